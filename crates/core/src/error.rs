@@ -1,0 +1,53 @@
+//! Errors of the engine: values with context, never panics.
+
+use thiserror::Error;
+
+/// Everything that can go wrong while building or relaxing a packing.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum Error {
+    /// A parameter is out of its allowed range; names the field and what is allowed.
+    #[error("{field} = {value}: {allowed}")]
+    InvalidParameter {
+        field: String,
+        value: String,
+        allowed: String,
+    },
+    /// The minimiser hit its step cap before either stopping criterion held.
+    #[error(
+        "FIRE did not converge in {steps} steps at phi = {phi:.12} (V/N = {energy_per_particle:.3e}, sum |dV/dq|^2 = {force_sq:.3e}); raise minimizer.max_steps or loosen minimizer.force_tol"
+    )]
+    NotConverged {
+        steps: u64,
+        phi: f64,
+        energy_per_particle: f64,
+        force_sq: f64,
+    },
+    /// The jamming bisection ran out of steps or of floating-point resolution.
+    #[error("jamming search failed at phi = {phi:.15} after {steps} density changes: {reason}")]
+    JammingFailed {
+        phi: f64,
+        steps: u64,
+        reason: String,
+    },
+    /// A NaN or infinity appeared in the energy or the forces.
+    #[error("non-finite energy or force at phi = {phi:.12}: {what}")]
+    NonFinite { phi: f64, what: String },
+}
+
+/// Result with the engine's [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// Shorthand for [`Error::InvalidParameter`].
+    pub fn invalid(
+        field: impl Into<String>,
+        value: impl std::fmt::Display,
+        allowed: impl Into<String>,
+    ) -> Self {
+        Error::InvalidParameter {
+            field: field.into(),
+            value: value.to_string(),
+            allowed: allowed.into(),
+        }
+    }
+}

@@ -1,0 +1,36 @@
+//! # jamkit-core
+//!
+//! The vocabulary every other jamkit crate speaks:
+//!
+//! * [`math`]: the only module that names the linear-algebra crate
+//!   (`Vector<D>`, `RotVec`), so that the rest of the code reads as physics;
+//! * [`periodic`]: the periodic box and its minimum-image convention;
+//! * [`shape`]: the [`Shape`] trait a shape family implements (volume,
+//!   bounding radius, rotational coordinates and the *contacts* between two
+//!   bodies, each a gap `h` with its first derivatives);
+//! * [`potential`]: scalar contact potentials `v(h)` (harmonic, Hertzian);
+//! * [`sizes`]: size distributions (binary, monodisperse, uniform);
+//! * [`packing`]: a configuration of bodies in a box, in flat generalised
+//!   coordinates;
+//! * [`error`]: the errors the engine can report.
+//!
+//! Geometry (the gap) belongs to shapes, energy to potentials: a new family
+//! never touches the potential, and a new potential never touches a family.
+
+pub mod error;
+pub mod family;
+pub mod math;
+pub mod packing;
+pub mod periodic;
+pub mod potential;
+pub mod shape;
+pub mod sizes;
+
+pub use error::{Error, Result};
+pub use family::{Dims, FamilyInfo, ParamSpec};
+pub use math::{MAX_ROT, RotVec, Vector};
+pub use packing::Packing;
+pub use periodic::PeriodicBox;
+pub use potential::Potential;
+pub use shape::{Contact, Shape};
+pub use sizes::SizeDistribution;

@@ -1,0 +1,147 @@
+//! A packing: bodies of one family in a periodic box.
+//!
+//! The state is stored per body (centre, orientation, size). Minimisers see
+//! it as one flat vector of *generalised coordinates*: for each body its `D`
+//! translations followed by its `rot_dof` rotational coordinates, with a mass
+//! per coordinate (1 for translations, the family's inertia for rotations).
+//! Rotational coordinates are applied as increments through
+//! [`Shape::rotate`], so a family can keep a quaternion while FIRE sees three
+//! small angles.
+
+use crate::error::{Error, Result};
+use crate::math::Vector;
+use crate::periodic::PeriodicBox;
+use crate::shape::Shape;
+use rand::{Rng, RngExt};
+
+/// Bodies of one family in a periodic box.
+#[derive(Clone, Debug)]
+pub struct Packing<const D: usize, S: Shape<D>> {
+    /// The family (its parameters).
+    pub shape: S,
+    /// The periodic box.
+    pub bbox: PeriodicBox<D>,
+    /// Centres, inside the box.
+    pub positions: Vec<Vector<D>>,
+    /// Orientations.
+    pub orientations: Vec<S::Orientation>,
+    /// Size `R⁰` of each body.
+    pub sizes: Vec<f64>,
+}
+
+impl<const D: usize, S: Shape<D>> Packing<D, S> {
+    /// Bodies with the given sizes placed uniformly at random (orientations
+    /// uniform too) in a cubic box whose edge gives packing fraction `phi`.
+    pub fn random<R: Rng + ?Sized>(
+        shape: S,
+        sizes: Vec<f64>,
+        phi: f64,
+        rng: &mut R,
+    ) -> Result<Self> {
+        if !(phi > 0.0 && phi.is_finite()) {
+            return Err(Error::invalid("phi", phi, "must be positive and finite"));
+        }
+        if sizes.is_empty() {
+            return Err(Error::invalid("particles", 0, "must be at least 1"));
+        }
+        let total: f64 = sizes.iter().map(|&s| shape.volume(s)).sum();
+        let edge = (total / phi).powf(1.0 / D as f64);
+        let bbox = PeriodicBox::cubic(edge);
+        let positions = (0..sizes.len())
+            .map(|_| Vector::<D>::from_fn(|_, _| edge * rng.random::<f64>()))
+            .map(|r| bbox.wrap(r))
+            .collect();
+        let orientations = (0..sizes.len())
+            .map(|_| shape.random_orientation(rng))
+            .collect();
+        Ok(Self {
+            shape,
+            bbox,
+            positions,
+            orientations,
+            sizes,
+        })
+    }
+
+    /// Number of bodies `N`.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// True when there are no bodies.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Generalised coordinates per body, `D + rot_dof`.
+    pub fn dof_per_body(&self) -> usize {
+        D + self.shape.rot_dof()
+    }
+
+    /// Total number of generalised coordinates.
+    pub fn dof(&self) -> usize {
+        self.len() * self.dof_per_body()
+    }
+
+    /// Summed volume of the bodies, `Σ_i S_i`.
+    pub fn body_volume(&self) -> f64 {
+        self.sizes.iter().map(|&s| self.shape.volume(s)).sum()
+    }
+
+    /// Packing fraction `φ = Σ_i S_i / V_box`, with true body volumes.
+    pub fn phi(&self) -> f64 {
+        self.body_volume() / self.bbox.volume()
+    }
+
+    /// Rescale the box and all centres affinely (sizes unchanged) to reach
+    /// packing fraction `phi`.
+    pub fn set_phi(&mut self, phi: f64) {
+        let factor = (self.phi() / phi).powf(1.0 / D as f64);
+        self.bbox.scale(factor);
+        for r in &mut self.positions {
+            *r = self.bbox.wrap(*r * factor);
+        }
+    }
+
+    /// Inverse mass of every generalised coordinate: 1 for translations, the
+    /// family's inverse inertia for rotations.
+    pub fn inverse_masses(&self) -> Vec<f64> {
+        let k = self.shape.rot_dof();
+        let mut out = Vec::with_capacity(self.dof());
+        for &s in &self.sizes {
+            out.extend(std::iter::repeat_n(1.0, D));
+            let inertia = self.shape.rot_inertia(s);
+            out.extend(inertia[..k].iter().map(|&m| 1.0 / m));
+        }
+        out
+    }
+
+    /// Move every body by `dq` (flat generalised coordinates); returns the
+    /// largest squared translation of a body, so that callers can tell when
+    /// a neighbour list goes stale without a pass of their own.
+    pub fn displace(&mut self, dq: &[f64]) -> f64 {
+        let stride = self.dof_per_body();
+        debug_assert_eq!(dq.len(), self.dof());
+        let mut max_sq: f64 = 0.0;
+        for (i, chunk) in dq.chunks_exact(stride).enumerate() {
+            let r = &mut self.positions[i];
+            let mut sq = 0.0;
+            for a in 0..D {
+                r[a] += chunk[a];
+                sq += chunk[a] * chunk[a];
+            }
+            max_sq = max_sq.max(sq);
+            if stride > D {
+                self.shape.rotate(&mut self.orientations[i], &chunk[D..]);
+            }
+        }
+        max_sq
+    }
+
+    /// Bring every centre back into the primary cell.
+    pub fn wrap_positions(&mut self) {
+        for r in &mut self.positions {
+            *r = self.bbox.wrap(*r);
+        }
+    }
+}

@@ -1,0 +1,128 @@
+//! The shape-family trait.
+//!
+//! A *shape family* (disks and spheres, Fourier near-disks, rigid n-mers, …)
+//! describes one kind of body up to a scale `R⁰` (its *size*) and an
+//! orientation. The engine asks a family only a handful of questions:
+//!
+//! * how many rotational coordinates a body has ([`Shape::rot_dof`]: zero for
+//!   spheres, so that a sphere scene carries no rotational coordinates at all);
+//! * its volume and a bounding radius (for the packing fraction and the
+//!   neighbour list);
+//! * how a small change of its rotational coordinates moves the orientation
+//!   ([`Shape::rotate`]);
+//! * the **contacts** between two bodies: each a gap `h` (negative when the
+//!   bodies overlap) with its derivatives with respect to the separation and
+//!   to both bodies' rotational coordinates ([`Shape::contacts`]).
+//!
+//! A near-disk yields one contact per pair, a dimer up to four; the energy is
+//! then `Σ v(h)` over all contacts, with `v` a [`Potential`](crate::Potential).
+//!
+//! Gaps depend on the two centres only through `r_ij = r_j − r_i` (minimum
+//! image), so `∂h/∂r_i = −∂h/∂r_j` and a [`Contact`] stores one of them.
+
+use crate::math::{RotVec, Vector};
+use rand::Rng;
+use std::fmt::Debug;
+
+/// One contact between bodies `i` and `j`: a gap with its first derivatives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contact<const D: usize> {
+    /// The gap `h_ij` (negative for an overlap).
+    pub gap: f64,
+    /// `∂h/∂r_j = −∂h/∂r_i`.
+    pub grad_r: Vector<D>,
+    /// `∂h/∂q_i` for the rotational coordinates of body `i` (first `rot_dof` entries).
+    pub grad_rot_i: RotVec,
+    /// `∂h/∂q_j` for the rotational coordinates of body `j`.
+    pub grad_rot_j: RotVec,
+}
+
+impl<const D: usize> Contact<D> {
+    /// A contact between bodies without rotational coordinates.
+    #[inline(always)]
+    pub fn translational(gap: f64, grad_r: Vector<D>) -> Self {
+        Self {
+            gap,
+            grad_r,
+            grad_rot_i: [0.0; 3],
+            grad_rot_j: [0.0; 3],
+        }
+    }
+}
+
+/// A family of bodies, generic over the dimension `D`.
+///
+/// Implementations are small values (the family's parameters) shared by all
+/// bodies of a scene; per-body data is the size `R⁰` and the orientation.
+pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
+    /// Orientation of one body (`()` for spheres, an angle in 2D, a unit
+    /// quaternion in 3D).
+    type Orientation: Copy + Debug + PartialEq + Send + Sync + 'static;
+
+    /// The family's registry name (`"sphere"`, `"fourier"`, …).
+    fn family(&self) -> &'static str;
+
+    /// Number of rotational coordinates per body (≤ [`MAX_ROT`](crate::MAX_ROT)).
+    fn rot_dof(&self) -> usize;
+
+    /// Volume (area in 2D) of a body of size `size`.
+    fn volume(&self, size: f64) -> f64;
+
+    /// Radius of a ball around the centre that contains the body; two bodies
+    /// whose centres are farther apart than the sum have no contact.
+    fn bounding_radius(&self, size: f64) -> f64;
+
+    /// Inertia of each rotational coordinate (the mass FIRE gives it).
+    fn rot_inertia(&self, _size: f64) -> RotVec {
+        [1.0; 3]
+    }
+
+    /// The orientation all bodies start from before randomisation.
+    fn reference_orientation(&self) -> Self::Orientation;
+
+    /// A uniformly random orientation.
+    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Self::Orientation;
+
+    /// Apply a change `dq` (length `rot_dof`) of the rotational coordinates.
+    fn rotate(&self, orientation: &mut Self::Orientation, dq: &[f64]);
+
+    /// The orientation written as numbers for output (empty for spheres).
+    fn orientation_coords(&self, orientation: &Self::Orientation) -> Vec<f64>;
+
+    /// The inverse of [`Shape::orientation_coords`]; `None` if the numbers do
+    /// not describe an orientation.
+    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Self::Orientation>;
+
+    /// Visit the contacts between body `i` (size `size_i`, orientation `o_i`)
+    /// and body `j`, whose centre is at `r_ij = r_j − r_i` from `i`'s.
+    ///
+    /// Every contact whose gap may be at most `max_gap` must be visited;
+    /// contacts whose gap certainly exceeds `max_gap` may be skipped (a
+    /// cheap bounding test saves the full computation for far pairs). The
+    /// energy passes `max_gap = 0`; gap statistics pass their cut.
+    #[allow(clippy::too_many_arguments)]
+    fn contacts<F: FnMut(Contact<D>)>(
+        &self,
+        size_i: f64,
+        o_i: &Self::Orientation,
+        size_j: f64,
+        o_j: &Self::Orientation,
+        r_ij: &Vector<D>,
+        max_gap: f64,
+        visit: F,
+    );
+
+    /// Fewest contacts a non-rattler keeps (rattlers are removed iteratively
+    /// below this). Default `D + 1`, the paper's choice for disks and
+    /// near-disks.
+    fn rattler_threshold(&self) -> usize {
+        D + 1
+    }
+
+    /// Whether jammed packings of this family are expected to be isostatic
+    /// (`N_c ≥ f N_nr − D + 1`, `f = D + rot_dof`): true for spheres and rigid
+    /// bodies made of spheres, false for near-disks, which jam hypostatic.
+    fn expects_isostatic(&self) -> bool {
+        true
+    }
+}

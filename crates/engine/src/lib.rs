@@ -1,0 +1,28 @@
+//! # jamkit-engine
+//!
+//! Turns a [`Packing`](jamkit_core::Packing) into something that can be
+//! relaxed and jammed:
+//!
+//! * [`neighbors`]: a cell list with a Verlet skin, rebuilt only when some
+//!   body has moved more than half the skin, so one evaluation costs `O(N)`;
+//! * [`scene`]: the energy `V = Σ v(h)` and its gradient in all generalised
+//!   coordinates, in one fused pass over the neighbour list;
+//! * [`fire`]: the FIRE minimiser (Bitzek et al. 2006) and FIRE 2.0
+//!   (Guénolé et al. 2020), with a mass per coordinate;
+//! * [`protocol`]: the paper's compress/decompress bisection to the jamming
+//!   point, and compression to a packing fraction or a pressure.
+//!
+//! Everything is generic over the dimension `D` and the family `S`, so the
+//! pair loop is compiled once per family with no dynamic dispatch.
+
+pub mod fire;
+pub mod neighbors;
+pub mod protocol;
+pub mod scene;
+
+pub use fire::{Fire, FireParams, FireVariant, MinimizeOutcome, Objective, StopReason};
+pub use neighbors::NeighborList;
+pub use protocol::{
+    JamParams, PressureParams, ProtocolOutcome, compress_to_phi, compress_to_pressure, jam,
+};
+pub use scene::Scene;

@@ -1,0 +1,269 @@
+//! Protocols: how the packing fraction is changed between minimisations.
+//!
+//! **Jamming (the paper's).** Starting from the scene's packing fraction,
+//! change `φ → φ + ε` by affine rescaling and minimise. While `V/N ≤ E_low`
+//! after minimisation keep compressing; when `V/N > E_low`, decompress with
+//! `ε → −ε/2`, and halve and reverse again every time `V/N` crosses `E_low`.
+//! Stop when `E_low < V/N < E_high` (the paper: `10⁻¹⁶` and `2·10⁻¹⁶`).
+//!
+//! **To a packing fraction.** Step `φ` by `ε` towards the target (the last
+//! step lands on it exactly), minimising after each step.
+//!
+//! **To a pressure.** The same bisection as for jamming, on the virial
+//! pressure: compress while `P < P*`, reverse and halve on every crossing,
+//! stop when `|P − P*| < tol · P*`.
+
+use crate::fire::{Fire, Objective};
+use crate::scene::Scene;
+use jamkit_core::{Error, Result, Shape};
+use serde::{Deserialize, Serialize};
+
+/// Parameters of the paper's jamming bisection.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct JamParams {
+    /// Initial step `ε` of the packing fraction.
+    pub eps: f64,
+    /// Lower edge of the jamming window for `V/N`.
+    pub energy_low: f64,
+    /// Upper edge of the jamming window for `V/N`.
+    pub energy_high: f64,
+    /// Give up after this many changes of `φ`.
+    pub max_density_steps: u64,
+}
+
+impl Default for JamParams {
+    fn default() -> Self {
+        Self {
+            eps: 1e-3,
+            energy_low: 1e-16,
+            energy_high: 2e-16,
+            max_density_steps: 200_000,
+        }
+    }
+}
+
+impl JamParams {
+    /// Check ranges; names the offending field.
+    pub fn validate(&self, prefix: &str) -> Result<()> {
+        if !(self.eps > 0.0 && self.eps < 1.0) {
+            return Err(Error::invalid(
+                format!("{prefix}.eps"),
+                self.eps,
+                "must lie in (0, 1)",
+            ));
+        }
+        if !(self.energy_low > 0.0 && self.energy_low.is_finite()) {
+            return Err(Error::invalid(
+                format!("{prefix}.energy_low"),
+                self.energy_low,
+                "must be positive and finite",
+            ));
+        }
+        if !(self.energy_high > self.energy_low && self.energy_high.is_finite()) {
+            return Err(Error::invalid(
+                format!("{prefix}.energy_high"),
+                self.energy_high,
+                format!(
+                    "must be finite and greater than energy_low = {:e}",
+                    self.energy_low
+                ),
+            ));
+        }
+        if self.max_density_steps == 0 {
+            return Err(Error::invalid(
+                format!("{prefix}.max_density_steps"),
+                0,
+                "must be at least 1",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Parameters of compression to a target pressure.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PressureParams {
+    /// Target pressure `P*`.
+    pub pressure: f64,
+    /// Relative tolerance on `P`.
+    pub tol: f64,
+    /// Initial step `ε` of the packing fraction.
+    pub eps: f64,
+    /// Give up after this many changes of `φ`.
+    pub max_density_steps: u64,
+}
+
+impl Default for PressureParams {
+    fn default() -> Self {
+        Self {
+            pressure: 1e-3,
+            tol: 1e-3,
+            eps: 1e-3,
+            max_density_steps: 200_000,
+        }
+    }
+}
+
+/// What a protocol ended with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProtocolOutcome {
+    /// Final packing fraction.
+    pub phi: f64,
+    /// Final `V/N`.
+    pub energy_per_particle: f64,
+    /// FIRE steps over all minimisations.
+    pub fire_steps: u64,
+    /// Number of minimisations (changes of `φ` plus one).
+    pub minimizations: u64,
+}
+
+/// Bookkeeping shared by the protocols.
+struct Tally {
+    fire_steps: u64,
+    minimizations: u64,
+}
+
+impl Tally {
+    fn relax<const D: usize, S: Shape<D>>(
+        &mut self,
+        scene: &mut Scene<D, S>,
+        fire: &mut Fire,
+    ) -> Result<f64> {
+        let out = fire.minimize(scene)?;
+        self.fire_steps += out.steps;
+        self.minimizations += 1;
+        Ok(out.energy / scene.bodies() as f64)
+    }
+
+    fn outcome(&self, phi: f64, energy_per_particle: f64) -> ProtocolOutcome {
+        ProtocolOutcome {
+            phi,
+            energy_per_particle,
+            fire_steps: self.fire_steps,
+            minimizations: self.minimizations,
+        }
+    }
+}
+
+/// Move `φ` by `eps`, failing when the step no longer changes `φ`.
+fn step_phi<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    eps: f64,
+    steps: u64,
+) -> Result<()> {
+    let phi = scene.phi();
+    let next = phi + eps;
+    if next == phi || !(next > 0.0) {
+        return Err(Error::JammingFailed {
+            phi,
+            steps,
+            reason: format!(
+                "the step eps = {eps:e} no longer changes phi (floating-point resolution exhausted)"
+            ),
+        });
+    }
+    scene.set_phi(next);
+    Ok(())
+}
+
+/// The paper's compress/decompress bisection to the jamming point.
+pub fn jam<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    fire: &mut Fire,
+    params: &JamParams,
+) -> Result<ProtocolOutcome> {
+    let mut tally = Tally {
+        fire_steps: 0,
+        minimizations: 0,
+    };
+    let mut eps = params.eps;
+    let mut steps = 0;
+    loop {
+        let e = tally.relax(scene, fire)?;
+        if e > params.energy_low && e < params.energy_high {
+            return Ok(tally.outcome(scene.phi(), e));
+        }
+        let over = e > params.energy_low;
+        // Reverse and halve on every crossing of the threshold.
+        if over == (eps > 0.0) {
+            eps = -0.5 * eps;
+        }
+        if steps >= params.max_density_steps {
+            return Err(Error::JammingFailed {
+                phi: scene.phi(),
+                steps,
+                reason: format!(
+                    "no packing in the window after protocol.max_density_steps = {} (last V/N = {e:.3e})",
+                    params.max_density_steps
+                ),
+            });
+        }
+        step_phi(scene, eps, steps)?;
+        steps += 1;
+    }
+}
+
+/// Compress (or decompress) in steps of `eps` to packing fraction `target`,
+/// minimising after every step.
+pub fn compress_to_phi<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    fire: &mut Fire,
+    target: f64,
+    eps: f64,
+) -> Result<ProtocolOutcome> {
+    let mut tally = Tally {
+        fire_steps: 0,
+        minimizations: 0,
+    };
+    let mut e = tally.relax(scene, fire)?;
+    while scene.phi() != target {
+        let phi = scene.phi();
+        let next = if (target - phi).abs() <= eps {
+            target
+        } else {
+            phi + eps.copysign(target - phi)
+        };
+        scene.set_phi(next);
+        e = tally.relax(scene, fire)?;
+    }
+    Ok(tally.outcome(scene.phi(), e))
+}
+
+/// Bisect `φ` to the target pressure.
+pub fn compress_to_pressure<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    fire: &mut Fire,
+    params: &PressureParams,
+) -> Result<ProtocolOutcome> {
+    let mut tally = Tally {
+        fire_steps: 0,
+        minimizations: 0,
+    };
+    let mut eps = params.eps;
+    let mut steps = 0;
+    loop {
+        let e = tally.relax(scene, fire)?;
+        let p = scene.pressure();
+        if (p - params.pressure).abs() < params.tol * params.pressure {
+            return Ok(tally.outcome(scene.phi(), e));
+        }
+        let over = p > params.pressure;
+        if over == (eps > 0.0) {
+            eps = -0.5 * eps;
+        }
+        if steps >= params.max_density_steps {
+            return Err(Error::JammingFailed {
+                phi: scene.phi(),
+                steps,
+                reason: format!(
+                    "pressure {p:.6e} not within tolerance of {:.6e}",
+                    params.pressure
+                ),
+            });
+        }
+        step_phi(scene, eps, steps)?;
+        steps += 1;
+    }
+}

@@ -1,0 +1,242 @@
+//! A scene: a packing, a contact potential and a neighbour list.
+//!
+//! The energy is `V = Σ_contacts v(h_c)`, and its gradient in the generalised
+//! coordinates follows from the chain rule on each contact's gap,
+//!
+//! ```text
+//! ∂V/∂r_j = Σ_c v'(h_c) ∂h_c/∂r_j,   ∂V/∂r_i = −Σ_c v'(h_c) ∂h_c/∂r_j,
+//! ∂V/∂q_i = Σ_c v'(h_c) ∂h_c/∂q_i,
+//! ```
+//!
+//! computed with the energy in one pass over the neighbour list.
+
+use crate::fire::Objective;
+use crate::neighbors::NeighborList;
+use jamkit_core::{Contact, Packing, Potential, Shape, Vector};
+
+/// A packing ready to be relaxed.
+#[derive(Clone, Debug)]
+pub struct Scene<const D: usize, S: Shape<D>> {
+    packing: Packing<D, S>,
+    potential: Potential,
+    neighbors: NeighborList<D>,
+    reach: Vec<f64>,
+    inverse_masses: Vec<f64>,
+    evaluations: u64,
+}
+
+impl<const D: usize, S: Shape<D>> Scene<D, S> {
+    /// A scene with Verlet skin `skin` (in units of length; a few tenths of
+    /// the smallest body size is a good choice).
+    pub fn new(packing: Packing<D, S>, potential: Potential, skin: f64) -> Self {
+        let reach = packing
+            .sizes
+            .iter()
+            .map(|&s| packing.shape.bounding_radius(s))
+            .collect();
+        let inverse_masses = packing.inverse_masses();
+        let mut scene = Self {
+            packing,
+            potential,
+            neighbors: NeighborList::new(skin),
+            reach,
+            inverse_masses,
+            evaluations: 0,
+        };
+        scene.rebuild_neighbors();
+        scene
+    }
+
+    /// The packing.
+    pub fn packing(&self) -> &Packing<D, S> {
+        &self.packing
+    }
+
+    /// Give the packing back.
+    pub fn into_packing(self) -> Packing<D, S> {
+        self.packing
+    }
+
+    /// The potential.
+    pub fn potential(&self) -> Potential {
+        self.potential
+    }
+
+    /// Number of energy/gradient evaluations so far.
+    pub fn evaluations(&self) -> u64 {
+        self.evaluations
+    }
+
+    /// Number of pairs in the neighbour list.
+    pub fn neighbor_pairs(&self) -> usize {
+        self.neighbors.pair_count()
+    }
+
+    /// Number of neighbour-list builds so far.
+    pub fn neighbor_builds(&self) -> u64 {
+        self.neighbors.builds()
+    }
+
+    /// Packing fraction.
+    pub fn phi(&self) -> f64 {
+        self.packing.phi()
+    }
+
+    /// Rescale affinely to packing fraction `phi`.
+    pub fn set_phi(&mut self, phi: f64) {
+        self.packing.set_phi(phi);
+        // Affine rescaling moves far bodies by more than the skin allows.
+        self.rebuild_neighbors();
+    }
+
+    fn rebuild_neighbors(&mut self) {
+        self.packing.wrap_positions();
+        self.neighbors
+            .build(&self.packing.bbox, &self.packing.positions, &self.reach);
+    }
+
+    fn refresh_neighbors(&mut self) {
+        if self.neighbors.needs_rebuild(&self.packing.positions) {
+            self.rebuild_neighbors();
+        }
+    }
+
+    /// Visit every pair whose bounding balls come within `extra` of each
+    /// other, with its separation `r_ij` (minimum image) and every contact
+    /// the family reports for it (`i < j`). `extra` up to the skin uses the
+    /// neighbour list; beyond, all pairs.
+    pub fn for_each_contact<F: FnMut(usize, usize, &Vector<D>, &Contact<D>)>(
+        &mut self,
+        extra: f64,
+        mut visit: F,
+    ) {
+        self.refresh_neighbors();
+        let p = &self.packing;
+        let n = p.len();
+        let mut pair = |i: usize, j: usize| {
+            let d = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
+            let cut = self.reach[i] + self.reach[j] + extra;
+            if d.norm_squared() < cut * cut {
+                p.shape.contacts(
+                    p.sizes[i],
+                    &p.orientations[i],
+                    p.sizes[j],
+                    &p.orientations[j],
+                    &d,
+                    extra,
+                    |c| visit(i, j, &d, &c),
+                );
+            }
+        };
+        if extra <= self.neighbors.skin() {
+            for i in 0..n {
+                for &j in self.neighbors.partners(i) {
+                    pair(i, j as usize);
+                }
+            }
+        } else {
+            for i in 0..n {
+                for j in i + 1..n {
+                    pair(i, j);
+                }
+            }
+        }
+    }
+
+    /// Energy `V` and its gradient `∂V/∂q` (written into `grad`, length `dof`).
+    pub fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
+        self.refresh_neighbors();
+        self.evaluations += 1;
+        grad.fill(0.0);
+        let p = &self.packing;
+        let (positions, sizes, orientations) =
+            (&p.positions[..], &p.sizes[..], &p.orientations[..]);
+        let k = p.shape.rot_dof();
+        let stride = D + k;
+        let potential = self.potential;
+        let mut energy = 0.0;
+        for i in 0..positions.len() {
+            let ri = positions[i];
+            let (si, oi) = (sizes[i], &orientations[i]);
+            // Body i's own gradient stays in registers until its partners are done.
+            let mut gi_r = Vector::<D>::zeros();
+            let mut gi_q = [0.0; jamkit_core::MAX_ROT];
+            for &j in self.neighbors.partners(i) {
+                let j = j as usize;
+                let d = p.bbox.minimum_image(positions[j] - ri);
+                let gj = &mut grad[j * stride..(j + 1) * stride];
+                // NOTE: no test on the sign of the gap here: a pair out of
+                // contact adds exact zeros (v' = 0), which is cheaper than a
+                // mispredicted branch, and the sums are the same.
+                p.shape
+                    .contacts(si, oi, sizes[j], &orientations[j], &d, 0.0, |c| {
+                        let (v, dv) = potential.energy_and_derivative(c.gap);
+                        energy += v;
+                        let f = c.grad_r * dv;
+                        gi_r -= f;
+                        for a in 0..D {
+                            gj[a] += f[a];
+                        }
+                        for a in 0..k {
+                            gi_q[a] += dv * c.grad_rot_i[a];
+                            gj[D + a] += dv * c.grad_rot_j[a];
+                        }
+                    });
+            }
+            let gi = &mut grad[i * stride..(i + 1) * stride];
+            for a in 0..D {
+                gi[a] += gi_r[a];
+            }
+            for a in 0..k {
+                gi[D + a] += gi_q[a];
+            }
+        }
+        energy
+    }
+
+    /// Energy `V` alone.
+    pub fn energy(&mut self) -> f64 {
+        let mut e = 0.0;
+        let potential = self.potential;
+        self.for_each_contact(0.0, |_, _, _, c| e += potential.energy(c.gap));
+        e
+    }
+
+    /// Pressure from the virial of the contact forces,
+    /// `P = −(1 / (D V_box)) Σ_c v'(h_c) (r_ij · ∂h_c/∂r_j)`.
+    pub fn pressure(&mut self) -> f64 {
+        let potential = self.potential;
+        let mut virial = 0.0;
+        self.for_each_contact(0.0, |_, _, d, c| {
+            virial += potential.derivative(c.gap) * d.dot(&c.grad_r);
+        });
+        -virial / (D as f64 * self.packing.bbox.volume())
+    }
+}
+
+impl<const D: usize, S: Shape<D>> Objective for Scene<D, S> {
+    fn dof(&self) -> usize {
+        self.packing.dof()
+    }
+
+    fn bodies(&self) -> usize {
+        self.packing.len()
+    }
+
+    fn inverse_masses(&self) -> &[f64] {
+        &self.inverse_masses
+    }
+
+    fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
+        Scene::energy_gradient(self, grad)
+    }
+
+    fn displace(&mut self, dq: &[f64]) {
+        let max_sq = self.packing.displace(dq);
+        self.neighbors.record_motion(max_sq.sqrt());
+    }
+
+    fn phi(&self) -> f64 {
+        self.packing.phi()
+    }
+}

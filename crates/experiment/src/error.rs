@@ -1,0 +1,79 @@
+//! Errors of the experiment layer: each names what the user can fix.
+
+use thiserror::Error;
+
+/// What can go wrong between an experiment file and the packings on disk.
+#[derive(Debug, Error)]
+pub enum ExperimentError {
+    /// The file is not valid RON for the schema (unknown field, wrong type, …).
+    #[error("{file}: {message}")]
+    Parse { file: String, message: String },
+    /// A field has a value outside what is allowed.
+    #[error("{field} = {value}: {allowed}")]
+    Invalid {
+        field: String,
+        value: String,
+        allowed: String,
+    },
+    /// A `--set` override could not be applied.
+    #[error("--set {key}: {message}")]
+    Override { key: String, message: String },
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The engine failed on one sample.
+    #[error("sample {sample}: {source}")]
+    Sample {
+        sample: String,
+        #[source]
+        source: jamkit_core::Error,
+    },
+}
+
+impl ExperimentError {
+    /// Shorthand for [`ExperimentError::Invalid`].
+    pub fn invalid(
+        field: impl Into<String>,
+        value: impl std::fmt::Display,
+        allowed: impl Into<String>,
+    ) -> Self {
+        Self::Invalid {
+            field: field.into(),
+            value: value.to_string(),
+            allowed: allowed.into(),
+        }
+    }
+
+    /// Wrap an I/O error with its path.
+    pub fn io(path: impl AsRef<std::path::Path>, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.as_ref().display().to_string(),
+            source,
+        }
+    }
+}
+
+impl From<jamkit_core::Error> for ExperimentError {
+    fn from(e: jamkit_core::Error) -> Self {
+        match e {
+            jamkit_core::Error::InvalidParameter {
+                field,
+                value,
+                allowed,
+            } => Self::Invalid {
+                field,
+                value,
+                allowed,
+            },
+            other => Self::Invalid {
+                field: "experiment".into(),
+                value: String::new(),
+                allowed: other.to_string(),
+            },
+        }
+    }
+}

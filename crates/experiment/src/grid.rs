@@ -1,0 +1,238 @@
+//! Grid expansion: from an experiment to parameter points and samples.
+//!
+//! A family parameter given as a list (or, for a parameter that is itself a
+//! list, as a list of lists) scans; so does `particles`. The grid is the
+//! Cartesian product, `particles` outermost and parameters in name order.
+//! Each point runs `samples` packings with seeds `seed, seed + 1, …`: the
+//! same seeds at every point, so points differ only by their parameters.
+
+use crate::error::ExperimentError;
+use crate::registry::{self, ParamMap};
+use crate::schema::Experiment;
+use jamkit_core::FamilyInfo;
+
+/// One parameter point of the grid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    /// Position in the grid.
+    pub index: usize,
+    /// Number of bodies.
+    pub particles: usize,
+    /// Every family parameter (defaults filled in).
+    pub params: ParamMap,
+}
+
+impl Point {
+    /// A file-name-safe label: `sphere_d2_N1024`, `fourier_d2_N256_delta0.01_n2`.
+    pub fn label(&self, family: &str, dim: usize) -> String {
+        let mut s = format!("{family}_d{dim}_N{}", self.particles);
+        for (k, v) in &self.params {
+            s.push('_');
+            s.push_str(k);
+            s.push_str(&sanitize(&value_text(v)));
+        }
+        s
+    }
+}
+
+/// One packing to make.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Job {
+    /// Index of its point.
+    pub point: usize,
+    /// Sample number within the point.
+    pub sample: usize,
+    /// Seed of its random stream.
+    pub seed: u64,
+    /// File-name-safe identifier, `<point label>_s<seed>`.
+    pub id: String,
+}
+
+/// A parameter value as compact RON text.
+pub fn value_text(v: &ron::Value) -> String {
+    ron::to_string(v).unwrap_or_else(|_| format!("{v:?}"))
+}
+
+fn sanitize(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '+') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Values a parameter scans over.
+fn scan_values(
+    name: &str,
+    value: &ron::Value,
+    is_list: bool,
+) -> Result<Vec<ron::Value>, ExperimentError> {
+    let values = match value {
+        ron::Value::Seq(items) if !is_list => items.clone(),
+        ron::Value::Seq(items)
+            if items
+                .first()
+                .is_some_and(|x| matches!(x, ron::Value::Seq(_))) =>
+        {
+            items.clone()
+        }
+        other => vec![other.clone()],
+    };
+    if values.is_empty() {
+        return Err(ExperimentError::invalid(
+            format!("params.{name}"),
+            "[]",
+            "a scan needs at least one value",
+        ));
+    }
+    Ok(values)
+}
+
+/// The grid points of an experiment, each checked by building its shape.
+pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
+    let info = registry::family_info(&experiment.family)?;
+    let axes = param_axes(experiment, &info)?;
+    let mut combos: Vec<ParamMap> = vec![ParamMap::new()];
+    for (name, values) in &axes {
+        combos = combos
+            .into_iter()
+            .flat_map(|c| {
+                values.iter().map(move |v| {
+                    let mut c = c.clone();
+                    c.insert(name.clone(), v.clone());
+                    c
+                })
+            })
+            .collect();
+    }
+    let mut out = Vec::new();
+    for particles in experiment.particles.values() {
+        for params in &combos {
+            registry::dispatch(&experiment.family, experiment.dim, params, CheckOnly)?;
+            out.push(Point {
+                index: out.len(),
+                particles,
+                params: params.clone(),
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Every packing of the experiment, point by point.
+pub fn jobs(experiment: &Experiment, points: &[Point]) -> Vec<Job> {
+    let mut out = Vec::new();
+    for p in points {
+        let label = p.label(&experiment.family, experiment.dim);
+        for sample in 0..experiment.samples {
+            let seed = experiment.seed.wrapping_add(sample as u64);
+            out.push(Job {
+                point: p.index,
+                sample,
+                seed,
+                id: format!("{label}_s{seed}"),
+            });
+        }
+    }
+    out
+}
+
+fn param_axes(
+    experiment: &Experiment,
+    info: &FamilyInfo,
+) -> Result<Vec<(String, Vec<ron::Value>)>, ExperimentError> {
+    for name in experiment.params.keys() {
+        if info.param(name).is_none() {
+            let known: Vec<&str> = info.params.iter().map(|p| p.name).collect();
+            let allowed = if known.is_empty() {
+                format!("family `{}` has no parameters", info.name)
+            } else {
+                format!(
+                    "family `{}` has parameters: {}",
+                    info.name,
+                    known.join(", ")
+                )
+            };
+            return Err(ExperimentError::invalid(
+                format!("params.{name}"),
+                "(given)",
+                allowed,
+            ));
+        }
+    }
+    let mut axes = Vec::new();
+    for spec in info.params {
+        let value = match (experiment.params.get(spec.name), spec.default) {
+            (Some(v), _) => v.clone(),
+            (None, Some(default)) => ron::from_str(default).expect("family defaults are valid RON"),
+            (None, None) => {
+                return Err(ExperimentError::invalid(
+                    format!("params.{}", spec.name),
+                    "(missing)",
+                    format!("is required: {}", spec.about),
+                ));
+            }
+        };
+        axes.push((
+            spec.name.to_string(),
+            scan_values(spec.name, &value, spec.is_list)?,
+        ));
+    }
+    Ok(axes)
+}
+
+/// A visitor that only checks that the shape can be built.
+struct CheckOnly;
+
+impl registry::SceneVisitor for CheckOnly {
+    type Output = ();
+    fn visit<const D: usize, S: jamkit_core::Shape<D>>(self, _shape: S) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn particles_list_expands_and_seeds_repeat_per_point() {
+        let e = Experiment::from_ron(
+            r#"(name: "g", family: "sphere", particles: [8, 16], samples: 2, seed: 5)"#,
+            "g",
+        )
+        .unwrap();
+        let pts = points(&e).unwrap();
+        assert_eq!(
+            pts.iter().map(|p| p.particles).collect::<Vec<_>>(),
+            vec![8, 16]
+        );
+        let js = jobs(&e, &pts);
+        let ids: Vec<&str> = js.iter().map(|j| j.id.as_str()).collect();
+        assert_eq!(
+            ids,
+            vec![
+                "sphere_d2_N8_s5",
+                "sphere_d2_N8_s6",
+                "sphere_d2_N16_s5",
+                "sphere_d2_N16_s6"
+            ]
+        );
+    }
+
+    #[test]
+    fn unknown_parameter_is_rejected_with_the_family_named() {
+        let e = Experiment::from_ron(
+            r#"(name: "g", family: "sphere", particles: 8, params: {"delta": 0.1})"#,
+            "g",
+        )
+        .unwrap();
+        let err = points(&e).unwrap_err().to_string();
+        assert!(
+            err.contains("params.delta") && err.contains("no parameters"),
+            "{err}"
+        );
+    }
+}

@@ -1,0 +1,25 @@
+//! # jamkit-experiment
+//!
+//! Experiments are data. A RON file names a family and its parameters, the
+//! number of particles and samples, the protocol and the observables; this
+//! crate turns it into packings on disk:
+//!
+//! * [`schema`]: the experiment file's fields, defaults and validation;
+//! * [`overrides`]: `--set KEY=VALUE` edits of any field;
+//! * [`grid`]: expansion of lists into parameter points and samples;
+//! * [`registry`]: the explicit list of shape families, and the one place
+//!   where a family name becomes a typed `Scene<D, S>`;
+//! * [`runner`]: runs the samples in parallel, resumes, collects records;
+//! * [`record`]: packing files, `results.csv` and `summary.csv`, written
+//!   atomically.
+
+pub mod error;
+pub mod grid;
+pub mod overrides;
+pub mod record;
+pub mod registry;
+pub mod runner;
+pub mod schema;
+
+pub use error::ExperimentError;
+pub use schema::Experiment;

@@ -1,0 +1,335 @@
+//! What a run writes: one JSON file per packing, `results.csv` with a row per
+//! packing, `summary.csv` with mean and standard error per parameter point.
+//! Every file is written to a temporary name and renamed into place, so a
+//! killed run never leaves a half-written file; the packing files are also
+//! the checkpoint from which a rerun resumes. Formats: `docs/formats.md`.
+
+use crate::error::ExperimentError;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The values measured on one packing (one row of `results.csv`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Measures {
+    /// Packing fraction at the end of the protocol (φ_J for `Jam`).
+    pub phi: f64,
+    /// `V/N` at the end.
+    pub energy_per_particle: f64,
+    /// Contacts among non-rattlers, `N_c`.
+    pub n_contacts: Option<usize>,
+    /// Number of rattlers.
+    pub n_rattlers: Option<usize>,
+    /// `z_J = 2 N_c / N_nr`.
+    pub z_j: Option<f64>,
+    /// `N_c − (f N_nr − d)`.
+    pub iso_margin: Option<i64>,
+    /// Virial pressure.
+    pub pressure: Option<f64>,
+    /// FIRE steps over the whole protocol.
+    pub fire_steps: u64,
+    /// Minimisations (density changes + 1).
+    pub minimizations: u64,
+    /// Wall-clock seconds for the protocol and the observables.
+    pub wall_s: f64,
+    /// Empty, or why this packing deserves a second look.
+    pub flag: String,
+}
+
+/// One packing on disk (`packings/<id>.json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PackingFile {
+    /// Identifier (also the file name).
+    pub id: String,
+    /// The experiment's name.
+    pub experiment: String,
+    /// Family name.
+    pub family: String,
+    /// Family parameters at this grid point.
+    pub params: serde_json::Value,
+    /// Spatial dimension.
+    pub dim: usize,
+    /// Number of bodies.
+    pub particles: usize,
+    /// Seed of the random start.
+    pub seed: u64,
+    /// Protocol name (`jam`, `phi`, `pressure`).
+    pub protocol: String,
+    /// Packing fraction.
+    pub phi: f64,
+    /// `V/N`.
+    pub energy_per_particle: f64,
+    /// Everything measured.
+    pub measures: Measures,
+    /// Box edge lengths.
+    #[serde(rename = "box")]
+    pub box_edges: Vec<f64>,
+    /// Centres (N × D), empty when `output.packings` is false.
+    pub positions: Vec<Vec<f64>>,
+    /// Size `R⁰` of each body.
+    pub radii: Vec<f64>,
+    /// Orientation coordinates (N × k); empty for spheres.
+    pub orientations: Vec<Vec<f64>>,
+    /// Rattler flags (empty when contacts were not measured).
+    pub rattler: Vec<bool>,
+}
+
+/// Write `contents` to `path` atomically (temporary file, then rename).
+pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), ExperimentError> {
+    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+    std::fs::write(&tmp, contents).map_err(|e| ExperimentError::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| ExperimentError::io(path, e))
+}
+
+impl PackingFile {
+    /// Save as pretty JSON.
+    pub fn save(&self, path: &Path) -> Result<(), ExperimentError> {
+        let text = serde_json::to_vec_pretty(self).expect("a packing serialises");
+        write_atomic(path, &text)
+    }
+
+    /// Load; `None` if the file is missing or unreadable (then it is redone).
+    pub fn load(path: &Path) -> Option<Self> {
+        let text = std::fs::read(path).ok()?;
+        serde_json::from_slice(&text).ok()
+    }
+}
+
+/// Quote a CSV field when needed.
+pub fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn opt<T: ToString>(v: &Option<T>) -> String {
+    v.as_ref().map(T::to_string).unwrap_or_default()
+}
+
+/// The parameter names of a set of packings, in order.
+fn param_names(files: &[PackingFile]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for f in files {
+        if let Some(obj) = f.params.as_object() {
+            for k in obj.keys() {
+                if !names.contains(k) {
+                    names.push(k.clone());
+                }
+            }
+        }
+    }
+    names
+}
+
+fn param_cells(f: &PackingFile, names: &[String]) -> Vec<String> {
+    names
+        .iter()
+        .map(|n| {
+            f.params
+                .get(n)
+                .map(|v| csv_field(&v.to_string()))
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
+/// `results.csv`: one row per packing.
+pub fn results_csv(files: &[PackingFile]) -> String {
+    let names = param_names(files);
+    let mut head = vec!["id", "family", "dim", "particles", "seed"]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>();
+    head.extend(names.iter().cloned());
+    head.extend(
+        [
+            "protocol",
+            "phi_j",
+            "energy_per_particle",
+            "n_contacts",
+            "n_rattlers",
+            "z_j",
+            "iso_margin",
+            "pressure",
+            "fire_steps",
+            "minimizations",
+            "wall_s",
+            "flag",
+        ]
+        .map(String::from),
+    );
+    let mut out = head.join(",") + "\n";
+    for f in files {
+        let m = &f.measures;
+        let mut row = vec![
+            f.id.clone(),
+            f.family.clone(),
+            f.dim.to_string(),
+            f.particles.to_string(),
+            f.seed.to_string(),
+        ];
+        row.extend(param_cells(f, &names));
+        row.extend([
+            f.protocol.clone(),
+            format!("{}", m.phi),
+            format!("{:e}", m.energy_per_particle),
+            opt(&m.n_contacts),
+            opt(&m.n_rattlers),
+            opt(&m.z_j),
+            opt(&m.iso_margin),
+            m.pressure.map(|p| format!("{p:e}")).unwrap_or_default(),
+            m.fire_steps.to_string(),
+            m.minimizations.to_string(),
+            format!("{:.3}", m.wall_s),
+            csv_field(&m.flag),
+        ]);
+        out += &(row.join(",") + "\n");
+    }
+    out
+}
+
+/// Mean and standard error of the mean (0 for a single value).
+pub fn mean_sem(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    if values.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let mean = values.iter().sum::<f64>() / n;
+    if values.len() < 2 {
+        return (mean, 0.0);
+    }
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// One row of `summary.csv`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointSummary {
+    /// Label of the point.
+    pub label: String,
+    /// Packings in it.
+    pub samples: usize,
+    /// φ mean and s.e.m.
+    pub phi: (f64, f64),
+    /// z_J mean and s.e.m.
+    pub z_j: (f64, f64),
+    /// Rattler fraction mean and s.e.m.
+    pub rattler_fraction: (f64, f64),
+    /// Smallest isostaticity margin.
+    pub iso_margin_min: Option<i64>,
+    /// Pressure mean and s.e.m.
+    pub pressure: (f64, f64),
+    /// Mean FIRE steps.
+    pub fire_steps: f64,
+    /// Mean wall seconds.
+    pub wall_s: f64,
+    /// Packings flagged.
+    pub flagged: usize,
+}
+
+/// Summaries of packings grouped by point (files must be grouped already,
+/// in order; `labels[k]` is the label of group `k`).
+pub fn summarize_points(groups: &[(String, Vec<&PackingFile>)]) -> Vec<PointSummary> {
+    groups
+        .iter()
+        .map(|(label, files)| {
+            let col = |f: &dyn Fn(&PackingFile) -> Option<f64>| -> Vec<f64> {
+                files.iter().filter_map(|p| f(p)).collect()
+            };
+            PointSummary {
+                label: label.clone(),
+                samples: files.len(),
+                phi: mean_sem(&col(&|p| Some(p.measures.phi))),
+                z_j: mean_sem(&col(&|p| p.measures.z_j)),
+                rattler_fraction: mean_sem(&col(&|p| {
+                    p.measures.n_rattlers.map(|r| r as f64 / p.particles as f64)
+                })),
+                iso_margin_min: files.iter().filter_map(|p| p.measures.iso_margin).min(),
+                pressure: mean_sem(&col(&|p| p.measures.pressure)),
+                fire_steps: mean_sem(&col(&|p| Some(p.measures.fire_steps as f64))).0,
+                wall_s: mean_sem(&col(&|p| Some(p.measures.wall_s))).0,
+                flagged: files.iter().filter(|p| !p.measures.flag.is_empty()).count(),
+            }
+        })
+        .collect()
+}
+
+/// `summary.csv`: the point's identity (from its first packing) and the summary.
+pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
+    let firsts: Vec<PackingFile> = groups
+        .iter()
+        .filter_map(|(_, g)| g.first().map(|f| (*f).clone()))
+        .collect();
+    let names = param_names(&firsts);
+    let mut head: Vec<String> = ["point", "family", "dim", "particles"]
+        .map(String::from)
+        .to_vec();
+    head.extend(names.iter().cloned());
+    head.extend(
+        [
+            "samples",
+            "phi_j_mean",
+            "phi_j_sem",
+            "z_j_mean",
+            "z_j_sem",
+            "rattler_fraction_mean",
+            "rattler_fraction_sem",
+            "iso_margin_min",
+            "pressure_mean",
+            "pressure_sem",
+            "fire_steps_mean",
+            "wall_s_mean",
+            "flagged",
+        ]
+        .map(String::from),
+    );
+    let mut out = head.join(",") + "\n";
+    for (s, first) in summarize_points(groups).iter().zip(&firsts) {
+        let mut row = vec![
+            s.label.clone(),
+            first.family.clone(),
+            first.dim.to_string(),
+            first.particles.to_string(),
+        ];
+        row.extend(param_cells(first, &names));
+        row.extend([
+            s.samples.to_string(),
+            format!("{}", s.phi.0),
+            format!("{:e}", s.phi.1),
+            format!("{}", s.z_j.0),
+            format!("{:e}", s.z_j.1),
+            format!("{}", s.rattler_fraction.0),
+            format!("{:e}", s.rattler_fraction.1),
+            opt(&s.iso_margin_min),
+            format!("{:e}", s.pressure.0),
+            format!("{:e}", s.pressure.1),
+            format!("{:.0}", s.fire_steps),
+            format!("{:.3}", s.wall_s),
+            s.flagged.to_string(),
+        ]);
+        out += &(row.join(",") + "\n");
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mean_and_standard_error() {
+        let (m, s) = mean_sem(&[1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(m, 2.5);
+        // sample variance 5/3, sem = sqrt(5/12)
+        assert!((s - (5.0f64 / 12.0).sqrt()).abs() < 1e-15);
+        assert_eq!(mean_sem(&[7.0]), (7.0, 0.0));
+    }
+
+    #[test]
+    fn csv_fields_are_quoted_when_needed() {
+        assert_eq!(csv_field("a,b"), "\"a,b\"");
+        assert_eq!(csv_field("say \"x\""), "say \"x\"");
+        assert_eq!(csv_field("a\"b,"), "\"a\"\"b,\"");
+    }
+}

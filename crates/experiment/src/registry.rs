@@ -1,0 +1,122 @@
+//! The registry: every shape family jamkit knows, in one readable list.
+//!
+//! Adding a family means one entry in [`FAMILIES`] and one arm in
+//! [`dispatch`]; nothing else in the engine changes. `dispatch` is the one
+//! place where a family name from a file becomes a typed shape `S` in a
+//! const dimension `D`, after which everything is statically dispatched.
+
+use crate::error::ExperimentError;
+use jamkit_core::{Dims, FamilyInfo, Shape};
+use serde::de::DeserializeOwned;
+use std::collections::BTreeMap;
+
+/// Parameters of one grid point, by name.
+pub type ParamMap = BTreeMap<String, ron::Value>;
+
+/// Every registered family.
+pub const FAMILIES: &[FamilyInfo] = &[jamkit_sphere::INFO];
+
+/// Dimensions the engine is compiled for (families with `Dims::Any`).
+pub const COMPILED_DIMS: &[usize] = &[2, 3, 4];
+
+/// Something to do with a typed shape: run a sample, draw, analyse, …
+pub trait SceneVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Called with the family's shape in dimension `D`.
+    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Self::Output;
+}
+
+/// The family called `name`.
+pub fn family_info(name: &str) -> Result<FamilyInfo, ExperimentError> {
+    FAMILIES
+        .iter()
+        .copied()
+        .find(|f| f.name == name)
+        .ok_or_else(|| {
+            let known: Vec<&str> = FAMILIES.iter().map(|f| f.name).collect();
+            ExperimentError::invalid(
+                "family",
+                format!("\"{name}\""),
+                format!("must be one of: {}", known.join(", ")),
+            )
+        })
+}
+
+/// Whether `info` can run in dimension `dim`.
+pub fn supports_dim(info: &FamilyInfo, dim: usize) -> bool {
+    match info.dims {
+        Dims::Any => COMPILED_DIMS.contains(&dim),
+        Dims::Only(dims) => dims.contains(&dim),
+    }
+}
+
+/// "dim 2 or 3", for messages.
+pub fn describe_dims(info: &FamilyInfo) -> String {
+    let dims = match info.dims {
+        Dims::Any => COMPILED_DIMS,
+        Dims::Only(d) => d,
+    };
+    let list: Vec<String> = dims.iter().map(|d| d.to_string()).collect();
+    format!("dim {}", list.join(" or "))
+}
+
+/// Read a family's parameter struct from the grid point's values.
+pub fn parse_params<T: DeserializeOwned>(
+    family: &str,
+    params: &ParamMap,
+) -> Result<T, ExperimentError> {
+    let map: ron::Map = params
+        .iter()
+        .map(|(k, v)| (ron::Value::String(k.clone()), v.clone()))
+        .collect();
+    ron::Value::Map(map).into_rust().map_err(|e| {
+        ExperimentError::invalid(
+            format!("params (family `{family}`)"),
+            ron::to_string(params).unwrap_or_default(),
+            e.to_string(),
+        )
+    })
+}
+
+/// Build the family's shape for one grid point and hand it to `visitor` in
+/// the right dimension.
+pub fn dispatch<V: SceneVisitor>(
+    family: &str,
+    dim: usize,
+    params: &ParamMap,
+    visitor: V,
+) -> Result<V::Output, ExperimentError> {
+    let info = family_info(family)?;
+    if !supports_dim(&info, dim) {
+        return Err(ExperimentError::invalid(
+            "dim",
+            dim,
+            format!("family `{family}` supports {}", describe_dims(&info)),
+        ));
+    }
+    // One arm per family; `any_dim!` expands a family that works in every
+    // compiled dimension.
+    macro_rules! any_dim {
+        ($shape:expr) => {
+            match dim {
+                2 => Ok(visitor.visit::<2, _>($shape)),
+                3 => Ok(visitor.visit::<3, _>($shape)),
+                4 => Ok(visitor.visit::<4, _>($shape)),
+                _ => unreachable!("checked by supports_dim"),
+            }
+        };
+    }
+    match family {
+        "sphere" => {
+            let _: NoParams = parse_params(family, params)?;
+            any_dim!(jamkit_sphere::Sphere)
+        }
+        other => unreachable!("family `{other}` is in FAMILIES but has no dispatch arm"),
+    }
+}
+
+/// The parameters of a family that has none.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NoParams {}

@@ -1,0 +1,435 @@
+//! The experiment file.
+//!
+//! ```ron
+//! (
+//!     name: "quickstart",
+//!     dim: 2,
+//!     family: "sphere",
+//!     params: {},                       // the family's parameters; a list scans
+//!     sizes: Binary(small: 0.5, large: 0.7),
+//!     particles: 256,                   // or a list: [64, 128, 256]
+//!     samples: 4,
+//!     seed: 1,
+//!     protocol: Jam(phi_start: 0.1, eps: 1e-3, energy_low: 1e-16, energy_high: 2e-16),
+//!     minimizer: (variant: Fire, dt_max: 0.5, force_tol: 1e-25),
+//!     rattlers: (min_contacts: None),   // None: the family's default (d + 1 for disks)
+//!     observables: [Contacts, Pressure],
+//!     output: (packings: true),
+//! )
+//! ```
+//!
+//! Every field but `name`, `family` and `particles` has a default; unknown
+//! fields are rejected. `docs/formats.md` lists every field.
+
+use crate::error::ExperimentError;
+use jamkit_core::{Potential, SizeDistribution};
+use jamkit_engine::{FireParams, JamParams, PressureParams};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// One value or a list of values (a list scans).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum OneOrMany<T> {
+    /// A single value.
+    One(T),
+    /// Several values, each a grid point.
+    Many(Vec<T>),
+}
+
+impl<T: Clone> OneOrMany<T> {
+    /// The values as a list.
+    pub fn values(&self) -> Vec<T> {
+        match self {
+            OneOrMany::One(v) => vec![v.clone()],
+            OneOrMany::Many(v) => v.clone(),
+        }
+    }
+}
+
+/// A whole experiment.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Experiment {
+    /// Name, used in output.
+    pub name: String,
+    /// Spatial dimension.
+    #[serde(default = "default_dim")]
+    pub dim: usize,
+    /// Shape family (see `jamkit shapes`).
+    pub family: String,
+    /// The family's parameters; a list where a scalar is expected scans.
+    #[serde(default)]
+    pub params: BTreeMap<String, ron::Value>,
+    /// Size distribution of the bodies.
+    #[serde(default)]
+    pub sizes: SizeDistribution,
+    /// Number of bodies `N` (a list scans).
+    pub particles: OneOrMany<usize>,
+    /// Samples per parameter point.
+    #[serde(default = "default_samples")]
+    pub samples: usize,
+    /// Base seed; sample `k` uses `seed + k`.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// How the packing fraction is driven.
+    #[serde(default)]
+    pub protocol: Protocol,
+    /// FIRE's parameters and stopping criteria.
+    #[serde(default)]
+    pub minimizer: FireParams,
+    /// Contact potential `v(h)`.
+    #[serde(default)]
+    pub potential: Potential,
+    /// Rattler removal.
+    #[serde(default)]
+    pub rattlers: Rattlers,
+    /// What to measure on each packing.
+    #[serde(default = "default_observables")]
+    pub observables: Vec<Observable>,
+    /// Engine tuning that does not change results beyond round-off.
+    #[serde(default)]
+    pub engine: EngineParams,
+    /// What to write.
+    #[serde(default)]
+    pub output: OutputParams,
+}
+
+fn default_dim() -> usize {
+    2
+}
+fn default_samples() -> usize {
+    1
+}
+fn default_seed() -> u64 {
+    1
+}
+fn default_observables() -> Vec<Observable> {
+    vec![Observable::Contacts, Observable::Pressure]
+}
+
+/// How the packing fraction is driven.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Protocol {
+    /// The paper's bisection to the jamming point.
+    Jam {
+        /// Packing fraction of the random start.
+        #[serde(default = "default_phi_start")]
+        phi_start: f64,
+        /// Initial step of φ.
+        #[serde(default = "default_eps")]
+        eps: f64,
+        /// Lower edge of the window for `V/N`.
+        #[serde(default = "default_energy_low")]
+        energy_low: f64,
+        /// Upper edge of the window for `V/N`.
+        #[serde(default = "default_energy_high")]
+        energy_high: f64,
+        /// Give up after this many changes of φ.
+        #[serde(default = "default_max_density_steps")]
+        max_density_steps: u64,
+    },
+    /// Compress in steps of `eps` to packing fraction `phi`.
+    Phi {
+        /// Packing fraction of the random start.
+        #[serde(default = "default_phi_start")]
+        phi_start: f64,
+        /// Target packing fraction.
+        phi: f64,
+        /// Step of φ.
+        #[serde(default = "default_eps")]
+        eps: f64,
+    },
+    /// Bisect φ to a target pressure.
+    Pressure {
+        /// Packing fraction of the random start.
+        #[serde(default = "default_phi_start")]
+        phi_start: f64,
+        /// Target pressure.
+        pressure: f64,
+        /// Relative tolerance on the pressure.
+        #[serde(default = "default_pressure_tol")]
+        tol: f64,
+        /// Initial step of φ.
+        #[serde(default = "default_eps")]
+        eps: f64,
+        /// Give up after this many changes of φ.
+        #[serde(default = "default_max_density_steps")]
+        max_density_steps: u64,
+    },
+}
+
+fn default_phi_start() -> f64 {
+    0.1
+}
+fn default_eps() -> f64 {
+    JamParams::default().eps
+}
+fn default_energy_low() -> f64 {
+    JamParams::default().energy_low
+}
+fn default_energy_high() -> f64 {
+    JamParams::default().energy_high
+}
+fn default_max_density_steps() -> u64 {
+    JamParams::default().max_density_steps
+}
+fn default_pressure_tol() -> f64 {
+    PressureParams::default().tol
+}
+
+impl Default for Protocol {
+    fn default() -> Self {
+        Protocol::Jam {
+            phi_start: default_phi_start(),
+            eps: default_eps(),
+            energy_low: default_energy_low(),
+            energy_high: default_energy_high(),
+            max_density_steps: default_max_density_steps(),
+        }
+    }
+}
+
+impl Protocol {
+    /// Packing fraction of the random start.
+    pub fn phi_start(&self) -> f64 {
+        match *self {
+            Protocol::Jam { phi_start, .. }
+            | Protocol::Phi { phi_start, .. }
+            | Protocol::Pressure { phi_start, .. } => phi_start,
+        }
+    }
+
+    /// A short name for tables.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Protocol::Jam { .. } => "jam",
+            Protocol::Phi { .. } => "phi",
+            Protocol::Pressure { .. } => "pressure",
+        }
+    }
+}
+
+/// Rattler removal.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Rattlers {
+    /// Bodies with fewer contacts are removed iteratively; `None` uses the
+    /// family's default (`d + 1` for disks, spheres and near-disks).
+    pub min_contacts: Option<usize>,
+}
+
+/// An observable measured on each packing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Observable {
+    /// Contacts, rattlers, `z_J` and the isostaticity margin.
+    Contacts,
+    /// The virial pressure.
+    Pressure,
+}
+
+/// Engine tuning.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EngineParams {
+    /// Verlet skin, in units of the smallest body's bounding radius.
+    pub skin: f64,
+}
+
+impl Default for EngineParams {
+    fn default() -> Self {
+        Self { skin: 0.4 }
+    }
+}
+
+/// What to write.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputParams {
+    /// Write positions and orientations into `packings/<id>.json`. The
+    /// record with the measured values is written either way (it is what
+    /// makes a run resumable).
+    pub packings: bool,
+}
+
+impl Default for OutputParams {
+    fn default() -> Self {
+        Self { packings: true }
+    }
+}
+
+/// The largest `N` accepted (memory and time guard; the neighbour list is
+/// `O(N)` but a run of a million bodies is not what a file typo should start).
+pub const MAX_PARTICLES: usize = 10_000_000;
+
+impl Experiment {
+    /// Parse RON text; `file` names the source in errors.
+    pub fn from_ron(text: &str, file: &str) -> Result<Self, ExperimentError> {
+        ron::Options::default()
+            .from_str(text)
+            .map_err(|e| ExperimentError::Parse {
+                file: file.to_string(),
+                message: e.to_string(),
+            })
+    }
+
+    /// Read and parse a file.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, ExperimentError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ExperimentError::io(path, e))?;
+        Self::from_ron(&text, &path.display().to_string())
+    }
+
+    /// Check every range that serde cannot; the family's own parameters are
+    /// checked by the registry when the grid is expanded.
+    pub fn validate(&self) -> Result<(), ExperimentError> {
+        if self.name.trim().is_empty() {
+            return Err(ExperimentError::invalid(
+                "name",
+                "\"\"",
+                "must not be empty",
+            ));
+        }
+        let info = crate::registry::family_info(&self.family)?;
+        if !crate::registry::supports_dim(&info, self.dim) {
+            return Err(ExperimentError::invalid(
+                "dim",
+                self.dim,
+                format!(
+                    "family `{}` supports {}",
+                    self.family,
+                    crate::registry::describe_dims(&info)
+                ),
+            ));
+        }
+        let particles = self.particles.values();
+        if particles.is_empty() {
+            return Err(ExperimentError::invalid(
+                "particles",
+                "[]",
+                "must list at least one N",
+            ));
+        }
+        for n in particles {
+            if !(2..=MAX_PARTICLES).contains(&n) {
+                return Err(ExperimentError::invalid(
+                    "particles",
+                    n,
+                    format!("must be between 2 and {MAX_PARTICLES}"),
+                ));
+            }
+        }
+        if self.samples == 0 {
+            return Err(ExperimentError::invalid("samples", 0, "must be at least 1"));
+        }
+        self.sizes.validate()?;
+        self.minimizer.validate("minimizer")?;
+        self.validate_protocol()?;
+        if !(self.engine.skin > 0.0 && self.engine.skin <= 2.0) {
+            return Err(ExperimentError::invalid(
+                "engine.skin",
+                self.engine.skin,
+                "must lie in (0, 2] (units of the smallest bounding radius)",
+            ));
+        }
+        if self.rattlers.min_contacts == Some(0) {
+            return Err(ExperimentError::invalid(
+                "rattlers.min_contacts",
+                0,
+                "must be at least 1, or None for the family's default",
+            ));
+        }
+        Ok(())
+    }
+
+    fn validate_protocol(&self) -> Result<(), ExperimentError> {
+        let phi_start = self.protocol.phi_start();
+        if !(phi_start > 0.0 && phi_start < 1.0) {
+            return Err(ExperimentError::invalid(
+                "protocol.phi_start",
+                phi_start,
+                "must lie in (0, 1)",
+            ));
+        }
+        match self.protocol {
+            Protocol::Jam {
+                eps,
+                energy_low,
+                energy_high,
+                max_density_steps,
+                ..
+            } => {
+                JamParams {
+                    eps,
+                    energy_low,
+                    energy_high,
+                    max_density_steps,
+                }
+                .validate("protocol")?;
+                // NOTE: FIRE stops at V/N < energy_tol; if that were above the
+                // window's lower edge, an unrelaxed state could be taken as
+                // jammed.
+                if self.minimizer.energy_tol > energy_low {
+                    return Err(ExperimentError::invalid(
+                        "minimizer.energy_tol",
+                        self.minimizer.energy_tol,
+                        format!("must not exceed protocol.energy_low = {energy_low:e}"),
+                    ));
+                }
+            }
+            Protocol::Phi { phi, eps, .. } => {
+                if !(phi > 0.0 && phi.is_finite()) {
+                    return Err(ExperimentError::invalid(
+                        "protocol.phi",
+                        phi,
+                        "must be positive and finite",
+                    ));
+                }
+                if !(eps > 0.0 && eps < 1.0) {
+                    return Err(ExperimentError::invalid(
+                        "protocol.eps",
+                        eps,
+                        "must lie in (0, 1)",
+                    ));
+                }
+            }
+            Protocol::Pressure {
+                pressure,
+                tol,
+                eps,
+                max_density_steps,
+                ..
+            } => {
+                if !(pressure > 0.0 && pressure.is_finite()) {
+                    return Err(ExperimentError::invalid(
+                        "protocol.pressure",
+                        pressure,
+                        "must be positive and finite",
+                    ));
+                }
+                if !(tol > 0.0 && tol < 1.0) {
+                    return Err(ExperimentError::invalid(
+                        "protocol.tol",
+                        tol,
+                        "must lie in (0, 1)",
+                    ));
+                }
+                if !(eps > 0.0 && eps < 1.0) {
+                    return Err(ExperimentError::invalid(
+                        "protocol.eps",
+                        eps,
+                        "must lie in (0, 1)",
+                    ));
+                }
+                if max_density_steps == 0 {
+                    return Err(ExperimentError::invalid(
+                        "protocol.max_density_steps",
+                        0,
+                        "must be at least 1",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,118 @@
+//! # The `sphere` family
+//!
+//! Disks in 2D, spheres in 3D, hyperspheres in any `D`: a body of size `R`
+//! is the ball of radius `R`. The gap between two balls is
+//!
+//! ```text
+//! h_ij = |r_ij| − R_i − R_j,     ∂h/∂r_j = r̂_ij = −∂h/∂r_i
+//! ```
+//!
+//! and a ball has no rotational coordinates: a sphere scene carries only
+//! `D` coordinates per body.
+
+use jamkit_core::math::unit_ball_volume;
+use jamkit_core::{Contact, Dims, FamilyInfo, Shape, Vector};
+use rand::Rng;
+
+/// The family's self-description for the registry.
+pub const INFO: FamilyInfo = FamilyInfo {
+    name: "sphere",
+    about: "disks (2D), spheres (3D), hyperspheres: the ball of radius R0; no parameters, no rotations",
+    dims: Dims::Any,
+    params: &[],
+};
+
+/// Balls in `D` dimensions; the family has no parameters.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sphere;
+
+impl<const D: usize> Shape<D> for Sphere {
+    type Orientation = ();
+
+    fn family(&self) -> &'static str {
+        "sphere"
+    }
+
+    fn rot_dof(&self) -> usize {
+        0
+    }
+
+    fn volume(&self, size: f64) -> f64 {
+        unit_ball_volume(D) * size.powi(D as i32)
+    }
+
+    fn bounding_radius(&self, size: f64) -> f64 {
+        size
+    }
+
+    fn reference_orientation(&self) {}
+
+    fn random_orientation<R: Rng + ?Sized>(&self, _rng: &mut R) {}
+
+    fn rotate(&self, _orientation: &mut (), _dq: &[f64]) {}
+
+    fn orientation_coords(&self, _orientation: &()) -> Vec<f64> {
+        Vec::new()
+    }
+
+    fn orientation_from_coords(&self, coords: &[f64]) -> Option<()> {
+        coords.is_empty().then_some(())
+    }
+
+    #[inline(always)]
+    fn contacts<F: FnMut(Contact<D>)>(
+        &self,
+        size_i: f64,
+        _o_i: &(),
+        size_j: f64,
+        _o_j: &(),
+        r_ij: &Vector<D>,
+        _max_gap: f64,
+        mut visit: F,
+    ) {
+        // The exact gap is as cheap as any bound on it: always report it.
+        let r = r_ij.norm();
+        // NOTE: coincident centres have no direction; any unit vector is a
+        // valid subgradient, and a fixed one keeps the run deterministic.
+        let unit = if r > 0.0 {
+            r_ij * (1.0 / r)
+        } else {
+            Vector::<D>::from_fn(|a, _| if a == 0 { 1.0 } else { 0.0 })
+        };
+        visit(Contact::translational(r - size_i - size_j, unit));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn gap_of_touching_disks_is_zero() {
+        let mut h = f64::NAN;
+        Shape::<2>::contacts(
+            &Sphere,
+            0.5,
+            &(),
+            0.7,
+            &(),
+            &Vector::<2>::new(0.0, 1.2),
+            0.0,
+            |c| h = c.gap,
+        );
+        assert_relative_eq!(h, 0.0, epsilon = 1e-15);
+    }
+
+    #[test]
+    fn volumes_are_disk_area_and_ball_volume() {
+        assert_relative_eq!(
+            Shape::<2>::volume(&Sphere, 0.5),
+            std::f64::consts::PI * 0.25
+        );
+        assert_relative_eq!(
+            Shape::<3>::volume(&Sphere, 2.0),
+            4.0 / 3.0 * std::f64::consts::PI * 8.0
+        );
+    }
+}

@@ -1,0 +1,169 @@
+//! `jamkit`: the command line.
+//!
+//! * `jamkit run FILE [--out DIR] [--jobs N] [--set KEY=VALUE …]`
+//! * `jamkit validate FILE [--set KEY=VALUE …]`
+//! * `jamkit shapes`
+//! * `jamkit bench [packing|eval]`
+
+mod bench;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+use jamkit_experiment::runner::{RunOptions, default_out, run};
+use jamkit_experiment::{Experiment, grid, overrides, registry};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "jamkit",
+    version,
+    about = "Jamming of frictionless particles, spherical and not"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run an experiment file; results go to DIR (default out/<name>).
+    Run {
+        /// The RON experiment file.
+        file: PathBuf,
+        /// Output directory; a rerun into the same directory resumes.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Override a field: --set particles=256 --set protocol.eps=1e-4.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+    },
+    /// Check an experiment file and print its grid, without running it.
+    Validate {
+        /// The RON experiment file.
+        file: PathBuf,
+        /// Override a field, as for `run`.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+    },
+    /// List the registered shape families and their parameters.
+    Shapes,
+    /// Time the engine (see docs/performance.md).
+    Bench {
+        #[command(subcommand)]
+        what: bench::BenchCommand,
+    },
+}
+
+fn load(file: &PathBuf, sets: &[String]) -> Result<Experiment> {
+    let experiment = Experiment::from_file(file)?;
+    let experiment = overrides::apply(&experiment, sets)?;
+    experiment.validate()?;
+    Ok(experiment)
+}
+
+fn main() {
+    if let Err(e) = real_main() {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn real_main() -> Result<()> {
+    match Cli::parse().command {
+        Command::Run {
+            file,
+            out,
+            jobs,
+            sets,
+        } => {
+            let experiment = load(&file, &sets)?;
+            let out = out.unwrap_or_else(|| default_out(&experiment));
+            if jobs == Some(0) {
+                bail!("--jobs = 0: must be at least 1");
+            }
+            let options = RunOptions {
+                out: out.clone(),
+                jobs,
+                progress: std::io::stderr().is_terminal(),
+            };
+            let report = run(&experiment, &options)
+                .with_context(|| format!("running {}", file.display()))?;
+            print_table(&report);
+            println!(
+                "\n{} packings ({} reused from an earlier run) in {}: results.csv, summary.csv, packings/",
+                report.packings.len(),
+                report.reused,
+                out.display()
+            );
+            if !report.failures.is_empty() {
+                for f in &report.failures {
+                    eprintln!("error: {f}");
+                }
+                bail!(
+                    "{} of {} samples failed (the others are saved; rerun to retry only the failed ones)",
+                    report.failures.len(),
+                    report.failures.len() + report.packings.len()
+                );
+            }
+            Ok(())
+        }
+        Command::Validate { file, sets } => {
+            let experiment = load(&file, &sets)?;
+            let points = grid::points(&experiment)?;
+            println!(
+                "{}: valid; {} point(s) × {} sample(s)",
+                file.display(),
+                points.len(),
+                experiment.samples
+            );
+            for p in &points {
+                println!("  {}", p.label(&experiment.family, experiment.dim));
+            }
+            Ok(())
+        }
+        Command::Shapes => {
+            for f in registry::FAMILIES {
+                println!("{} ({}): {}", f.name, registry::describe_dims(f), f.about);
+                if f.params.is_empty() {
+                    println!("    (no parameters)");
+                }
+                for p in f.params {
+                    let default = p
+                        .default
+                        .map(|d| format!(" [default {d}]"))
+                        .unwrap_or_else(|| " [required]".into());
+                    println!("    {}{}: {}", p.name, default, p.about);
+                }
+            }
+            Ok(())
+        }
+        Command::Bench { what } => bench::run(what),
+    }
+}
+
+fn print_table(report: &jamkit_experiment::runner::RunReport) {
+    println!(
+        "{:<40} {:>7} {:>22} {:>18} {:>10} {:>8} {:>8}",
+        "point", "samples", "phi_J", "z_J", "rattlers", "iso_min", "flagged"
+    );
+    for s in &report.summaries {
+        println!(
+            "{:<40} {:>7} {:>13.6} ± {:<7.1e} {:>9.4} ± {:<6.1e} {:>9.2}% {:>8} {:>8}",
+            s.label,
+            s.samples,
+            s.phi.0,
+            s.phi.1,
+            s.z_j.0,
+            s.z_j.1,
+            100.0 * s.rattler_fraction.0,
+            s.iso_margin_min
+                .map(|m| m.to_string())
+                .unwrap_or_else(|| "-".into()),
+            s.flagged
+        );
+    }
+}
