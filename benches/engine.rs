@@ -1,1 +1,49 @@
-fn main() {}
+//! `cargo bench`: the engine's hot paths.
+//!
+//! * `energy_gradient/N`: one energy-and-gradient evaluation of binary disks
+//!   at φ = 0.84 (random, overlapping), N = 256 … 16384: must grow linearly.
+//! * `jam_disks/256`: one whole N = 256 packing with the paper's protocol.
+//!
+//! The N = 1024 packing benchmark is `jamkit bench packing` (one packing is
+//! seconds long, too long for criterion's repetitions).
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use jamkit_core::{Packing, Potential, SizeDistribution};
+use jamkit_engine::{Fire, FireParams, JamParams, Objective, Scene, jam};
+use jamkit_sphere::Sphere;
+use rand::SeedableRng;
+use std::hint::black_box;
+
+fn disks(n: usize, phi: f64, seed: u64) -> Scene<2, Sphere> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let sizes = SizeDistribution::default().sample(n, &mut rng);
+    let packing = Packing::<2, Sphere>::random(Sphere, sizes, phi, &mut rng).unwrap();
+    Scene::new(packing, Potential::Harmonic, 0.2)
+}
+
+fn energy_gradient(c: &mut Criterion) {
+    let mut group = c.benchmark_group("energy_gradient");
+    for n in [256, 1024, 4096, 16384] {
+        let mut scene = disks(n, 0.84, 1);
+        let mut grad = vec![0.0; scene.dof()];
+        group.throughput(Throughput::Elements(n as u64));
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| b.iter(|| black_box(scene.energy_gradient(&mut grad))));
+    }
+    group.finish();
+}
+
+fn jam_disks(c: &mut Criterion) {
+    let mut group = c.benchmark_group("jam_disks");
+    group.sample_size(10);
+    group.bench_function("256", |b| {
+        b.iter(|| {
+            let mut scene = disks(256, 0.1, 1);
+            let mut fire = Fire::new(FireParams::default());
+            black_box(jam(&mut scene, &mut fire, &JamParams::default()).unwrap())
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, energy_gradient, jam_disks);
+criterion_main!(benches);

@@ -58,7 +58,7 @@ enum Command {
     },
 }
 
-fn load(file: &PathBuf, sets: &[String]) -> Result<Experiment> {
+fn load(file: &std::path::Path, sets: &[String]) -> Result<Experiment> {
     let experiment = Experiment::from_file(file)?;
     let experiment = overrides::apply(&experiment, sets)?;
     experiment.validate()?;
@@ -148,7 +148,7 @@ fn real_main() -> Result<()> {
 fn print_table(report: &jamkit_experiment::runner::RunReport) {
     println!(
         "{:<40} {:>7} {:>22} {:>18} {:>10} {:>8} {:>8}",
-        "point", "samples", "phi_J", "z_J", "rattlers", "iso_min", "flagged"
+        "point", "samples", "phi", "z", "rattlers", "iso_min", "flagged"
     );
     for s in &report.summaries {
         println!(

@@ -46,8 +46,18 @@ impl Error {
     ) -> Self {
         Error::InvalidParameter {
             field: field.into(),
-            value: value.to_string(),
+            value: show_value(&value),
             allowed: allowed.into(),
         }
+    }
+}
+
+/// A value as a user wrote it: numbers far from 1 in scientific notation
+/// (`1e-15`, not `0.000000000000001`).
+pub fn show_value(value: &dyn std::fmt::Display) -> String {
+    let text = value.to_string();
+    match text.parse::<f64>() {
+        Ok(x) if x != 0.0 && x.is_finite() && (x.abs() < 1e-3 || x.abs() >= 1e7) => format!("{x:e}"),
+        _ => text,
     }
 }

@@ -188,7 +188,7 @@ pub fn jam<const D: usize, S: Shape<D>>(
         let over = e > params.energy_low;
         // Reverse and halve on every crossing of the threshold.
         if over == (eps > 0.0) {
-            eps = -0.5 * eps;
+            eps *= -0.5;
         }
         if steps >= params.max_density_steps {
             return Err(Error::JammingFailed {
@@ -218,13 +218,12 @@ pub fn compress_to_phi<const D: usize, S: Shape<D>>(
         minimizations: 0,
     };
     let mut e = tally.relax(scene, fire)?;
-    while scene.phi() != target {
-        let phi = scene.phi();
-        let next = if (target - phi).abs() <= eps {
-            target
-        } else {
-            phi + eps.copysign(target - phi)
-        };
+    // NOTE: φ is recomputed from the box volume, so it may miss `target` by an
+    // ulp after the last rescale; count the steps instead of comparing φ.
+    let start = scene.phi();
+    let steps = ((target - start).abs() / eps).ceil() as u64;
+    for k in 1..=steps {
+        let next = if k == steps { target } else { start + (k as f64) * eps.copysign(target - start) };
         scene.set_phi(next);
         e = tally.relax(scene, fire)?;
     }
@@ -251,7 +250,7 @@ pub fn compress_to_pressure<const D: usize, S: Shape<D>>(
         }
         let over = p > params.pressure;
         if over == (eps > 0.0) {
-            eps = -0.5 * eps;
+            eps *= -0.5;
         }
         if steps >= params.max_density_steps {
             return Err(Error::JammingFailed {

@@ -43,7 +43,7 @@ impl ExperimentError {
     ) -> Self {
         Self::Invalid {
             field: field.into(),
-            value: value.to_string(),
+            value: jamkit_core::error::show_value(&value),
             allowed: allowed.into(),
         }
     }

@@ -38,8 +38,18 @@ pub fn apply(experiment: &Experiment, sets: &[String]) -> Result<Experiment, Exp
     })
 }
 
-/// RON text to a JSON value; a bare word that RON rejects becomes a string.
+/// RON text to a JSON value. `ron::Value` forgets enum variant names, so
+/// `Variant(...)` is read as `{"Variant": (...)}` here; a bare word that RON
+/// rejects becomes a string (a unit variant such as `Fire2`, or a name).
 fn parse_value(text: &str) -> Value {
+    let ident_len = text.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(text.len());
+    let (ident, rest) = text.split_at(ident_len);
+    if ident.starts_with(|c: char| c.is_ascii_uppercase()) && rest.starts_with('(') && rest.ends_with(')') {
+        let inner = parse_value(rest);
+        let mut obj = serde_json::Map::new();
+        obj.insert(ident.to_string(), inner);
+        return Value::Object(obj);
+    }
     ron::from_str::<ron::Value>(text)
         .ok()
         .and_then(|v| serde_json::to_value(v).ok())
@@ -88,10 +98,8 @@ fn known_fields(node: &Value) -> String {
     match node {
         Value::Object(m) => {
             let mut keys: Vec<&str> = m.keys().map(String::as_str).collect();
-            if m.len() == 1 {
-                if let Some(Value::Object(inner)) = m.values().next() {
-                    keys.extend(inner.keys().map(String::as_str));
-                }
+            if let (1, Some(Value::Object(inner))) = (m.len(), m.values().next()) {
+                keys.extend(inner.keys().map(String::as_str));
             }
             keys.join(", ")
         }

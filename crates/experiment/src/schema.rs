@@ -29,7 +29,7 @@ use std::collections::BTreeMap;
 
 /// One value or a list of values (a list scans).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a value or a list of values")]
 pub enum OneOrMany<T> {
     /// A single value.
     One(T),
@@ -284,11 +284,7 @@ impl Experiment {
     /// checked by the registry when the grid is expanded.
     pub fn validate(&self) -> Result<(), ExperimentError> {
         if self.name.trim().is_empty() {
-            return Err(ExperimentError::invalid(
-                "name",
-                "\"\"",
-                "must not be empty",
-            ));
+            return Err(ExperimentError::invalid("name", format!("{:?}", self.name), "must not be blank"));
         }
         let info = crate::registry::family_info(&self.family)?;
         if !crate::registry::supports_dim(&info, self.dim) {
