@@ -27,7 +27,9 @@ fn energy_gradient(c: &mut Criterion) {
         let mut scene = disks(n, 0.84, 1);
         let mut grad = vec![0.0; scene.dof()];
         group.throughput(Throughput::Elements(n as u64));
-        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| b.iter(|| black_box(scene.energy_gradient(&mut grad))));
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| black_box(scene.energy_gradient(&mut grad)))
+        });
     }
     group.finish();
 }

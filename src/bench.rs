@@ -41,7 +41,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
             seeds,
             dim,
         } => {
-            println!("dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step");
+            out!("dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step");
             for seed in seeds {
                 match dim {
                     2 => bench_packing::<2>(particles, seed)?,
@@ -52,7 +52,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
             Ok(())
         }
         BenchCommand::Eval { particles } => {
-            println!("particles,pairs,us_per_eval,ns_per_particle");
+            out!("particles,pairs,us_per_eval,ns_per_particle");
             for n in particles {
                 let mut scene = random_scene::<2>(n, 1, 0.84)?;
                 let mut g = vec![0.0; scene.dof()];
@@ -65,7 +65,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
                 }
                 let us = t.elapsed().as_secs_f64() * 1e6 / reps as f64;
                 assert!(sink.is_finite());
-                println!(
+                out!(
                     "{n},{},{us:.3},{:.2}",
                     scene.neighbor_pairs(),
                     us * 1e3 / n as f64
@@ -90,7 +90,7 @@ fn bench_packing<const D: usize>(n: usize, seed: u64) -> Result<()> {
     let out = jam(&mut scene, &mut fire, &JamParams::default())?;
     let wall = t.elapsed().as_secs_f64();
     let s = summarize(&mut scene, D + 1);
-    println!(
+    out!(
         "{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2}",
         out.phi,
         s.z_j,

@@ -5,6 +5,15 @@
 //! * `jamkit shapes`
 //! * `jamkit bench [packing|eval]`
 
+/// `println!` that ignores a closed pipe (`jamkit validate … | head`)
+/// instead of panicking.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod bench;
 
 use anyhow::{Context, Result, bail};
@@ -93,7 +102,7 @@ fn real_main() -> Result<()> {
             let report = run(&experiment, &options)
                 .with_context(|| format!("running {}", file.display()))?;
             print_table(&report);
-            println!(
+            out!(
                 "\n{} packings ({} reused from an earlier run) in {}: results.csv, summary.csv, packings/",
                 report.packings.len(),
                 report.reused,
@@ -114,29 +123,29 @@ fn real_main() -> Result<()> {
         Command::Validate { file, sets } => {
             let experiment = load(&file, &sets)?;
             let points = grid::points(&experiment)?;
-            println!(
+            out!(
                 "{}: valid; {} point(s) × {} sample(s)",
                 file.display(),
                 points.len(),
                 experiment.samples
             );
             for p in &points {
-                println!("  {}", p.label(&experiment.family, experiment.dim));
+                out!("  {}", p.label(&experiment.family, experiment.dim));
             }
             Ok(())
         }
         Command::Shapes => {
             for f in registry::FAMILIES {
-                println!("{} ({}): {}", f.name, registry::describe_dims(f), f.about);
+                out!("{} ({}): {}", f.name, registry::describe_dims(f), f.about);
                 if f.params.is_empty() {
-                    println!("    (no parameters)");
+                    out!("    (no parameters)");
                 }
                 for p in f.params {
                     let default = p
                         .default
                         .map(|d| format!(" [default {d}]"))
                         .unwrap_or_else(|| " [required]".into());
-                    println!("    {}{}: {}", p.name, default, p.about);
+                    out!("    {}{}: {}", p.name, default, p.about);
                 }
             }
             Ok(())
@@ -146,12 +155,18 @@ fn real_main() -> Result<()> {
 }
 
 fn print_table(report: &jamkit_experiment::runner::RunReport) {
-    println!(
+    out!(
         "{:<40} {:>7} {:>22} {:>18} {:>10} {:>8} {:>8}",
-        "point", "samples", "phi", "z", "rattlers", "iso_min", "flagged"
+        "point",
+        "samples",
+        "phi",
+        "z",
+        "rattlers",
+        "iso_min",
+        "flagged"
     );
     for s in &report.summaries {
-        println!(
+        out!(
             "{:<40} {:>7} {:>13.6} ± {:<7.1e} {:>9.4} ± {:<6.1e} {:>9.2}% {:>8} {:>8}",
             s.label,
             s.samples,

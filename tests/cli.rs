@@ -4,8 +4,16 @@ use std::path::Path;
 use std::process::Command;
 
 fn jamkit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_jamkit")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+    let out = Command::new(env!("CARGO_BIN_EXE_jamkit"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
 }
 
 #[test]
@@ -15,7 +23,11 @@ fn bad_files_exit_with_a_message_and_no_panic() {
         let path = entry.unwrap().path();
         let (code, _, err) = jamkit(&["validate", path.to_str().unwrap()]);
         assert_eq!(code, 1, "{}", path.display());
-        assert!(err.starts_with("error: ") && !err.contains("panicked"), "{}: {err}", path.display());
+        assert!(
+            err.starts_with("error: ") && !err.contains("panicked"),
+            "{}: {err}",
+            path.display()
+        );
     }
     let (code, _, err) = jamkit(&["run", "no/such/file.ron"]);
     assert_eq!(code, 1);
@@ -24,10 +36,27 @@ fn bad_files_exit_with_a_message_and_no_panic() {
 
 #[test]
 fn overrides_reach_the_grid() {
-    let (code, out, err) = jamkit(&["validate", "experiments/quickstart.ron", "--set", "particles=[32, 64]", "--set", "samples=3"]);
+    let (code, out, err) = jamkit(&[
+        "validate",
+        "experiments/quickstart.ron",
+        "--set",
+        "particles=[32, 64]",
+        "--set",
+        "samples=3",
+    ]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("2 point(s) × 3 sample(s)") && out.contains("sphere_d2_N32") && out.contains("sphere_d2_N64"), "{out}");
-    let (code, _, err) = jamkit(&["validate", "experiments/quickstart.ron", "--set", "protocol.epz=1"]);
+    assert!(
+        out.contains("2 point(s) × 3 sample(s)")
+            && out.contains("sphere_d2_N32")
+            && out.contains("sphere_d2_N64"),
+        "{out}"
+    );
+    let (code, _, err) = jamkit(&[
+        "validate",
+        "experiments/quickstart.ron",
+        "--set",
+        "protocol.epz=1",
+    ]);
     assert_eq!(code, 1);
     assert!(err.contains("epz"), "{err}");
 }
@@ -43,10 +72,27 @@ fn shapes_lists_the_sphere_family() {
 fn run_writes_results_and_a_table() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().to_str().unwrap();
-    let (code, out, err) = jamkit(&["run", "experiments/quickstart.ron", "--out", out_dir, "--jobs", "2", "--set", "particles=16", "--set", "samples=2"]);
+    let (code, out, err) = jamkit(&[
+        "run",
+        "experiments/quickstart.ron",
+        "--out",
+        out_dir,
+        "--jobs",
+        "2",
+        "--set",
+        "particles=16",
+        "--set",
+        "samples=2",
+    ]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("sphere_d2_N16"), "{out}");
-    for f in ["results.csv", "summary.csv", "experiment.ron", "packings/sphere_d2_N16_s1.json", "packings/sphere_d2_N16_s2.json"] {
+    for f in [
+        "results.csv",
+        "summary.csv",
+        "experiment.ron",
+        "packings/sphere_d2_N16_s1.json",
+        "packings/sphere_d2_N16_s2.json",
+    ] {
         assert!(dir.path().join(f).exists(), "{f} missing");
     }
 }

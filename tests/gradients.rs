@@ -24,7 +24,10 @@ fn check<const D: usize>() {
             let scene = dense_scene::<D>(potential, seed);
             let (err, scale) = gradient_error(&scene, 1e-6);
             assert!(scale > 1e-2, "configuration should overlap");
-            assert!(err < 1e-6 * scale, "D={D} {potential:?} seed {seed}: error {err:e} vs gradient {scale:e}");
+            assert!(
+                err < 1e-6 * scale,
+                "D={D} {potential:?} seed {seed}: error {err:e} vs gradient {scale:e}"
+            );
         }
     }
 }

@@ -9,8 +9,14 @@ use jamkit_experiment::{Experiment, ExperimentError, grid};
 use std::path::{Path, PathBuf};
 
 fn files(dir: &str) -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/inputs").join(dir);
-    let mut out: Vec<PathBuf> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "ron")).collect();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/inputs")
+        .join(dir);
+    let mut out: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ron"))
+        .collect();
     out.sort();
     assert!(!out.is_empty(), "no files in {}", dir.display());
     out
@@ -35,10 +41,21 @@ fn good_files_validate() {
 fn bad_files_fail_with_their_message() {
     for path in files("bad") {
         let text = std::fs::read_to_string(&path).unwrap();
-        let expected = text.lines().next().and_then(|l| l.strip_prefix("// error: ")).unwrap_or_else(|| panic!("{}: first line must be `// error: …`", path.display()));
+        let expected = text
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix("// error: "))
+            .unwrap_or_else(|| panic!("{}: first line must be `// error: …`", path.display()));
         match load(&path) {
-            Ok(_) => panic!("{}: accepted, expected error containing {expected:?}", path.display()),
-            Err(e) => assert!(e.to_string().contains(expected), "{}:\n  got:      {e}\n  expected: {expected}", path.display()),
+            Ok(_) => panic!(
+                "{}: accepted, expected error containing {expected:?}",
+                path.display()
+            ),
+            Err(e) => assert!(
+                e.to_string().contains(expected),
+                "{}:\n  got:      {e}\n  expected: {expected}",
+                path.display()
+            ),
         }
     }
 }

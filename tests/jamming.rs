@@ -5,12 +5,26 @@ use jamkit_experiment::record::PackingFile;
 use jamkit_experiment::runner::{RunOptions, run};
 
 fn experiment(dim: usize, particles: usize, samples: usize) -> Experiment {
-    let text = format!(r#"(name: "small", dim: {dim}, family: "sphere", particles: {particles}, samples: {samples}, seed: 11)"#);
+    let text = format!(
+        r#"(name: "small", dim: {dim}, family: "sphere", particles: {particles}, samples: {samples}, seed: 11)"#
+    );
     Experiment::from_ron(&text, "inline").unwrap()
 }
 
-fn run_into(e: &Experiment, dir: &std::path::Path, jobs: usize) -> jamkit_experiment::runner::RunReport {
-    run(e, &RunOptions { out: dir.to_path_buf(), jobs: Some(jobs), progress: false }).unwrap()
+fn run_into(
+    e: &Experiment,
+    dir: &std::path::Path,
+    jobs: usize,
+) -> jamkit_experiment::runner::RunReport {
+    run(
+        e,
+        &RunOptions {
+            out: dir.to_path_buf(),
+            jobs: Some(jobs),
+            progress: false,
+        },
+    )
+    .unwrap()
 }
 
 /// Every packing ends inside the paper's window, with a rigid contact
@@ -24,8 +38,18 @@ fn check_jammed(dim: usize, particles: usize, phi_range: (f64, f64)) {
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     assert_eq!(report.packings.len(), 3);
     for p in &report.packings {
-        assert!(p.energy_per_particle > 1e-16 && p.energy_per_particle < 2e-16, "{}: V/N = {}", p.id, p.energy_per_particle);
-        assert!(p.phi > phi_range.0 && p.phi < phi_range.1, "{}: phi = {}", p.id, p.phi);
+        assert!(
+            p.energy_per_particle > 1e-16 && p.energy_per_particle < 2e-16,
+            "{}: V/N = {}",
+            p.id,
+            p.energy_per_particle
+        );
+        assert!(
+            p.phi > phi_range.0 && p.phi < phi_range.1,
+            "{}: phi = {}",
+            p.id,
+            p.phi
+        );
         let margin = p.measures.iso_margin.unwrap();
         assert!(margin >= 1, "{}: iso margin {margin}", p.id);
         assert_eq!(p.positions.len(), particles);
@@ -65,18 +89,54 @@ fn packings_are_reproducible_and_runs_resume() {
     assert_eq!(again.packings, a.packings);
     let csv = std::fs::read_to_string(one.path().join("results.csv")).unwrap();
     let header = csv.lines().next().unwrap();
-    for column in ["family", "dim", "particles", "seed", "phi_j", "energy_per_particle", "n_contacts", "n_rattlers", "z_j", "iso_margin", "fire_steps", "wall_s"] {
-        assert!(header.split(',').any(|c| c == column), "missing column {column}");
+    for column in [
+        "family",
+        "dim",
+        "particles",
+        "seed",
+        "phi_j",
+        "energy_per_particle",
+        "n_contacts",
+        "n_rattlers",
+        "z_j",
+        "iso_margin",
+        "fire_steps",
+        "wall_s",
+    ] {
+        assert!(
+            header.split(',').any(|c| c == column),
+            "missing column {column}"
+        );
     }
     assert_eq!(csv.lines().count(), 4);
     let summary = std::fs::read_to_string(one.path().join("summary.csv")).unwrap();
     assert_eq!(summary.lines().count(), 2);
+    // Changed settings are not served from the old files.
+    let changed = jamkit_experiment::overrides::apply(&e, &["protocol.eps=2e-3".into()]).unwrap();
+    let redone = run_into(&changed, two.path(), 2);
+    assert_eq!(redone.reused, 0);
+    for p in &a.packings {
+        for x in &p.positions {
+            assert!(
+                x.iter()
+                    .zip(&p.box_edges)
+                    .all(|(c, l)| (0.0..*l).contains(c)),
+                "centre outside the box"
+            );
+        }
+    }
     // A damaged packing file is recomputed, not trusted.
-    let damaged = one.path().join("packings").join(format!("{}.json", a.packings[0].id));
+    let damaged = one
+        .path()
+        .join("packings")
+        .join(format!("{}.json", a.packings[0].id));
     std::fs::write(&damaged, "{ truncated").unwrap();
     let repaired = run_into(&e, one.path(), 1);
     assert_eq!(repaired.reused, 2);
-    assert_eq!(PackingFile::load(&damaged).unwrap().positions, a.packings[0].positions);
+    assert_eq!(
+        PackingFile::load(&damaged).unwrap().positions,
+        a.packings[0].positions
+    );
 }
 
 /// Compression to a packing fraction and to a pressure end where asked.
@@ -84,12 +144,24 @@ fn packings_are_reproducible_and_runs_resume() {
 fn phi_and_pressure_protocols_reach_their_targets() {
     let dir = tempfile::tempdir().unwrap();
     let mut e = experiment(2, 64, 1);
-    e = jamkit_experiment::overrides::apply(&e, &["protocol=Phi(phi: 0.9, eps: 0.01)".into()]).unwrap();
+    e = jamkit_experiment::overrides::apply(&e, &["protocol=Phi(phi: 0.9, eps: 0.01)".into()])
+        .unwrap();
     let r = run_into(&e, dir.path(), 1);
-    assert!((r.packings[0].phi - 0.9).abs() < 1e-12, "phi {}", r.packings[0].phi);
-    assert!(r.packings[0].energy_per_particle > 1e-6, "0.9 is above jamming: energy must remain");
+    assert!(
+        (r.packings[0].phi - 0.9).abs() < 1e-12,
+        "phi {}",
+        r.packings[0].phi
+    );
+    assert!(
+        r.packings[0].energy_per_particle > 1e-6,
+        "0.9 is above jamming: energy must remain"
+    );
     let dir = tempfile::tempdir().unwrap();
-    e = jamkit_experiment::overrides::apply(&e, &["protocol=Pressure(pressure: 1e-3, tol: 1e-2)".into()]).unwrap();
+    e = jamkit_experiment::overrides::apply(
+        &e,
+        &["protocol=Pressure(pressure: 1e-3, tol: 1e-2)".into()],
+    )
+    .unwrap();
     let r = run_into(&e, dir.path(), 1);
     let p = r.packings[0].measures.pressure.unwrap();
     assert!((p - 1e-3).abs() < 1e-2 * 1e-3, "pressure {p}");

@@ -29,6 +29,11 @@ pub enum Error {
         steps: u64,
         reason: String,
     },
+    /// The box is too small for the minimum-image convention.
+    #[error(
+        "the box edge {edge:.4} is shorter than twice the interaction range {range:.4} at phi = {phi:.6}: a body would meet its own periodic image; use more particles"
+    )]
+    BoxTooSmall { edge: f64, range: f64, phi: f64 },
     /// A NaN or infinity appeared in the energy or the forces.
     #[error("non-finite energy or force at phi = {phi:.12}: {what}")]
     NonFinite { phi: f64, what: String },
@@ -57,7 +62,9 @@ impl Error {
 pub fn show_value(value: &dyn std::fmt::Display) -> String {
     let text = value.to_string();
     match text.parse::<f64>() {
-        Ok(x) if x != 0.0 && x.is_finite() && (x.abs() < 1e-3 || x.abs() >= 1e7) => format!("{x:e}"),
+        Ok(x) if x != 0.0 && x.is_finite() && (x.abs() < 1e-3 || x.abs() >= 1e7) => {
+            format!("{x:e}")
+        }
         _ => text,
     }
 }

@@ -3,8 +3,8 @@
 //! An orthorhombic box `[0, L_1) × … × [0, L_D)` with periodic boundaries in
 //! every direction. Separations use the minimum-image convention,
 //! `d ← d − L ⌊d/L⌉`, which is exact as long as interactions are shorter than
-//! half an edge; the neighbour list checks that and falls back to an explicit
-//! image search when the box is too small (see `jamkit-engine`).
+//! half an edge; the engine refuses boxes smaller than that
+//! (`Scene::check_box` in `jamkit-engine`).
 
 use crate::math::Vector;
 use serde::{Deserialize, Serialize};

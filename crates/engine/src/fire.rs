@@ -59,14 +59,15 @@ pub struct FireParams {
     pub dt_max: f64,
     /// Smallest time step (FIRE 2.0 only).
     pub dt_min: f64,
-    /// Steps with `P > 0` before `Δt` may grow (`N_min` in FIRE, `N_delay` in FIRE 2.0).
-    pub n_min: u32,
+    /// Steps with `P > 0` before `Δt` may grow (`N_min` in FIRE, `N_delay`
+    /// in FIRE 2.0); `None`: the variant's own (5 for FIRE, 20 for FIRE 2.0).
+    pub n_min: Option<u32>,
     /// Growth factor of `Δt`.
     pub f_inc: f64,
     /// Shrink factor of `Δt` on `P ≤ 0`.
     pub f_dec: f64,
-    /// Initial mixing `α`.
-    pub alpha_start: f64,
+    /// Initial mixing `α`; `None`: the variant's own (0.1 for FIRE, 0.25 for FIRE 2.0).
+    pub alpha_start: Option<f64>,
     /// Decay factor of `α`.
     pub f_alpha: f64,
     /// Stop when `V/N` falls below this.
@@ -87,10 +88,10 @@ impl Default for FireParams {
             dt_init: 0.1,
             dt_max: 0.5,
             dt_min: 0.002,
-            n_min: 5,
+            n_min: None,
             f_inc: 1.1,
             f_dec: 0.5,
-            alpha_start: 0.1,
+            alpha_start: None,
             f_alpha: 0.99,
             energy_tol: 1e-16,
             force_tol: 1e-25,
@@ -101,15 +102,28 @@ impl Default for FireParams {
 }
 
 impl FireParams {
-    /// FIRE 2.0 with the parameters of Guénolé et al. (their Table 1),
-    /// scaled to this `dt_init`.
+    /// FIRE 2.0 with the mixing and delay of Guénolé et al. (their Table 1).
     pub fn fire2() -> Self {
         Self {
             variant: FireVariant::Fire2,
-            n_min: 20,
-            alpha_start: 0.25,
             ..Self::default()
         }
+    }
+
+    /// `N_min` (FIRE) or `N_delay` (FIRE 2.0) in force.
+    pub fn n_min(&self) -> u32 {
+        self.n_min.unwrap_or(match self.variant {
+            FireVariant::Fire => 5,
+            FireVariant::Fire2 => 20,
+        })
+    }
+
+    /// `α_start` in force.
+    pub fn alpha_start(&self) -> f64 {
+        self.alpha_start.unwrap_or(match self.variant {
+            FireVariant::Fire => 0.1,
+            FireVariant::Fire2 => 0.25,
+        })
     }
 
     /// Check ranges; names the offending field.
@@ -140,7 +154,7 @@ impl FireParams {
         let unit = [
             ("f_dec", self.f_dec),
             ("f_alpha", self.f_alpha),
-            ("alpha_start", self.alpha_start),
+            ("alpha_start", self.alpha_start()),
         ];
         for (name, v) in unit {
             if !(v > 0.0 && v < 1.0) {
@@ -229,7 +243,8 @@ impl Fire {
         let (inv_m, mass) = (&self.inv_mass, &self.mass);
 
         let mut dt = p.dt_init;
-        let mut alpha = p.alpha_start;
+        let (alpha_start, n_min) = (p.alpha_start(), p.n_min());
+        let mut alpha = alpha_start;
         let mut positive_steps: u32 = 0;
         let mut energy = obj.energy_gradient(g);
         let mut steps: u64 = 0;
@@ -284,7 +299,7 @@ impl Fire {
                         };
                         let keep = 1.0 - alpha;
                         positive_steps += 1;
-                        if positive_steps > p.n_min {
+                        if positive_steps > n_min {
                             dt = (dt * p.f_inc).min(p.dt_max);
                             alpha *= p.f_alpha;
                         }
@@ -292,7 +307,7 @@ impl Fire {
                     } else {
                         positive_steps = 0;
                         dt *= p.f_dec;
-                        alpha = p.alpha_start;
+                        alpha = alpha_start;
                         (0.0, 0.0)
                     };
                     let kick = steer + dt;
@@ -306,17 +321,17 @@ impl Fire {
                 FireVariant::Fire2 => {
                     if power > 0.0 {
                         positive_steps += 1;
-                        if positive_steps > p.n_min {
+                        if positive_steps > n_min {
                             dt = (dt * p.f_inc).min(p.dt_max);
                             alpha *= p.f_alpha;
                         }
                     } else {
                         positive_steps = 0;
                         // No shrinking during the initial delay (Guénolé et al.).
-                        if steps >= p.n_min as u64 && dt * p.f_dec >= p.dt_min {
+                        if steps >= n_min as u64 && dt * p.f_dec >= p.dt_min {
                             dt *= p.f_dec;
                         }
-                        alpha = p.alpha_start;
+                        alpha = alpha_start;
                         // Half a step back, then restart from rest.
                         for a in 0..n {
                             dq[a] = -0.5 * dt * v[a];
@@ -361,25 +376,28 @@ const LANES: usize = 4;
 
 /// `[Σ g², Σ g v, Σ m v², Σ g²/m]` in one pass.
 fn step_sums(g: &[f64], v: &[f64], inv_m: &[f64], mass: &[f64]) -> [f64; 4] {
-    let mut acc = [[0.0; LANES]; 4];
-    let n = g.len();
-    let body = n - n % LANES;
-    for base in (0..body).step_by(LANES) {
+    let (mut gg, mut gv, mut vv, mut ff) = ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    let chunks = g
+        .chunks_exact(LANES)
+        .zip(v.chunks_exact(LANES))
+        .zip(inv_m.chunks_exact(LANES))
+        .zip(mass.chunks_exact(LANES));
+    for (((g4, v4), im4), m4) in chunks {
         for l in 0..LANES {
-            let (ga, va) = (g[base + l], v[base + l]);
-            acc[0][l] += ga * ga;
-            acc[1][l] += ga * va;
-            acc[2][l] += va * va * mass[base + l];
-            acc[3][l] += ga * ga * inv_m[base + l];
+            gg[l] += g4[l] * g4[l];
+            gv[l] += g4[l] * v4[l];
+            vv[l] += v4[l] * v4[l] * m4[l];
+            ff[l] += g4[l] * g4[l] * im4[l];
         }
     }
-    for a in body..n {
-        acc[0][0] += g[a] * g[a];
-        acc[1][0] += g[a] * v[a];
-        acc[2][0] += v[a] * v[a] * mass[a];
-        acc[3][0] += g[a] * g[a] * inv_m[a];
+    let body = g.len() - g.len() % LANES;
+    for a in body..g.len() {
+        gg[0] += g[a] * g[a];
+        gv[0] += g[a] * v[a];
+        vv[0] += v[a] * v[a] * mass[a];
+        ff[0] += g[a] * g[a] * inv_m[a];
     }
-    acc.map(|lanes| (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]))
+    [gg, gv, vv, ff].map(|l| (l[0] + l[1]) + (l[2] + l[3]))
 }
 
 #[cfg(test)]

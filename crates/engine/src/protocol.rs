@@ -131,6 +131,7 @@ impl Tally {
         scene: &mut Scene<D, S>,
         fire: &mut Fire,
     ) -> Result<f64> {
+        scene.check_box()?;
         let out = fire.minimize(scene)?;
         self.fire_steps += out.steps;
         self.minimizations += 1;
@@ -223,7 +224,11 @@ pub fn compress_to_phi<const D: usize, S: Shape<D>>(
     let start = scene.phi();
     let steps = ((target - start).abs() / eps).ceil() as u64;
     for k in 1..=steps {
-        let next = if k == steps { target } else { start + (k as f64) * eps.copysign(target - start) };
+        let next = if k == steps {
+            target
+        } else {
+            start + (k as f64) * eps.copysign(target - start)
+        };
         scene.set_phi(next);
         e = tally.relax(scene, fire)?;
     }

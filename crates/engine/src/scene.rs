@@ -67,6 +67,23 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         self.evaluations
     }
 
+    /// Fail when some body could meet its own periodic image, or a pair
+    /// could interact through two images: the minimum-image convention needs
+    /// every listed range `b_i + b_j + skin` below half the shortest edge.
+    pub fn check_box(&self) -> jamkit_core::Result<()> {
+        let max_reach = self.reach.iter().copied().fold(0.0, f64::max);
+        let range = 2.0 * max_reach + self.neighbors.skin();
+        let edge = self.packing.bbox.min_edge();
+        if 2.0 * range > edge {
+            return Err(jamkit_core::Error::BoxTooSmall {
+                edge,
+                range,
+                phi: self.phi(),
+            });
+        }
+        Ok(())
+    }
+
     /// Number of pairs in the neighbour list.
     pub fn neighbor_pairs(&self) -> usize {
         self.neighbors.pair_count()

@@ -2,7 +2,8 @@
 //!
 //! A family parameter given as a list (or, for a parameter that is itself a
 //! list, as a list of lists) scans; so does `particles`. The grid is the
-//! Cartesian product, `particles` outermost and parameters in name order.
+//! Cartesian product, `particles` outermost and parameters in the order the
+//! family declares them (the first declared varies slowest).
 //! Each point runs `samples` packings with seeds `seed, seed + 1, …`: the
 //! same seeds at every point, so points differ only by their parameters.
 

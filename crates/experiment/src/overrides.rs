@@ -38,22 +38,188 @@ pub fn apply(experiment: &Experiment, sets: &[String]) -> Result<Experiment, Exp
     })
 }
 
-/// RON text to a JSON value. `ron::Value` forgets enum variant names, so
-/// `Variant(...)` is read as `{"Variant": (...)}` here; a bare word that RON
-/// rejects becomes a string (a unit variant such as `Fire2`, or a name).
+/// RON text to a JSON value in serde's externally tagged form: `Name` is
+/// the string `"Name"` (a unit variant), `Name(a: 1)` is `{"Name": {"a": 1}}`,
+/// `Name(x)` is `{"Name": x}`, `Some(x)` is `x`, `None` is `null`. A value
+/// that does not parse is taken as a plain string (`--set name=trial`).
 fn parse_value(text: &str) -> Value {
-    let ident_len = text.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(text.len());
-    let (ident, rest) = text.split_at(ident_len);
-    if ident.starts_with(|c: char| c.is_ascii_uppercase()) && rest.starts_with('(') && rest.ends_with(')') {
-        let inner = parse_value(rest);
-        let mut obj = serde_json::Map::new();
-        obj.insert(ident.to_string(), inner);
-        return Value::Object(obj);
+    let mut p = RonText {
+        s: text.as_bytes(),
+        at: 0,
+    };
+    match p.value() {
+        Some(v) if p.at_end() => v,
+        _ => Value::String(text.to_string()),
     }
-    ron::from_str::<ron::Value>(text)
-        .ok()
-        .and_then(|v| serde_json::to_value(v).ok())
-        .unwrap_or_else(|| Value::String(text.to_string()))
+}
+
+/// A small recursive-descent reader of RON values (enough for overrides).
+struct RonText<'a> {
+    s: &'a [u8],
+    at: usize,
+}
+
+impl RonText<'_> {
+    fn skip_ws(&mut self) {
+        while self.at < self.s.len() && self.s[self.at].is_ascii_whitespace() {
+            self.at += 1;
+        }
+    }
+
+    fn at_end(&mut self) -> bool {
+        self.skip_ws();
+        self.at == self.s.len()
+    }
+
+    fn peek(&mut self) -> Option<u8> {
+        self.skip_ws();
+        self.s.get(self.at).copied()
+    }
+
+    fn eat(&mut self, c: u8) -> bool {
+        if self.peek() == Some(c) {
+            self.at += 1;
+            true
+        } else {
+            false
+        }
+    }
+
+    fn ident(&mut self) -> Option<String> {
+        self.skip_ws();
+        let start = self.at;
+        while self.at < self.s.len()
+            && (self.s[self.at].is_ascii_alphanumeric() || self.s[self.at] == b'_')
+        {
+            self.at += 1;
+        }
+        (self.at > start && !self.s[start].is_ascii_digit())
+            .then(|| String::from_utf8_lossy(&self.s[start..self.at]).into_owned())
+    }
+
+    fn value(&mut self) -> Option<Value> {
+        match self.peek()? {
+            b'"' => self.string().map(Value::String),
+            b'[' => {
+                self.at += 1;
+                let mut items = Vec::new();
+                while !self.eat(b']') {
+                    items.push(self.value()?);
+                    if !self.eat(b',') && self.peek() != Some(b']') {
+                        return None;
+                    }
+                }
+                Some(Value::Array(items))
+            }
+            b'{' => {
+                self.at += 1;
+                let mut map = serde_json::Map::new();
+                while !self.eat(b'}') {
+                    let key = match self.value()? {
+                        Value::String(k) => k,
+                        other => other.to_string(),
+                    };
+                    if !self.eat(b':') {
+                        return None;
+                    }
+                    map.insert(key, self.value()?);
+                    if !self.eat(b',') && self.peek() != Some(b'}') {
+                        return None;
+                    }
+                }
+                Some(Value::Object(map))
+            }
+            b'(' => self.parenthesised(),
+            c if c == b'-' || c == b'+' || c == b'.' || c.is_ascii_digit() => self.number(),
+            _ => {
+                let name = self.ident()?;
+                match name.as_str() {
+                    "true" => return Some(Value::Bool(true)),
+                    "false" => return Some(Value::Bool(false)),
+                    "None" => return Some(Value::Null),
+                    _ => {}
+                }
+                if self.peek() != Some(b'(') {
+                    return Some(Value::String(name));
+                }
+                let inner = self.parenthesised()?;
+                if name == "Some" {
+                    return Some(inner);
+                }
+                let mut tagged = serde_json::Map::new();
+                tagged.insert(name, inner);
+                Some(Value::Object(tagged))
+            }
+        }
+    }
+
+    /// `(a: 1, b: 2)` → object; `(x)` → x; `(x, y)` → array.
+    fn parenthesised(&mut self) -> Option<Value> {
+        if !self.eat(b'(') {
+            return None;
+        }
+        let mut fields = serde_json::Map::new();
+        let mut items = Vec::new();
+        while !self.eat(b')') {
+            let save = self.at;
+            match (self.ident(), self.eat(b':')) {
+                (Some(key), true) => {
+                    fields.insert(key, self.value()?);
+                }
+                _ => {
+                    self.at = save;
+                    items.push(self.value()?);
+                }
+            }
+            if !self.eat(b',') && self.peek() != Some(b')') {
+                return None;
+            }
+        }
+        match (fields.is_empty(), items.len()) {
+            (false, 0) => Some(Value::Object(fields)),
+            (true, 1) => items.pop(),
+            (true, _) => Some(Value::Array(items)),
+            (false, _) => None,
+        }
+    }
+
+    fn string(&mut self) -> Option<String> {
+        self.at += 1;
+        let mut out = String::new();
+        while self.at < self.s.len() {
+            let c = self.s[self.at];
+            self.at += 1;
+            match c {
+                b'"' => return Some(out),
+                b'\\' => {
+                    out.push(*self.s.get(self.at)? as char);
+                    self.at += 1;
+                }
+                _ => out.push(c as char),
+            }
+        }
+        None
+    }
+
+    fn number(&mut self) -> Option<Value> {
+        let start = self.at;
+        while self.at < self.s.len()
+            && matches!(
+                self.s[self.at],
+                b'0'..=b'9' | b'-' | b'+' | b'.' | b'e' | b'E' | b'_'
+            )
+        {
+            self.at += 1;
+        }
+        let text: String = String::from_utf8_lossy(&self.s[start..self.at]).replace('_', "");
+        if let Ok(i) = text.parse::<i64>() {
+            return Some(Value::from(i));
+        }
+        text.parse::<f64>()
+            .ok()
+            .and_then(serde_json::Number::from_f64)
+            .map(Value::Number)
+    }
 }
 
 fn assign(tree: &mut Value, key: &str, value: Value) -> Result<(), ExperimentError> {
@@ -117,23 +283,44 @@ mod tests {
 
     #[test]
     fn sets_top_level_nested_and_enum_fields() {
-        let e = apply(
-            &base(),
-            &[
-                "particles=[8, 16]".into(),
-                "protocol.eps=1e-4".into(),
-                "minimizer.variant=Fire2".into(),
-                "samples=3".into(),
-            ],
-        )
-        .unwrap();
+        let sets = [
+            "particles=[8, 16]",
+            "protocol.eps=1e-4",
+            "minimizer.variant=Fire2",
+            "samples=3",
+            "rattlers.min_contacts=Some(2)",
+            "potential=Hertzian",
+            "observables=[Contacts]",
+            "name=trial",
+        ];
+        let e = apply(&base(), &sets.map(String::from)).unwrap();
         assert_eq!(e.particles.values(), vec![8, 16]);
         assert_eq!(e.samples, 3);
         assert_eq!(e.minimizer.variant, jamkit_engine::FireVariant::Fire2);
+        assert_eq!(e.rattlers.min_contacts, Some(2));
+        assert_eq!(e.potential, jamkit_core::Potential::Hertzian);
+        assert_eq!(e.observables, vec![crate::schema::Observable::Contacts]);
+        assert_eq!(e.name, "trial");
         match e.protocol {
             crate::schema::Protocol::Jam { eps, .. } => assert_eq!(eps, 1e-4),
             other => panic!("{other:?}"),
         }
+        let sets = [
+            "protocol=Phi(phi: 0.9, eps: 0.01)",
+            "sizes=Mono(radius: 0.5)",
+            "rattlers.min_contacts=None",
+        ];
+        let e = apply(&e, &sets.map(String::from)).unwrap();
+        assert_eq!(
+            e.protocol,
+            crate::schema::Protocol::Phi {
+                phi_start: 0.1,
+                phi: 0.9,
+                eps: 0.01
+            }
+        );
+        assert_eq!(e.sizes, jamkit_core::SizeDistribution::Mono { radius: 0.5 });
+        assert_eq!(e.rattlers.min_contacts, None);
     }
 
     #[test]

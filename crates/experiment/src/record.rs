@@ -54,6 +54,10 @@ pub struct PackingFile {
     pub seed: u64,
     /// Protocol name (`jam`, `phi`, `pressure`).
     pub protocol: String,
+    /// Every setting that shapes this packing (family, parameters, sizes,
+    /// protocol, minimiser, potential, rattlers, observables, engine): a
+    /// rerun reuses the file only if these are unchanged.
+    pub settings: serde_json::Value,
     /// Packing fraction.
     pub phi: f64,
     /// `V/N`.
@@ -92,6 +96,11 @@ impl PackingFile {
         let text = std::fs::read(path).ok()?;
         serde_json::from_slice(&text).ok()
     }
+
+    /// Load only if it was made with exactly these settings.
+    pub fn load_matching(path: &Path, settings: &serde_json::Value) -> Option<Self> {
+        Self::load(path).filter(|f| &f.settings == settings)
+    }
 }
 
 /// Quote a CSV field when needed.
@@ -105,6 +114,15 @@ pub fn csv_field(s: &str) -> String {
 
 fn opt<T: ToString>(v: &Option<T>) -> String {
     v.as_ref().map(T::to_string).unwrap_or_default()
+}
+
+/// A number for a CSV cell; a mean of nothing (NaN) is an empty cell.
+fn num(x: f64, scientific: bool) -> String {
+    match (x.is_nan(), scientific) {
+        (true, _) => String::new(),
+        (false, true) => format!("{x:e}"),
+        (false, false) => format!("{x}"),
+    }
 }
 
 /// The parameter names of a set of packings, in order.
@@ -295,15 +313,15 @@ pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
         row.extend(param_cells(first, &names));
         row.extend([
             s.samples.to_string(),
-            format!("{}", s.phi.0),
-            format!("{:e}", s.phi.1),
-            format!("{}", s.z_j.0),
-            format!("{:e}", s.z_j.1),
-            format!("{}", s.rattler_fraction.0),
-            format!("{:e}", s.rattler_fraction.1),
+            num(s.phi.0, false),
+            num(s.phi.1, true),
+            num(s.z_j.0, false),
+            num(s.z_j.1, true),
+            num(s.rattler_fraction.0, false),
+            num(s.rattler_fraction.1, true),
             opt(&s.iso_margin_min),
-            format!("{:e}", s.pressure.0),
-            format!("{:e}", s.pressure.1),
+            num(s.pressure.0, true),
+            num(s.pressure.1, true),
             format!("{:.0}", s.fire_steps),
             format!("{:.3}", s.wall_s),
             s.flagged.to_string(),
@@ -329,7 +347,8 @@ mod tests {
     #[test]
     fn csv_fields_are_quoted_when_needed() {
         assert_eq!(csv_field("a,b"), "\"a,b\"");
-        assert_eq!(csv_field("say \"x\""), "say \"x\"");
+        assert_eq!(csv_field("say \"x\""), "\"say \"\"x\"\"\"");
+        assert_eq!(csv_field("plain"), "plain");
         assert_eq!(csv_field("a\"b,"), "\"a\"\"b,\"");
     }
 }

@@ -69,7 +69,9 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
     );
     let work = |job: &Job| -> Result<(PackingFile, bool), ExperimentError> {
         let path = packing_dir.join(format!("{}.json", job.id));
-        if let Some(done) = PackingFile::load(&path) {
+        if let Some(done) =
+            PackingFile::load_matching(&path, &settings(experiment, &points[job.point], job))
+        {
             bar.inc(1);
             return Ok((done, true));
         }
@@ -141,6 +143,26 @@ fn group_by_point<'a>(
         })
         .filter(|(_, m): &(String, Vec<&PackingFile>)| !m.is_empty())
         .collect()
+}
+
+/// Everything that shapes one packing, for the resume check.
+pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json::Value {
+    let e = experiment;
+    serde_json::json!({
+        "dim": e.dim,
+        "family": e.family,
+        "params": point.params,
+        "particles": point.particles,
+        "seed": job.seed,
+        "sizes": e.sizes,
+        "protocol": e.protocol,
+        "minimizer": e.minimizer,
+        "potential": e.potential,
+        "rattlers": e.rattlers,
+        "observables": e.observables,
+        "engine": e.engine,
+        "output": e.output,
+    })
 }
 
 /// Make one packing.
@@ -264,14 +286,17 @@ impl SceneVisitor for SampleVisitor<'_> {
             particles: p.len(),
             seed: job.seed,
             protocol: e.protocol.name().to_string(),
+            settings: settings(e, self.point, job),
             phi: outcome.phi,
             energy_per_particle: outcome.energy_per_particle,
             measures,
             box_edges: p.bbox.edges().iter().copied().collect(),
             positions: if write {
+                // Centres drift out of the box between neighbour-list
+                // rebuilds; the file holds them in the primary cell.
                 p.positions
                     .iter()
-                    .map(|r| r.iter().copied().collect())
+                    .map(|r| p.bbox.wrap(*r).iter().copied().collect())
                     .collect()
             } else {
                 Vec::new()

@@ -284,7 +284,11 @@ impl Experiment {
     /// checked by the registry when the grid is expanded.
     pub fn validate(&self) -> Result<(), ExperimentError> {
         if self.name.trim().is_empty() {
-            return Err(ExperimentError::invalid("name", format!("{:?}", self.name), "must not be blank"));
+            return Err(ExperimentError::invalid(
+                "name",
+                format!("{:?}", self.name),
+                "must not be blank",
+            ));
         }
         let info = crate::registry::family_info(&self.family)?;
         if !crate::registry::supports_dim(&info, self.dim) {
