@@ -119,6 +119,13 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         D + 1
     }
 
+    /// Caveats about these parameters that do not stop a run but qualify its
+    /// results (e.g. a non-convex outline where the gap model assumes one
+    /// contact per pair). Written into each packing's `flag`.
+    fn warnings(&self) -> Vec<String> {
+        Vec::new()
+    }
+
     /// Whether jammed packings of this family are expected to be isostatic
     /// (`N_c ≥ f N_nr − D + 1`, `f = D + rot_dof`): true for spheres and rigid
     /// bodies made of spheres, false for near-disks, which jam hypostatic.

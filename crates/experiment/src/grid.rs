@@ -27,10 +27,15 @@ impl Point {
     /// A file-name-safe label: `sphere_d2_N1024`, `fourier_d2_N256_delta0.01_n2`.
     pub fn label(&self, family: &str, dim: usize) -> String {
         let mut s = format!("{family}_d{dim}_N{}", self.particles);
-        for (k, v) in &self.params {
+        // `None` (a default such as "inertia: None") says nothing: left out.
+        for (k, v) in self
+            .params
+            .iter()
+            .filter(|(_, v)| !matches!(v, ron::Value::Option(None) | ron::Value::Unit))
+        {
             s.push('_');
             s.push_str(k);
-            s.push_str(&sanitize(&value_text(v)));
+            s.push_str(&short(&sanitize(&value_text(v))));
         }
         s
     }
@@ -52,6 +57,18 @@ pub struct Job {
 /// A parameter value as compact RON text.
 pub fn value_text(v: &ron::Value) -> String {
     ron::to_string(v).unwrap_or_else(|_| format!("{v:?}"))
+}
+
+/// Long values (mode lists) become a stable 16-hex-digit FNV-1a hash, so
+/// file names stay short; the full value is in the packing file's `params`.
+fn short(text: &str) -> String {
+    if text.len() <= 24 {
+        return text.to_string();
+    }
+    let hash = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    format!("{hash:016x}")
 }
 
 fn sanitize(s: &str) -> String {

@@ -14,7 +14,11 @@ use std::collections::BTreeMap;
 pub type ParamMap = BTreeMap<String, ron::Value>;
 
 /// Every registered family.
-pub const FAMILIES: &[FamilyInfo] = &[jamkit_sphere::INFO];
+pub const FAMILIES: &[FamilyInfo] = &[
+    jamkit_sphere::INFO,
+    jamkit_fourier::FOURIER_INFO,
+    jamkit_fourier::FOURIER_SUM_INFO,
+];
 
 /// Dimensions the engine is compiled for (families with `Dims::Any`).
 pub const COMPILED_DIMS: &[usize] = &[2, 3, 4];
@@ -112,8 +116,39 @@ pub fn dispatch<V: SceneVisitor>(
             let _: NoParams = parse_params(family, params)?;
             any_dim!(jamkit_sphere::Sphere)
         }
+        // Near-disks with Δ = 0 are disks: the sphere family, with no
+        // rotational coordinates and the same random stream, hence the
+        // same packing as `sphere` for the same seed.
+        "fourier" => {
+            let mut p: jamkit_fourier::FourierParams = parse_params(family, params)?;
+            if p.delta == 0.0 {
+                p.inertia.get_or_insert(1.0); // no rotations at Δ = 0; only the other checks matter
+            }
+            let shape = jamkit_fourier::NearDisk::fourier(&p).map_err(near_disk_error)?;
+            if p.delta == 0.0 {
+                Ok(visitor.visit::<2, _>(jamkit_sphere::Sphere))
+            } else {
+                Ok(visitor.visit::<2, _>(shape))
+            }
+        }
+        "fourier_sum" => {
+            let mut p: jamkit_fourier::FourierSumParams = parse_params(family, params)?;
+            if p.delta == 0.0 {
+                p.inertia.get_or_insert(1.0);
+            }
+            let shape = jamkit_fourier::NearDisk::fourier_sum(&p).map_err(near_disk_error)?;
+            if p.delta == 0.0 {
+                Ok(visitor.visit::<2, _>(jamkit_sphere::Sphere))
+            } else {
+                Ok(visitor.visit::<2, _>(shape))
+            }
+        }
         other => unreachable!("family `{other}` is in FAMILIES but has no dispatch arm"),
     }
+}
+
+fn near_disk_error(e: jamkit_fourier::ParamError) -> ExperimentError {
+    ExperimentError::invalid(e.field, e.value, e.allowed)
 }
 
 /// The parameters of a family that has none.

@@ -255,13 +255,16 @@ impl SceneVisitor for SampleVisitor<'_> {
             .contains(&Observable::Pressure)
             .then(|| scene.pressure());
         let expects_iso = scene.packing().shape.expects_isostatic();
-        let flag = match (&contacts, &e.protocol) {
-            (Some(s), Protocol::Jam { .. }) if expects_iso && s.iso_margin < 1 => format!(
+        let mut flags = scene.packing().shape.warnings();
+        if let (Some(s), Protocol::Jam { .. }, true) = (&contacts, &e.protocol, expects_iso)
+            && s.iso_margin < 1
+        {
+            flags.push(format!(
                 "hypostatic: iso_margin = {} < 1; some contact is likely not closed (the minimisation stopped early) or the packing is not rigid",
                 s.iso_margin
-            ),
-            _ => String::new(),
-        };
+            ));
+        }
+        let flag = flags.join("; ");
         let measures = Measures {
             phi: outcome.phi,
             energy_per_particle: outcome.energy_per_particle,

@@ -1,0 +1,669 @@
+//! # Near-disks: the `fourier` and `fourier_sum` families
+//!
+//! A body of size `R⁰` and orientation `θ_i` has the polar outline
+//!
+//! ```text
+//! R_i(φ) = R⁰ [1 + Δ F(φ − θ_i)],    F(φ) = Σ_k a_k sin(n_k φ + b_k)
+//! ```
+//!
+//! (`fourier`: one mode with `a = 1/n`, `b = 0`, i.e. `F_n = sin(nφ)/n`, the
+//! paper's model). Two bodies interact through the paper's first-order gap
+//! (Ikeda, Eq. (8)),
+//!
+//! ```text
+//! h_ij = |r_ij| − R_i⁰ − R_j⁰ − Δ [R_i⁰ F(θ_i − θ_ij) + R_j⁰ F(θ_j − θ_ji)],
+//! θ_ij = atan2(y_j − y_i, x_j − x_i),   θ_ji = θ_ij + π,
+//! ```
+//!
+//! exact to `O(Δ)`; its derivatives, with `u = r_ij/|r_ij|` and
+//! `t = (−u_y, u_x)` (so `∂θ_ij/∂r_j = t/|r_ij|`), are
+//!
+//! ```text
+//! ∂h/∂r_j = u + Δ [R_i⁰ F'(A_i) + R_j⁰ F'(A_j)] t / |r_ij|,
+//! ∂h/∂θ_i = −Δ R_i⁰ F'(A_i),   ∂h/∂θ_j = −Δ R_j⁰ F'(A_j),
+//! A_i = θ_i − θ_ij,   A_j = θ_j − θ_ij − π.
+//! ```
+//!
+//! NOTE: no `atan2`, `sin` or `cos` in the pair loop: `e^{iθ_ij}` is the unit
+//! vector `u`, `e^{iθ_i}` is stored with the orientation, and `e^{i n A}`
+//! follows by complex multiplication, so angles near ±π need no care.
+//!
+//! Orientation convention: the outline of body `i` is
+//! `R(φ) = R⁰ [1 + Δ F(θ_i − φ)]` in the lab direction `φ`, so that its
+//! radius towards `j` is `R⁰[1 + Δ F(θ_i − θ_ij)]`, exactly the term in the
+//! printed gap. (For the odd `F_n = sin(nφ)/n` this is the mirror image of
+//! `R⁰[1 + Δ F(φ − θ_i)]`; both describe the same family of shapes.)
+
+use jamkit_core::{Contact, Dims, FamilyInfo, ParamSpec, Shape, Vector};
+use rand::{Rng, RngExt};
+use serde::Deserialize;
+use std::f64::consts::PI;
+
+/// The `fourier` family's self-description.
+pub const FOURIER_INFO: FamilyInfo = FamilyInfo {
+    name: "fourier",
+    about: "near-disks R(θ) = R0 [1 + Δ sin(nθ)/n] with the paper's first-order gap (2D)",
+    dims: Dims::Only(&[2]),
+    params: &[
+        ParamSpec {
+            name: "n",
+            about: "mode number, an integer ≥ 1",
+            is_list: false,
+            default: Some("2"),
+        },
+        ParamSpec {
+            name: "delta",
+            about: "Δ, the amplitude; 0 gives disks (the sphere family)",
+            is_list: false,
+            default: None,
+        },
+        ParamSpec {
+            name: "inertia",
+            about: "moment of inertia I of the angle θ; None: I = Δ (the paper's choice)",
+            is_list: false,
+            default: Some("None"),
+        },
+    ],
+};
+
+/// The `fourier_sum` family's self-description.
+pub const FOURIER_SUM_INFO: FamilyInfo = FamilyInfo {
+    name: "fourier_sum",
+    about: "near-disks R(θ) = R0 [1 + Δ Σ_k a_k sin(n_k θ + b_k)] with the first-order gap (2D)",
+    dims: Dims::Only(&[2]),
+    params: &[
+        ParamSpec {
+            name: "modes",
+            about: "list of (n: integer ≥ 1, a: amplitude, b: phase in radians)",
+            is_list: true,
+            default: None,
+        },
+        ParamSpec {
+            name: "delta",
+            about: "Δ, the overall amplitude",
+            is_list: false,
+            default: None,
+        },
+        ParamSpec {
+            name: "inertia",
+            about: "moment of inertia; None: I = Δ",
+            is_list: false,
+            default: Some("None"),
+        },
+    ],
+};
+
+/// One Fourier mode `a sin(nθ + b)`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mode {
+    /// Mode number.
+    pub n: u32,
+    /// Amplitude.
+    pub a: f64,
+    /// Phase (radians).
+    #[serde(default)]
+    pub b: f64,
+}
+
+/// Parameters of `fourier`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FourierParams {
+    /// Mode number.
+    pub n: u32,
+    /// Amplitude Δ.
+    pub delta: f64,
+    /// Moment of inertia (`None`: Δ).
+    pub inertia: Option<f64>,
+}
+
+/// Parameters of `fourier_sum`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FourierSumParams {
+    /// The modes.
+    pub modes: Vec<Mode>,
+    /// Amplitude Δ.
+    pub delta: f64,
+    /// Moment of inertia (`None`: Δ).
+    pub inertia: Option<f64>,
+}
+
+/// A near-disk family: `Δ`, the modes of `F`, and the moment of inertia.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NearDisk {
+    name: &'static str,
+    delta: f64,
+    modes: Vec<Mode>,
+    /// `e^{i b_k}` of each mode.
+    phases: Vec<(f64, f64)>,
+    inertia: f64,
+    /// `Σ |a_k|`, a bound on `|F|`.
+    f_bound: f64,
+}
+
+/// Orientation `θ` with `e^{iθ}` cached (`cos θ`, `sin θ`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Angle {
+    /// `θ`, kept in `[−π, π)`.
+    pub theta: f64,
+    cos: f64,
+    sin: f64,
+}
+
+impl Angle {
+    /// The orientation `θ`.
+    pub fn new(theta: f64) -> Self {
+        // NOTE: wrapping keeps sin/cos accurate for bodies that have turned
+        // many times; θ and θ + 2π are the same orientation.
+        let theta = theta - 2.0 * PI * (theta / (2.0 * PI)).round();
+        let (sin, cos) = theta.sin_cos();
+        Self { theta, cos, sin }
+    }
+}
+
+/// Complex product.
+#[inline(always)]
+fn cmul(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0)
+}
+
+/// `z^n` by binary exponentiation.
+#[inline(always)]
+fn cpow(mut z: (f64, f64), mut n: u32) -> (f64, f64) {
+    let mut acc = (1.0, 0.0);
+    while n > 0 {
+        if n & 1 == 1 {
+            acc = cmul(acc, z);
+        }
+        z = cmul(z, z);
+        n >>= 1;
+    }
+    acc
+}
+
+/// An invalid parameter, named.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamError {
+    /// Field path.
+    pub field: String,
+    /// Offending value.
+    pub value: String,
+    /// What is allowed.
+    pub allowed: String,
+}
+
+impl NearDisk {
+    /// The `fourier` family: one mode `sin(nθ)/n`.
+    pub fn fourier(p: &FourierParams) -> Result<Self, ParamError> {
+        if p.n < 1 {
+            return Err(ParamError {
+                field: "params.n".into(),
+                value: p.n.to_string(),
+                allowed: "must be an integer ≥ 1".into(),
+            });
+        }
+        Self::new(
+            "fourier",
+            p.delta,
+            vec![Mode {
+                n: p.n,
+                a: 1.0 / p.n as f64,
+                b: 0.0,
+            }],
+            p.inertia,
+        )
+    }
+
+    /// The `fourier_sum` family.
+    pub fn fourier_sum(p: &FourierSumParams) -> Result<Self, ParamError> {
+        Self::new("fourier_sum", p.delta, p.modes.clone(), p.inertia)
+    }
+
+    fn new(
+        name: &'static str,
+        delta: f64,
+        modes: Vec<Mode>,
+        inertia: Option<f64>,
+    ) -> Result<Self, ParamError> {
+        let err = |field: &str, value: String, allowed: &str| ParamError {
+            field: field.into(),
+            value,
+            allowed: allowed.into(),
+        };
+        if !delta.is_finite() || delta < 0.0 {
+            return Err(err(
+                "params.delta",
+                delta.to_string(),
+                "must be a finite number ≥ 0",
+            ));
+        }
+        if modes.is_empty() {
+            return Err(err(
+                "params.modes",
+                "[]".into(),
+                "must list at least one mode (n, a, b)",
+            ));
+        }
+        for (k, m) in modes.iter().enumerate() {
+            if m.n < 1 {
+                return Err(err(
+                    &format!("params.modes[{k}].n"),
+                    m.n.to_string(),
+                    "must be an integer ≥ 1",
+                ));
+            }
+            if !(m.a.is_finite() && m.b.is_finite()) {
+                return Err(err(
+                    &format!("params.modes[{k}]"),
+                    format!("{m:?}"),
+                    "a and b must be finite",
+                ));
+            }
+        }
+        let inertia = inertia.unwrap_or(delta);
+        if !(inertia > 0.0 && inertia.is_finite()) {
+            return Err(err(
+                "params.inertia",
+                inertia.to_string(),
+                "must be positive and finite (the default I = Δ needs Δ > 0)",
+            ));
+        }
+        let shape = Self {
+            name,
+            delta,
+            phases: modes.iter().map(|m| (m.b.cos(), m.b.sin())).collect(),
+            f_bound: modes.iter().map(|m| m.a.abs()).sum(),
+            modes,
+            inertia,
+        };
+        let min_r = shape.min_relative_radius();
+        if min_r <= 0.0 {
+            return Err(err(
+                "params.delta",
+                delta.to_string(),
+                &format!(
+                    "is so large that R(θ) ≤ 0 somewhere (min R/R0 = {min_r:.4}); the outline must stay star-shaped"
+                ),
+            ));
+        }
+        Ok(shape)
+    }
+
+    /// `Δ`.
+    pub fn delta(&self) -> f64 {
+        self.delta
+    }
+
+    /// `F(φ)` and `F'(φ)` from `e^{iφ}`... for a given lab angle (slow path, for geometry).
+    pub fn f_and_derivative(&self, phi: f64) -> (f64, f64) {
+        let mut f = 0.0;
+        let mut df = 0.0;
+        for m in &self.modes {
+            let arg = m.n as f64 * phi + m.b;
+            f += m.a * arg.sin();
+            df += m.a * m.n as f64 * arg.cos();
+        }
+        (f, df)
+    }
+
+    /// `F''(φ)`.
+    pub fn f_second(&self, phi: f64) -> f64 {
+        self.modes
+            .iter()
+            .map(|m| -m.a * (m.n as f64).powi(2) * (m.n as f64 * phi + m.b).sin())
+            .sum()
+    }
+
+    /// `R(φ)/R⁰ = 1 + Δ F(φ)`.
+    pub fn relative_radius(&self, phi: f64) -> f64 {
+        1.0 + self.delta * self.f_and_derivative(phi).0
+    }
+
+    fn min_relative_radius(&self) -> f64 {
+        (0..4096)
+            .map(|k| self.relative_radius(2.0 * PI * k as f64 / 4096.0))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// True when the outline is convex: the polar curvature numerator
+    /// `r² + 2r'² − r r''` stays positive (sampled on 4096 angles).
+    pub fn is_convex(&self) -> bool {
+        (0..4096).all(|k| {
+            let phi = 2.0 * PI * k as f64 / 4096.0;
+            let (f, df) = self.f_and_derivative(phi);
+            let (r, dr, ddr) = (
+                1.0 + self.delta * f,
+                self.delta * df,
+                self.delta * self.f_second(phi),
+            );
+            r * r + 2.0 * dr * dr - r * ddr > 0.0
+        })
+    }
+
+    /// Area in units of `(R⁰)²`: `π [1 + Δ² ⟨F²⟩]` with
+    /// `⟨F²⟩ = (1/2π)∫F² = ½ Σ_{k,l: n_k = n_l} a_k a_l cos(b_k − b_l)`.
+    pub fn relative_area(&self) -> f64 {
+        let mut mean_f2 = 0.0;
+        for p in &self.modes {
+            for q in &self.modes {
+                if p.n == q.n {
+                    mean_f2 += 0.5 * p.a * q.a * (p.b - q.b).cos();
+                }
+            }
+        }
+        PI * (1.0 + self.delta * self.delta * mean_f2)
+    }
+
+    /// Asphericity `A = P²/(4π S)` by numerical integration of the perimeter
+    /// `P = ∫ √(R² + R'²) dφ` (trapezoid rule on 8192 points, spectrally
+    /// accurate for a periodic integrand).
+    pub fn asphericity(&self) -> f64 {
+        let m = 8192;
+        let perimeter: f64 = (0..m)
+            .map(|k| {
+                let phi = 2.0 * PI * k as f64 / m as f64;
+                let (f, df) = self.f_and_derivative(phi);
+                ((1.0 + self.delta * f).powi(2) + (self.delta * df).powi(2)).sqrt()
+            })
+            .sum::<f64>()
+            * 2.0
+            * PI
+            / m as f64;
+        perimeter * perimeter / (4.0 * PI * self.relative_area())
+    }
+
+    /// `Σ_k a_k sin(n_k A + b_k)` and its derivative from `e^{iA}` given as
+    /// the products `e^{i n_k A}` computed on the fly.
+    #[inline(always)]
+    fn f_from_phase(&self, z: (f64, f64), w_conj: (f64, f64), sign_flip: bool) -> (f64, f64) {
+        let mut f = 0.0;
+        let mut df = 0.0;
+        for (m, &phase) in self.modes.iter().zip(&self.phases) {
+            // e^{i n A} = z^n · conj(w)^n (· (−1)^n for body j).
+            let mut e = cmul(cpow(z, m.n), cpow(w_conj, m.n));
+            if sign_flip && m.n % 2 == 1 {
+                e = (-e.0, -e.1);
+            }
+            let e = cmul(e, phase);
+            f += m.a * e.1;
+            df += m.a * m.n as f64 * e.0;
+        }
+        (f, df)
+    }
+}
+
+impl Shape<2> for NearDisk {
+    type Orientation = Angle;
+
+    fn family(&self) -> &'static str {
+        self.name
+    }
+
+    fn rot_dof(&self) -> usize {
+        1
+    }
+
+    fn volume(&self, size: f64) -> f64 {
+        self.relative_area() * size * size
+    }
+
+    fn bounding_radius(&self, size: f64) -> f64 {
+        size * (1.0 + self.delta * self.f_bound)
+    }
+
+    fn rot_inertia(&self, _size: f64) -> jamkit_core::RotVec {
+        [self.inertia, 1.0, 1.0]
+    }
+
+    fn reference_orientation(&self) -> Angle {
+        Angle::new(0.0)
+    }
+
+    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Angle {
+        Angle::new(2.0 * PI * rng.random::<f64>() - PI)
+    }
+
+    fn rotate(&self, o: &mut Angle, dq: &[f64]) {
+        *o = Angle::new(o.theta + dq[0]);
+    }
+
+    fn orientation_coords(&self, o: &Angle) -> Vec<f64> {
+        vec![o.theta]
+    }
+
+    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Angle> {
+        match coords {
+            [theta] if theta.is_finite() => Some(Angle::new(*theta)),
+            _ => None,
+        }
+    }
+
+    fn rattler_threshold(&self) -> usize {
+        3
+    }
+
+    fn expects_isostatic(&self) -> bool {
+        false
+    }
+
+    fn warnings(&self) -> Vec<String> {
+        if self.is_convex() {
+            Vec::new()
+        } else {
+            vec![format!(
+                "non-convex outline (Δ = {}): the first-order gap assumes convex bodies with one contact per pair",
+                self.delta
+            )]
+        }
+    }
+
+    #[inline(always)]
+    fn contacts<F: FnMut(Contact<2>)>(
+        &self,
+        size_i: f64,
+        o_i: &Angle,
+        size_j: f64,
+        o_j: &Angle,
+        r_ij: &Vector<2>,
+        max_gap: f64,
+        mut visit: F,
+    ) {
+        let r = r_ij.norm();
+        // The gap is at least |r| − bounding radii; skip pairs certainly apart.
+        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
+            return;
+        }
+        // NOTE: coincident centres have no direction θ_ij; take θ_ij = 0
+        // (deterministic; such a pair overlaps deeply and any direction
+        // pushes it apart).
+        let (u, inv_r) = if r > 0.0 {
+            (r_ij * (1.0 / r), 1.0 / r)
+        } else {
+            (Vector::<2>::new(1.0, 0.0), 0.0)
+        };
+        let w_conj = (u[0], -u[1]);
+        let (f_i, df_i) = self.f_from_phase((o_i.cos, o_i.sin), w_conj, false);
+        let (f_j, df_j) = self.f_from_phase((o_j.cos, o_j.sin), w_conj, true);
+        let d = self.delta;
+        let gap = r - size_i - size_j - d * (size_i * f_i + size_j * f_j);
+        let tangent = Vector::<2>::new(-u[1], u[0]);
+        let grad_r = u + tangent * (d * (size_i * df_i + size_j * df_j) * inv_r);
+        visit(Contact {
+            gap,
+            grad_r,
+            grad_rot_i: [-d * size_i * df_i, 0.0, 0.0],
+            grad_rot_j: [-d * size_j * df_j, 0.0, 0.0],
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn fourier(n: u32, delta: f64) -> NearDisk {
+        NearDisk::fourier(&FourierParams {
+            n,
+            delta,
+            inertia: None,
+        })
+        .unwrap()
+    }
+
+    fn gap(s: &NearDisk, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> f64 {
+        let mut h = f64::NAN;
+        s.contacts(
+            ri,
+            &Angle::new(ti),
+            rj,
+            &Angle::new(tj),
+            &d,
+            f64::INFINITY,
+            |c| h = c.gap,
+        );
+        h
+    }
+
+    /// The complex-arithmetic gap equals the paper's formula written with
+    /// atan2 and sin, to round-off (1e-14 on gaps of order 1).
+    #[test]
+    fn gap_matches_the_printed_formula() {
+        for n in 2..=5 {
+            let s = fourier(n, 0.2);
+            for &(x, y, ti, tj) in &[
+                (1.1, 0.3, 0.4, -2.0),
+                (-0.9, -0.8, 3.1, 1.0),
+                (0.2, -1.3, -3.1, 3.0),
+            ] {
+                let d = Vector::<2>::new(x, y);
+                let tij = y.atan2(x);
+                let f = |a: f64| (n as f64 * a).sin() / n as f64;
+                let expected =
+                    d.norm() - 0.5 - 0.7 - 0.2 * (0.5 * f(ti - tij) + 0.7 * f(tj - tij - PI));
+                assert_relative_eq!(gap(&s, 0.5, ti, 0.7, tj, d), expected, epsilon = 1e-14);
+            }
+        }
+    }
+
+    /// h_ij = h_ji: swapping the bodies and reversing the separation.
+    #[test]
+    fn gap_is_symmetric() {
+        let s = fourier(3, 0.3);
+        let d = Vector::<2>::new(0.8, -0.9);
+        assert_relative_eq!(
+            gap(&s, 0.5, 0.3, 0.7, -1.2, d),
+            gap(&s, 0.7, -1.2, 0.5, 0.3, -d),
+            epsilon = 1e-14
+        );
+    }
+
+    /// A single mode (n, 1/n, 0) in `fourier_sum` is `fourier`, bit for bit.
+    #[test]
+    fn single_mode_sum_is_fourier() {
+        let a = fourier(4, 0.1);
+        let b = NearDisk::fourier_sum(&FourierSumParams {
+            modes: vec![Mode {
+                n: 4,
+                a: 0.25,
+                b: 0.0,
+            }],
+            delta: 0.1,
+            inertia: None,
+        })
+        .unwrap();
+        let d = Vector::<2>::new(0.7, 0.6);
+        assert_eq!(
+            gap(&a, 0.5, 1.0, 0.7, 2.0, d).to_bits(),
+            gap(&b, 0.5, 1.0, 0.7, 2.0, d).to_bits()
+        );
+    }
+
+    /// Area: closed form against a direct quadrature of ½∫R², which is
+    /// spectrally accurate (1e-12) for these trigonometric polynomials.
+    #[test]
+    fn area_matches_quadrature() {
+        let s = NearDisk::fourier_sum(&FourierSumParams {
+            modes: vec![
+                Mode {
+                    n: 2,
+                    a: 0.5,
+                    b: 0.3,
+                },
+                Mode {
+                    n: 2,
+                    a: 0.2,
+                    b: 1.1,
+                },
+                Mode {
+                    n: 5,
+                    a: 0.1,
+                    b: 0.0,
+                },
+            ],
+            delta: 0.3,
+            inertia: None,
+        })
+        .unwrap();
+        let m = 4096;
+        let quad: f64 = (0..m)
+            .map(|k| 0.5 * s.relative_radius(2.0 * PI * k as f64 / m as f64).powi(2))
+            .sum::<f64>()
+            * 2.0
+            * PI
+            / m as f64;
+        assert_relative_eq!(s.relative_area(), quad, max_relative = 1e-12);
+    }
+
+    /// A ≈ 1 + Δ²(1 − 1/n²)/2 for small Δ (the paper's Eq. (7)); the next
+    /// order is O(Δ⁴), so at Δ = 0.01 the relative difference in A − 1 is ~1e-4.
+    #[test]
+    fn asphericity_matches_small_delta_expansion() {
+        for n in 2..=5 {
+            let delta = 0.01;
+            let s = fourier(n, delta);
+            let expected = 0.5 * delta * delta * (1.0 - 1.0 / (n * n) as f64);
+            assert_relative_eq!(s.asphericity() - 1.0, expected, max_relative = 1e-3);
+        }
+    }
+
+    #[test]
+    fn nonsense_parameters_are_rejected_and_large_delta_is_non_convex() {
+        assert!(
+            NearDisk::fourier(&FourierParams {
+                n: 0,
+                delta: 0.1,
+                inertia: None
+            })
+            .is_err()
+        );
+        assert!(
+            NearDisk::fourier(&FourierParams {
+                n: 2,
+                delta: f64::NAN,
+                inertia: None
+            })
+            .is_err()
+        );
+        assert!(
+            NearDisk::fourier(&FourierParams {
+                n: 2,
+                delta: 2.5,
+                inertia: None
+            })
+            .is_err()
+        ); // 1 − Δ/2 < 0
+        assert!(
+            NearDisk::fourier_sum(&FourierSumParams {
+                modes: vec![],
+                delta: 0.1,
+                inertia: None
+            })
+            .is_err()
+        );
+        assert!(fourier(2, 0.1).is_convex());
+        assert!(!fourier(5, 0.5).is_convex());
+    }
+}
