@@ -119,7 +119,7 @@ fn energy_is_invariant_under_global_rotation() {
             for (r, o) in q.positions.iter_mut().zip(q.orientations.iter_mut()) {
                 let d = *r - centre;
                 *r = centre + Vector::<2>::new(ca * d[0] - sa * d[1], sa * d[0] + ca * d[1]);
-                *o = jamkit_fourier::Angle::new(o.theta + alpha);
+                *o = jamkit_fourier::Angle::new(o.theta() + alpha);
             }
             let e1 = energy(q);
             assert!((e1 - e0).abs() < 1e-12 * e0, "alpha {alpha}: {e0} vs {e1}");

@@ -48,3 +48,25 @@ impl FamilyInfo {
         self.params.iter().find(|p| p.name == name)
     }
 }
+
+/// Read an optional parameter written either as `Some(x)`/`None` (RON) or
+/// as a bare `x` (what `--set` and JSON produce, having no `Some`). Use as
+/// `#[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]`.
+pub fn lenient_option<'de, D, T>(deserializer: D) -> Result<Option<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: serde::Deserialize<'de>,
+{
+    #[derive(serde::Deserialize)]
+    #[serde(untagged)]
+    enum Either<T> {
+        Wrapped(Option<T>),
+        Bare(T),
+    }
+    Ok(
+        match <Either<T> as serde::Deserialize>::deserialize(deserializer)? {
+            Either::Wrapped(v) => v,
+            Either::Bare(v) => Some(v),
+        },
+    )
+}

@@ -166,21 +166,30 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         self.evaluations += 1;
         grad.fill(0.0);
         let p = &self.packing;
-        let (positions, sizes, orientations) =
-            (&p.positions[..], &p.sizes[..], &p.orientations[..]);
+        let (positions, sizes, orientations, reach) = (
+            &p.positions[..],
+            &p.sizes[..],
+            &p.orientations[..],
+            &self.reach[..],
+        );
         let k = p.shape.rot_dof();
         let stride = D + k;
         let potential = self.potential;
         let mut energy = 0.0;
         for i in 0..positions.len() {
             let ri = positions[i];
-            let (si, oi) = (sizes[i], &orientations[i]);
+            let (si, oi, bi) = (sizes[i], &orientations[i], reach[i]);
             // Body i's own gradient stays in registers until its partners are done.
             let mut gi_r = Vector::<D>::zeros();
             let mut gi_q = [0.0; jamkit_core::MAX_ROT];
             for &j in self.neighbors.partners(i) {
                 let j = j as usize;
                 let d = p.bbox.minimum_image(positions[j] - ri);
+                // Bounding balls apart: no contact, and no square root.
+                let cut = bi + reach[j];
+                if d.norm_squared() >= cut * cut {
+                    continue;
+                }
                 let gj = &mut grad[j * stride..(j + 1) * stride];
                 // NOTE: no test on the sign of the gap here: a pair out of
                 // contact adds exact zeros (v' = 0), which is cheaper than a

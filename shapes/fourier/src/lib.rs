@@ -115,6 +115,7 @@ pub struct FourierParams {
     /// Amplitude Δ.
     pub delta: f64,
     /// Moment of inertia (`None`: Δ).
+    #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
 }
 
@@ -127,6 +128,7 @@ pub struct FourierSumParams {
     /// Amplitude Δ.
     pub delta: f64,
     /// Moment of inertia (`None`: Δ).
+    #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
 }
 
@@ -143,11 +145,11 @@ pub struct NearDisk {
     f_bound: f64,
 }
 
-/// Orientation `θ` with `e^{iθ}` cached (`cos θ`, `sin θ`).
+/// An orientation, stored as the unit complex number `e^{iθ}`
+/// (`cos θ`, `sin θ`): the pair loop needs nothing else, and `θ` itself is
+/// `atan2(sin θ, cos θ)` in `(−π, π]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Angle {
-    /// `θ`, kept in `[−π, π)`.
-    pub theta: f64,
     cos: f64,
     sin: f64,
 }
@@ -155,11 +157,39 @@ pub struct Angle {
 impl Angle {
     /// The orientation `θ`.
     pub fn new(theta: f64) -> Self {
-        // NOTE: wrapping keeps sin/cos accurate for bodies that have turned
-        // many times; θ and θ + 2π are the same orientation.
+        // NOTE: wrapping first keeps sin/cos accurate for angles that have
+        // wound many turns; θ and θ + 2π are the same orientation.
         let theta = theta - 2.0 * PI * (theta / (2.0 * PI)).round();
         let (sin, cos) = theta.sin_cos();
-        Self { theta, cos, sin }
+        Self { cos, sin }
+    }
+
+    /// `θ` in `(−π, π]`.
+    pub fn theta(&self) -> f64 {
+        self.sin.atan2(self.cos)
+    }
+
+    /// Turn by `dθ`. Small turns (every FIRE step near a minimum) multiply
+    /// `e^{iθ}` by `e^{i dθ}` from its Taylor series instead of calling
+    /// `sin_cos`, which cost a sixth of a near-disk step.
+    ///
+    /// NOTE: for `|dθ| < 10⁻²` the truncated series (through `dθ⁷` and `dθ⁸`)
+    /// is exact in double precision (next terms < 3·10⁻²⁴); the product is
+    /// renormalised by one Newton step for `1/|z|`, so `|e^{iθ}| = 1` to
+    /// round-off however many turns accumulate.
+    pub fn turned(self, dtheta: f64) -> Self {
+        if dtheta.abs() >= 1e-2 {
+            return Self::new(self.theta() + dtheta);
+        }
+        let x2 = dtheta * dtheta;
+        let s = dtheta * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
+        let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+        let (cos, sin) = cmul((self.cos, self.sin), (c, s));
+        let fix = 1.5 - 0.5 * (cos * cos + sin * sin);
+        Self {
+            cos: cos * fix,
+            sin: sin * fix,
+        }
     }
 }
 
@@ -374,23 +404,28 @@ impl NearDisk {
         perimeter * perimeter / (4.0 * PI * self.relative_area())
     }
 
-    /// `Σ_k a_k sin(n_k A + b_k)` and its derivative from `e^{iA}` given as
-    /// the products `e^{i n_k A}` computed on the fly.
+    /// `F(A)` and `F'(A)` for both bodies of a pair: `A_i = θ_i − θ_ij` and
+    /// `A_j = θ_j − θ_ij − π`, from `z_i = e^{iθ_i}`, `z_j = e^{iθ_j}` and
+    /// `w̄ = e^{−iθ_ij}`: `e^{iA_i} = z_i w̄`, `e^{iA_j} = −z_j w̄`, and
+    /// `a sin(nA + b) = a Im(e^{inA} e^{ib})`, `a n cos(nA + b) = a n Re(…)`.
     #[inline(always)]
-    fn f_from_phase(&self, z: (f64, f64), w_conj: (f64, f64), sign_flip: bool) -> (f64, f64) {
-        let mut f = 0.0;
-        let mut df = 0.0;
+    fn f_pair(&self, z_i: (f64, f64), z_j: (f64, f64), w_conj: (f64, f64)) -> [(f64, f64); 2] {
+        let e_i = cmul(z_i, w_conj);
+        let e_j = cmul((-z_j.0, -z_j.1), w_conj);
+        let mut out = [(0.0, 0.0); 2];
         for (m, &phase) in self.modes.iter().zip(&self.phases) {
-            // e^{i n A} = z^n · conj(w)^n (· (−1)^n for body j).
-            let mut e = cmul(cpow(z, m.n), cpow(w_conj, m.n));
-            if sign_flip && m.n % 2 == 1 {
-                e = (-e.0, -e.1);
+            let (mut p_i, mut p_j) = (cpow(e_i, m.n), cpow(e_j, m.n));
+            if m.b != 0.0 {
+                p_i = cmul(p_i, phase);
+                p_j = cmul(p_j, phase);
             }
-            let e = cmul(e, phase);
-            f += m.a * e.1;
-            df += m.a * m.n as f64 * e.0;
+            let (a, an) = (m.a, m.a * m.n as f64);
+            out[0].0 += a * p_i.1;
+            out[0].1 += an * p_i.0;
+            out[1].0 += a * p_j.1;
+            out[1].1 += an * p_j.0;
         }
-        (f, df)
+        out
     }
 }
 
@@ -426,11 +461,11 @@ impl Shape<2> for NearDisk {
     }
 
     fn rotate(&self, o: &mut Angle, dq: &[f64]) {
-        *o = Angle::new(o.theta + dq[0]);
+        *o = o.turned(dq[0]);
     }
 
     fn orientation_coords(&self, o: &Angle) -> Vec<f64> {
-        vec![o.theta]
+        vec![o.theta()]
     }
 
     fn orientation_from_coords(&self, coords: &[f64]) -> Option<Angle> {
@@ -484,8 +519,8 @@ impl Shape<2> for NearDisk {
             (Vector::<2>::new(1.0, 0.0), 0.0)
         };
         let w_conj = (u[0], -u[1]);
-        let (f_i, df_i) = self.f_from_phase((o_i.cos, o_i.sin), w_conj, false);
-        let (f_j, df_j) = self.f_from_phase((o_j.cos, o_j.sin), w_conj, true);
+        let [(f_i, df_i), (f_j, df_j)] =
+            self.f_pair((o_i.cos, o_i.sin), (o_j.cos, o_j.sin), w_conj);
         let d = self.delta;
         let gap = r - size_i - size_j - d * (size_i * f_i + size_j * f_j);
         let tangent = Vector::<2>::new(-u[1], u[0]);
@@ -627,6 +662,30 @@ mod tests {
             let expected = 0.5 * delta * delta * (1.0 - 1.0 / (n * n) as f64);
             assert_relative_eq!(s.asphericity() - 1.0, expected, max_relative = 1e-3);
         }
+    }
+
+    /// Many small turns agree with their sum: after 10⁵ turns the angle is
+    /// within 1e-11 of the (compensated) sum of the increments, i.e. an
+    /// error of ~1e-16 per turn, and `|e^{iθ}| = 1` to round-off.
+    #[test]
+    fn small_turns_accumulate_exactly() {
+        let mut a = Angle::new(0.3);
+        let (mut sum, mut carry) = (0.3f64, 0.0f64);
+        for k in 0..100_000 {
+            let d = 1e-3 * ((k % 7) as f64 - 2.9);
+            a = a.turned(d);
+            // Kahan summation of the exact total angle.
+            let y = d - carry;
+            let t = sum + y;
+            carry = (t - sum) - y;
+            sum = t;
+        }
+        let b = Angle::new(sum);
+        assert!(
+            (a.cos - b.cos).abs() < 1e-11 && (a.sin - b.sin).abs() < 1e-11,
+            "{a:?} vs {b:?}"
+        );
+        assert!((a.cos * a.cos + a.sin * a.sin - 1.0).abs() < 1e-15);
     }
 
     #[test]
