@@ -169,41 +169,76 @@ fn step_phi<const D: usize, S: Shape<D>>(
     Ok(())
 }
 
-/// The paper's compress/decompress bisection to the jamming point.
-pub fn jam<const D: usize, S: Shape<D>>(
+/// Where a relaxed state stands relative to the target of a bisection.
+enum Verdict {
+    /// In the target window: stop.
+    Done,
+    /// Beyond the target (too dense): the next step must decompress.
+    Over,
+    /// Short of the target: the next step must compress.
+    Under,
+}
+
+/// The bisection shared by [`jam`] and [`compress_to_pressure`]: relax,
+/// judge, and change φ by ε, reversing and halving ε on every crossing of
+/// the target, until the judge says done. `judge` gets the relaxed scene and
+/// `V/N`, and returns its verdict and a description of the state for the
+/// error raised after `max_steps` changes of φ.
+fn bisect<const D: usize, S: Shape<D>>(
     scene: &mut Scene<D, S>,
     fire: &mut Fire,
-    params: &JamParams,
+    eps: f64,
+    max_steps: u64,
+    mut judge: impl FnMut(&mut Scene<D, S>, f64) -> (Verdict, String),
 ) -> Result<ProtocolOutcome> {
     let mut tally = Tally {
         fire_steps: 0,
         minimizations: 0,
     };
-    let mut eps = params.eps;
+    let mut eps = eps;
     let mut steps = 0;
     loop {
         let e = tally.relax(scene, fire)?;
-        if e > params.energy_low && e < params.energy_high {
-            return Ok(tally.outcome(scene.phi(), e));
-        }
-        let over = e > params.energy_low;
-        // Reverse and halve on every crossing of the threshold.
+        let (verdict, state) = judge(scene, e);
+        let over = match verdict {
+            Verdict::Done => return Ok(tally.outcome(scene.phi(), e)),
+            Verdict::Over => true,
+            Verdict::Under => false,
+        };
+        // Reverse and halve on every crossing of the target.
         if over == (eps > 0.0) {
             eps *= -0.5;
         }
-        if steps >= params.max_density_steps {
+        if steps >= max_steps {
             return Err(Error::JammingFailed {
                 phi: scene.phi(),
                 steps,
                 reason: format!(
-                    "no packing in the window after protocol.max_density_steps = {} (last V/N = {e:.3e})",
-                    params.max_density_steps
+                    "not in the target after protocol.max_density_steps = {max_steps} ({state})"
                 ),
             });
         }
         step_phi(scene, eps, steps)?;
         steps += 1;
     }
+}
+
+/// The paper's compress/decompress bisection to the jamming point.
+pub fn jam<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    fire: &mut Fire,
+    params: &JamParams,
+) -> Result<ProtocolOutcome> {
+    bisect(scene, fire, params.eps, params.max_density_steps, |_, e| {
+        let verdict = if e > params.energy_low && e < params.energy_high {
+            Verdict::Done
+        } else if e > params.energy_low {
+            Verdict::Over
+        } else {
+            Verdict::Under
+        };
+        (verdict, format!("last V/N = {e:.3e}"))
+    })
 }
 
 /// Compress (or decompress) in steps of `eps` to packing fraction `target`,
@@ -241,33 +276,24 @@ pub fn compress_to_pressure<const D: usize, S: Shape<D>>(
     fire: &mut Fire,
     params: &PressureParams,
 ) -> Result<ProtocolOutcome> {
-    let mut tally = Tally {
-        fire_steps: 0,
-        minimizations: 0,
-    };
-    let mut eps = params.eps;
-    let mut steps = 0;
-    loop {
-        let e = tally.relax(scene, fire)?;
-        let p = scene.pressure();
-        if (p - params.pressure).abs() < params.tol * params.pressure {
-            return Ok(tally.outcome(scene.phi(), e));
-        }
-        let over = p > params.pressure;
-        if over == (eps > 0.0) {
-            eps *= -0.5;
-        }
-        if steps >= params.max_density_steps {
-            return Err(Error::JammingFailed {
-                phi: scene.phi(),
-                steps,
-                reason: format!(
-                    "pressure {p:.6e} not within tolerance of {:.6e}",
-                    params.pressure
-                ),
-            });
-        }
-        step_phi(scene, eps, steps)?;
-        steps += 1;
-    }
+    bisect(
+        scene,
+        fire,
+        params.eps,
+        params.max_density_steps,
+        |scene, _| {
+            let p = scene.pressure();
+            let verdict = if (p - params.pressure).abs() < params.tol * params.pressure {
+                Verdict::Done
+            } else if p > params.pressure {
+                Verdict::Over
+            } else {
+                Verdict::Under
+            };
+            (
+                verdict,
+                format!("pressure {p:.6e}, target {:.6e}", params.pressure),
+            )
+        },
+    )
 }
