@@ -4,6 +4,8 @@
 //! * `jamkit validate FILE [--set KEY=VALUE …]`
 //! * `jamkit shapes`
 //! * `jamkit bench [packing|eval]`
+//! * `jamkit draw PACKING.json -o FILE.svg|FILE.png [--size PIXELS]`
+//! * `jamkit draw-shape [fourier|fourier_sum] [--n 2,3] [--delta 0,0.1] [--modes RON …] -o FILE.svg`
 
 /// `println!` that ignores a closed pipe (`jamkit validate … | head`)
 /// instead of panicking.
@@ -64,6 +66,40 @@ enum Command {
     Bench {
         #[command(subcommand)]
         what: bench::BenchCommand,
+    },
+    /// Draw a 2D packing file: true outlines, periodic images, rattlers.
+    Draw {
+        /// A packing file written by `run` (DIR/packings/<id>.json).
+        packing: PathBuf,
+        /// The picture to write: FILE.svg or FILE.png.
+        #[arg(short, long, value_name = "FILE")]
+        out: PathBuf,
+        /// Length in pixels of the picture's longer side.
+        #[arg(long, value_name = "PIXELS", default_value_t = jamkit_draw::render::DEFAULT_SIZE)]
+        size: u32,
+    },
+    /// Polar plots R(θ)/R0 = 1 + Δ F(θ) of near-disk shapes (SVG): one
+    /// panel per n (or mode set), one curve per Δ.
+    DrawShape {
+        /// `fourier` (one panel per --n) or `fourier_sum` (one per --modes).
+        #[arg(default_value = "fourier")]
+        family: String,
+        /// fourier: mode numbers, comma-separated [default: 2,3,4,5].
+        #[arg(long, value_delimiter = ',')]
+        n: Vec<u32>,
+        /// Amplitudes Δ, comma-separated [default: 0,0.1,0.3].
+        #[arg(long, value_delimiter = ',')]
+        delta: Vec<f64>,
+        /// fourier_sum: one mode set per panel, in RON, repeatable:
+        /// --modes '[(n: 2, a: 0.5), (n: 3, a: 0.1, b: 1.0)]'.
+        #[arg(long, value_name = "RON")]
+        modes: Vec<String>,
+        /// The picture to write: FILE.svg.
+        #[arg(short, long, value_name = "FILE")]
+        out: PathBuf,
+        /// Side in pixels of one panel.
+        #[arg(long, value_name = "PIXELS", default_value_t = jamkit_draw::render::DEFAULT_PANEL_SIZE)]
+        size: u32,
     },
 }
 
@@ -151,6 +187,69 @@ fn real_main() -> Result<()> {
             Ok(())
         }
         Command::Bench { what } => bench::run(what),
+        Command::Draw { packing, out, size } => {
+            let p = jamkit_draw::Packing2d::load(&packing)?;
+            jamkit_draw::draw_packing(&p, &out, size)?;
+            let images = p
+                .pieces(jamkit_draw::render::POINTS_PER_BODY)
+                .iter()
+                .filter(|q| q.is_image())
+                .count();
+            out!(
+                "{}: {} {} bodies ({} periodic image pieces, {} rattlers) drawn to {}",
+                packing.display(),
+                p.bodies.len(),
+                p.family,
+                images,
+                p.bodies.iter().filter(|b| b.rattler).count(),
+                out.display()
+            );
+            Ok(())
+        }
+        Command::DrawShape {
+            family,
+            n,
+            delta,
+            modes,
+            out,
+            size,
+        } => {
+            let delta = if delta.is_empty() {
+                vec![0.0, 0.1, 0.3]
+            } else {
+                delta
+            };
+            let panels = match family.as_str() {
+                "fourier" => {
+                    if !modes.is_empty() {
+                        bail!("--modes belongs to fourier_sum; fourier takes --n");
+                    }
+                    let n = if n.is_empty() { vec![2, 3, 4, 5] } else { n };
+                    jamkit_draw::shapes::fourier_panels(&n, &delta)?
+                }
+                "fourier_sum" => {
+                    if !n.is_empty() {
+                        bail!("--n belongs to fourier; fourier_sum takes --modes");
+                    }
+                    if modes.is_empty() {
+                        bail!(
+                            "fourier_sum needs --modes, e.g. --modes '[(n: 2, a: 0.5), (n: 3, a: 0.1)]'"
+                        );
+                    }
+                    let sets = modes
+                        .iter()
+                        .map(|m| jamkit_draw::shapes::parse_modes(m))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    jamkit_draw::shapes::fourier_sum_panels(&sets, &delta)?
+                }
+                other => bail!(
+                    "draw-shape: family `{other}`: only fourier and fourier_sum have shape plots"
+                ),
+            };
+            jamkit_draw::draw_shapes(&panels, &out, size)?;
+            out!("{} panel(s) drawn to {}", panels.len(), out.display());
+            Ok(())
+        }
     }
 }
 

@@ -18,6 +18,7 @@ pub const FAMILIES: &[FamilyInfo] = &[
     jamkit_sphere::INFO,
     jamkit_fourier::FOURIER_INFO,
     jamkit_fourier::FOURIER_SUM_INFO,
+    jamkit_lobed::INFO,
 ];
 
 /// Dimensions the engine is compiled for (families with `Dims::Any`).
@@ -142,6 +143,12 @@ pub fn dispatch<V: SceneVisitor>(
             } else {
                 Ok(visitor.visit::<2, _>(shape))
             }
+        }
+        "lobed" => {
+            let p: jamkit_lobed::LobedParams = parse_params(family, params)?;
+            let shape = jamkit_lobed::Lobed::new(&p)
+                .map_err(|e| ExperimentError::invalid(e.field, e.value, e.allowed))?;
+            Ok(visitor.visit::<2, _>(shape))
         }
         other => unreachable!("family `{other}` is in FAMILIES but has no dispatch arm"),
     }

@@ -1,0 +1,359 @@
+//! Outlines, periodic images and clipping, with no plotting.
+//!
+//! A body of size `R⁰`, centre `r` and orientation `θ` has the polar outline
+//! `R(φ) = R⁰ [1 + Δ F(θ − φ)]` in the lab direction `φ` (the convention of
+//! `jamkit-fourier`; a disk is `Δ = 0`), so its outline points are
+//! `r + R(φ) (cos φ, sin φ)`. A body that crosses an edge of the periodic
+//! box `[0, L₁) × [0, L₂)` is drawn as several pieces: the body and its
+//! periodic images, each clipped to the box.
+
+use crate::DrawError;
+use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
+use std::f64::consts::PI;
+
+/// A point of the plane, `[x, y]`.
+pub type Point = [f64; 2];
+
+/// The families [`Outline::from_family`] knows how to draw.
+pub const DRAWABLE_FAMILIES: &[&str] = &["sphere", "fourier", "fourier_sum"];
+
+/// The outline law of a family, shared by all bodies of a packing.
+#[derive(Clone, Debug)]
+pub enum Outline {
+    /// A disk: `R(φ) = R⁰`.
+    Disk,
+    /// A near-disk: `R(φ) = R⁰ [1 + Δ F(θ − φ)]`.
+    NearDisk(NearDisk),
+}
+
+impl Outline {
+    /// The outline of a registered family from its parameters as stored in
+    /// a packing file (`{}` for spheres, `{"n": 3, "delta": 0.2, …}` for
+    /// `fourier`, `{"modes": [...], "delta": …}` for `fourier_sum`).
+    pub fn from_family(family: &str, params: &serde_json::Value) -> Result<Self, DrawError> {
+        let bad = |message: String| DrawError::Params {
+            family: family.to_string(),
+            message,
+        };
+        match family {
+            "sphere" => Ok(Outline::Disk),
+            "fourier" => {
+                let p: FourierParams =
+                    serde_json::from_value(params.clone()).map_err(|e| bad(e.to_string()))?;
+                Self::fourier(p.n, p.delta)
+            }
+            "fourier_sum" => {
+                let p: FourierSumParams =
+                    serde_json::from_value(params.clone()).map_err(|e| bad(e.to_string()))?;
+                Self::fourier_sum(p.modes, p.delta)
+            }
+            other => Err(DrawError::UnknownFamily(other.to_string())),
+        }
+    }
+
+    /// The `fourier` outline: one mode `F(φ) = sin(nφ)/n`.
+    pub fn fourier(n: u32, delta: f64) -> Result<Self, DrawError> {
+        // NOTE: the moment of inertia plays no part in the outline; giving it
+        // keeps Δ = 0 (whose default inertia Δ is refused) drawable.
+        let shape = NearDisk::fourier(&FourierParams {
+            n,
+            delta,
+            inertia: Some(1.0),
+        })
+        .map_err(|e| param_error("fourier", e))?;
+        Ok(Outline::NearDisk(shape))
+    }
+
+    /// The `fourier_sum` outline: `F(φ) = Σ_k a_k sin(n_k φ + b_k)`.
+    pub fn fourier_sum(modes: Vec<Mode>, delta: f64) -> Result<Self, DrawError> {
+        let shape = NearDisk::fourier_sum(&FourierSumParams {
+            modes,
+            delta,
+            inertia: Some(1.0),
+        })
+        .map_err(|e| param_error("fourier_sum", e))?;
+        Ok(Outline::NearDisk(shape))
+    }
+
+    /// `R/R⁰` as a function of the body-frame angle `ψ`: `1 + Δ F(ψ)`.
+    pub fn relative_radius(&self, psi: f64) -> f64 {
+        match self {
+            Outline::Disk => 1.0,
+            Outline::NearDisk(s) => s.relative_radius(psi),
+        }
+    }
+
+    /// `Δ` (0 for disks).
+    pub fn delta(&self) -> f64 {
+        match self {
+            Outline::Disk => 0.0,
+            Outline::NearDisk(s) => s.delta(),
+        }
+    }
+
+    /// The radius `R(φ) = R⁰ [1 + Δ F(θ − φ)]` of a body of size `size` and
+    /// orientation `theta` in the lab direction `phi`.
+    pub fn radius(&self, size: f64, theta: f64, phi: f64) -> f64 {
+        size * self.relative_radius(theta - phi)
+    }
+
+    /// `m` outline points of a body, counter-clockwise from `φ = 0`, not
+    /// closed (the last point is not repeated).
+    pub fn body_points(&self, center: Point, size: f64, theta: f64, m: usize) -> Vec<Point> {
+        (0..m)
+            .map(|k| {
+                let phi = 2.0 * PI * k as f64 / m as f64;
+                let r = self.radius(size, theta, phi);
+                [center[0] + r * phi.cos(), center[1] + r * phi.sin()]
+            })
+            .collect()
+    }
+
+    /// The closed polar curve `(1 + Δ F(θ)) (cos θ, sin θ)` on `m + 1`
+    /// points (`θ = 0 … 2π`), in units of `R⁰`: the shape plot of
+    /// `draw-shape`.
+    pub fn polar_curve(&self, m: usize) -> Vec<Point> {
+        (0..=m)
+            .map(|k| {
+                let theta = 2.0 * PI * k as f64 / m as f64;
+                let r = self.relative_radius(theta);
+                [r * theta.cos(), r * theta.sin()]
+            })
+            .collect()
+    }
+}
+
+fn param_error(family: &str, e: jamkit_fourier::ParamError) -> DrawError {
+    DrawError::Params {
+        family: family.to_string(),
+        message: format!("{} = {}: {}", e.field, e.value, e.allowed),
+    }
+}
+
+/// Signed area of a polygon (shoelace; positive when counter-clockwise).
+pub fn polygon_area(poly: &[Point]) -> f64 {
+    let n = poly.len();
+    (0..n)
+        .map(|i| {
+            let (p, q) = (poly[i], poly[(i + 1) % n]);
+            p[0] * q[1] - q[0] * p[1]
+        })
+        .sum::<f64>()
+        / 2.0
+}
+
+/// Keep the part of `poly` with `sign (p[axis] − c) ≥ 0` (one step of
+/// Sutherland–Hodgman).
+fn clip_half_plane(poly: &[Point], axis: usize, c: f64, sign: f64) -> Vec<Point> {
+    let value = |p: &Point| sign * (p[axis] - c);
+    let mut out = Vec::with_capacity(poly.len() + 4);
+    for i in 0..poly.len() {
+        let s = poly[i];
+        let e = poly[(i + 1) % poly.len()];
+        let (vs, ve) = (value(&s), value(&e));
+        if vs >= 0.0 {
+            out.push(s);
+        }
+        if (vs >= 0.0) != (ve >= 0.0) {
+            let t = vs / (vs - ve);
+            let mut p = [s[0] + t * (e[0] - s[0]), s[1] + t * (e[1] - s[1])];
+            p[axis] = c; // exactly on the edge, whatever the rounding
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// The part of `poly` inside the box `[0, L₁] × [0, L₂]`
+/// (Sutherland–Hodgman; correct for any polygon since the box is convex,
+/// though a non-convex polygon cut in two keeps a zero-width bridge along
+/// the edge). Empty when nothing is inside.
+pub fn clip_to_box(poly: &[Point], box_edges: [f64; 2]) -> Vec<Point> {
+    let mut out = poly.to_vec();
+    for (axis, c, sign) in [
+        (0, 0.0, 1.0),
+        (0, box_edges[0], -1.0),
+        (1, 0.0, 1.0),
+        (1, box_edges[1], -1.0),
+    ] {
+        if out.is_empty() {
+            break;
+        }
+        out = clip_half_plane(&out, axis, c, sign);
+    }
+    out
+}
+
+/// The shifts (multiples of the box edges, `[0, 0]` first) that bring a part
+/// of `poly` into the box `[0, L₁) × [0, L₂)`. A polygon inside the box has
+/// only `[0, 0]`; one crossing a single edge has two shifts; one crossing a
+/// corner has four. Assumes the polygon is smaller than the box.
+pub fn image_shifts(poly: &[Point], box_edges: [f64; 2]) -> Vec<Point> {
+    let mut per_axis: [Vec<f64>; 2] = [vec![0.0], vec![0.0]];
+    for axis in 0..2 {
+        let lo = poly.iter().map(|p| p[axis]).fold(f64::INFINITY, f64::min);
+        let hi = poly
+            .iter()
+            .map(|p| p[axis])
+            .fold(f64::NEG_INFINITY, f64::max);
+        if lo < 0.0 {
+            per_axis[axis].push(box_edges[axis]);
+        }
+        if hi > box_edges[axis] {
+            per_axis[axis].push(-box_edges[axis]);
+        }
+    }
+    let mut shifts = Vec::new();
+    for &sx in &per_axis[0] {
+        for &sy in &per_axis[1] {
+            shifts.push([sx, sy]);
+        }
+    }
+    shifts
+}
+
+/// The pieces of `poly` to draw in the periodic box: the polygon and its
+/// periodic images, each clipped to the box, with its shift. Pieces of
+/// (relatively) zero area are dropped. The first piece, if any, is the
+/// unshifted one.
+pub fn periodic_pieces(poly: &[Point], box_edges: [f64; 2]) -> Vec<(Point, Vec<Point>)> {
+    let min_area = 1e-12 * box_edges[0] * box_edges[1];
+    image_shifts(poly, box_edges)
+        .into_iter()
+        .filter_map(|s| {
+            let shifted: Vec<Point> = poly.iter().map(|p| [p[0] + s[0], p[1] + s[1]]).collect();
+            let clipped = clip_to_box(&shifted, box_edges);
+            (clipped.len() >= 3 && polygon_area(&clipped).abs() > min_area).then_some((s, clipped))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn disk_outline_points_lie_at_distance_r() {
+        let c = [1.5, 2.0];
+        for p in Outline::Disk.body_points(c, 0.7, 0.3, 200) {
+            assert_relative_eq!((p[0] - c[0]).hypot(p[1] - c[1]), 0.7, epsilon = 1e-12);
+        }
+    }
+
+    #[test]
+    fn near_disk_radius_at_its_orientation_is_one_plus_delta_f0() {
+        // fourier: F(0) = sin(0)/n = 0, so R(θ_i) = R⁰.
+        let o = Outline::fourier(3, 0.2).unwrap();
+        let (size, theta) = (0.6, 1.1);
+        assert_relative_eq!(o.radius(size, theta, theta), size, epsilon = 1e-12);
+        // fourier_sum with a phase: F(0) = a sin(b).
+        let modes = vec![Mode {
+            n: 2,
+            a: 0.5,
+            b: 0.7,
+        }];
+        let o = Outline::fourier_sum(modes, 0.3).unwrap();
+        let expected = size * (1.0 + 0.3 * 0.5 * 0.7f64.sin());
+        assert_relative_eq!(o.radius(size, theta, theta), expected, epsilon = 1e-12);
+        // And the outline point in the direction θ_i sits at that radius.
+        let m = 200;
+        let theta = 2.0 * PI * 17.0 / m as f64; // on the sampling grid
+        let c = [0.0, 0.0];
+        let p = o.body_points(c, size, theta, m)[17];
+        assert_relative_eq!(p[0].hypot(p[1]), expected, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn near_disk_follows_the_outline_convention() {
+        // R(φ) = R⁰ [1 + Δ sin(n(θ − φ))/n]: at φ = θ − π/(2n) it is maximal.
+        let (n, delta, size, theta) = (2, 0.3, 1.0, 0.4);
+        let o = Outline::fourier(n, delta).unwrap();
+        let phi = theta - PI / (2.0 * n as f64);
+        assert_relative_eq!(
+            o.radius(size, theta, phi),
+            1.0 + delta / n as f64,
+            epsilon = 1e-12
+        );
+    }
+
+    #[test]
+    fn polar_curve_is_closed_and_matches_relative_radius() {
+        let o = Outline::fourier(4, 0.1).unwrap();
+        let c = o.polar_curve(100);
+        assert_eq!(c.len(), 101);
+        assert_relative_eq!(c[0][0], c[100][0], epsilon = 1e-12);
+        assert_relative_eq!(c[0][1], c[100][1], epsilon = 1e-12);
+        let theta = 2.0 * PI * 13.0 / 100.0;
+        assert_relative_eq!(
+            c[13][0].hypot(c[13][1]),
+            1.0 + 0.1 * (4.0 * theta).sin() / 4.0,
+            epsilon = 1e-12
+        );
+    }
+
+    #[test]
+    fn a_body_inside_the_box_has_one_piece() {
+        let poly = Outline::Disk.body_points([2.0, 2.0], 0.5, 0.0, 64);
+        let pieces = periodic_pieces(&poly, [4.0, 4.0]);
+        assert_eq!(pieces.len(), 1);
+        assert_eq!(pieces[0].0, [0.0, 0.0]);
+        assert_relative_eq!(
+            polygon_area(&pieces[0].1),
+            polygon_area(&poly),
+            epsilon = 1e-12
+        );
+    }
+
+    #[test]
+    fn a_body_crossing_an_edge_gets_an_image_and_keeps_its_area() {
+        let box_edges = [4.0, 5.0];
+        let poly = Outline::Disk.body_points([0.2, 2.5], 0.5, 0.0, 200);
+        let pieces = periodic_pieces(&poly, box_edges);
+        assert_eq!(pieces.len(), 2);
+        assert_eq!(pieces[1].0, [4.0, 0.0]);
+        for (_, piece) in &pieces {
+            assert!(
+                piece
+                    .iter()
+                    .all(|p| (0.0..=4.0).contains(&p[0]) && (0.0..=5.0).contains(&p[1]))
+            );
+        }
+        let total: f64 = pieces.iter().map(|(_, p)| polygon_area(p)).sum();
+        assert_relative_eq!(total, polygon_area(&poly), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn a_body_on_a_corner_gets_three_images() {
+        let box_edges = [4.0, 4.0];
+        let poly = Outline::fourier(3, 0.2)
+            .unwrap()
+            .body_points([3.9, 0.1], 0.5, 0.8, 200);
+        let pieces = periodic_pieces(&poly, box_edges);
+        assert_eq!(pieces.len(), 4);
+        let total: f64 = pieces.iter().map(|(_, p)| polygon_area(p)).sum();
+        assert_relative_eq!(total, polygon_area(&poly), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn families_and_parameters_are_checked() {
+        let p = serde_json::json!({"n": 3, "delta": 0.2, "inertia": null});
+        assert!(matches!(
+            Outline::from_family("fourier", &p),
+            Ok(Outline::NearDisk(_))
+        ));
+        let p = serde_json::json!({"modes": [{"n": 2, "a": 0.5, "b": 0.0}], "delta": 0.1});
+        assert!(Outline::from_family("fourier_sum", &p).is_ok());
+        assert!(matches!(
+            Outline::from_family("sphere", &serde_json::json!({})),
+            Ok(Outline::Disk)
+        ));
+        let e = Outline::from_family("dimer", &serde_json::json!({})).unwrap_err();
+        assert!(e.to_string().contains("dimer"), "{e}");
+        let e = Outline::from_family("fourier", &serde_json::json!({"n": 2})).unwrap_err();
+        assert!(e.to_string().contains("delta"), "{e}");
+        let e = Outline::fourier(1, 5.0).unwrap_err();
+        assert!(e.to_string().contains("params.delta"), "{e}");
+        assert!(Outline::fourier(2, 0.0).is_ok());
+    }
+}

@@ -1,0 +1,94 @@
+//! # Pictures of packings and shapes
+//!
+//! `jamkit-draw` turns a 2D packing file (`packings/<id>.json`) into an SVG
+//! or PNG picture of every body's true outline in the periodic box, and
+//! draws polar plots `R(θ)/R⁰ = 1 + Δ F(θ)` of near-disk shapes. It backs
+//! the `jamkit draw` and `jamkit draw-shape` commands (`docs/drawing.md`).
+//!
+//! The crate is split in two layers:
+//!
+//! * geometry, free of any plotting: [`geometry`] (outlines of the
+//!   families, periodic images, clipping to the box), [`packing`] (a
+//!   packing file as bodies with outlines), [`shapes`] (the curves of a
+//!   shape plot) and [`colors`] (fill colours by size);
+//! * plotting with `plotters`: [`render`] (SVG and PNG output).
+//!
+//! PNG pictures carry no text (the bitmap backend would need a font), so
+//! `draw-shape`, whose panels have titles, axes and legends, writes SVG only.
+
+pub mod colors;
+pub mod geometry;
+pub mod packing;
+pub mod render;
+pub mod shapes;
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong while drawing; each message names the fix.
+#[derive(Debug, thiserror::Error)]
+pub enum DrawError {
+    /// A file could not be read or written.
+    #[error("{path}: {error}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error (shown in the message, not chained).
+        error: std::io::Error,
+    },
+    /// A packing file is not valid JSON of the expected form.
+    #[error("{path}: not a packing file: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// What the JSON reader said.
+        message: String,
+    },
+    /// The packing is not two-dimensional.
+    #[error("dim = {0}: only 2D packings can be drawn")]
+    Dimension(usize),
+    /// A family this crate does not know how to outline.
+    #[error(
+        "family `{0}`: cannot draw it (drawable families: {families})",
+        families = geometry::DRAWABLE_FAMILIES.join(", ")
+    )]
+    UnknownFamily(String),
+    /// The family's parameters do not describe a valid shape.
+    #[error("params (family `{family}`): {message}")]
+    Params {
+        /// Family name.
+        family: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The arrays of a packing file do not fit together (lengths, finiteness).
+    #[error("{0}")]
+    Inconsistent(String),
+    /// An output file name whose extension is not `.svg` or `.png`.
+    #[error("{path}: {message}")]
+    Format {
+        /// The output file.
+        path: PathBuf,
+        /// Which extensions are accepted.
+        message: String,
+    },
+    /// An image size outside the accepted range.
+    #[error(
+        "--size = {0}: must lie in {min}..={max} pixels",
+        min = render::MIN_SIZE,
+        max = render::MAX_SIZE
+    )]
+    Size(u32),
+    /// The plotting library failed.
+    #[error("drawing {path}: {message}")]
+    Render {
+        /// The output file (empty when drawing to a string).
+        path: PathBuf,
+        /// The library's message.
+        message: String,
+    },
+}
+
+pub use geometry::{Outline, Point};
+pub use packing::{Body, Packing2d, Piece};
+pub use render::{Format, draw_packing, draw_shapes, packing_svg, shapes_svg};
+pub use shapes::{ShapeCurve, ShapePanel};

@@ -1,0 +1,162 @@
+//! `jamkit draw` and `jamkit draw-shape` through the binary: pictures of
+//! freshly jammed packings (disks and near-disks) in SVG and PNG, shape
+//! panels, and clear errors (never panics) for what cannot be drawn.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn jamkit(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_jamkit"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+/// Jam one packing of 16 bodies into `dir` and return its file.
+fn jam(dir: &Path, extra: &[&str]) -> PathBuf {
+    let mut args = vec![
+        "run",
+        "experiments/quickstart.ron",
+        "--out",
+        dir.to_str().unwrap(),
+        "--set",
+        "particles=16",
+        "--set",
+        "samples=1",
+    ];
+    args.extend_from_slice(extra);
+    let (code, _, err) = jamkit(&args);
+    assert_eq!(code, 0, "{err}");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir.join("packings"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(files.len(), 1, "{files:?}");
+    files.pop().unwrap()
+}
+
+/// Draw `packing` to SVG and PNG; check both files, and return the SVG.
+fn draw_both(packing: &Path, dir: &Path) -> String {
+    let svg = dir.join("packing.svg");
+    let png = dir.join("packing.png");
+    for (out, size) in [(&svg, "400"), (&png, "300")] {
+        let (code, stdout, err) = jamkit(&[
+            "draw",
+            packing.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--size",
+            size,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        assert!(stdout.contains("16 "), "{stdout}");
+        assert!(
+            std::fs::metadata(out).unwrap().len() > 0,
+            "{}",
+            out.display()
+        );
+    }
+    assert_eq!(&std::fs::read(&png).unwrap()[..4], b"\x89PNG");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg") && text.contains("</svg>"));
+    // At least one filled polygon per body (more with periodic images).
+    assert!(text.matches("<polygon").count() >= 16, "{text}");
+    text
+}
+
+#[test]
+fn draw_binary_disks_to_svg_and_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let packing = jam(&dir.path().join("run"), &[]);
+    draw_both(&packing, dir.path());
+}
+
+#[test]
+fn draw_near_disks_to_svg_and_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let packing = jam(
+        &dir.path().join("run"),
+        &[
+            "--set",
+            "family=fourier",
+            "--set",
+            r#"params={"n": 3, "delta": 0.2}"#,
+        ],
+    );
+    draw_both(&packing, dir.path());
+}
+
+#[test]
+fn draw_refuses_what_it_cannot_draw() {
+    let dir = tempfile::tempdir().unwrap();
+    let packing = jam(&dir.path().join("run"), &[]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&packing).unwrap()).unwrap();
+    let out = dir.path().join("x.svg");
+    let out = out.to_str().unwrap();
+    for (key, value, message) in [
+        ("dim", serde_json::json!(3), "dim = 3"),
+        ("family", serde_json::json!("dimer"), "family `dimer`"),
+    ] {
+        let mut bad = json.clone();
+        bad[key] = value;
+        let path = dir.path().join(format!("bad_{key}.json"));
+        std::fs::write(&path, bad.to_string()).unwrap();
+        let (code, _, err) = jamkit(&["draw", path.to_str().unwrap(), "-o", out]);
+        assert_eq!(code, 1, "{err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(message) && !err.contains("panicked"),
+            "{err}"
+        );
+    }
+    let (code, _, err) = jamkit(&["draw", packing.to_str().unwrap(), "-o", "x.jpg"]);
+    assert_eq!(code, 1);
+    assert!(err.contains(".svg or .png"), "{err}");
+    let (code, _, err) = jamkit(&["draw", "no/such/packing.json", "-o", out]);
+    assert_eq!(code, 1);
+    assert!(err.contains("no/such/packing.json"), "{err}");
+}
+
+#[test]
+fn draw_shape_writes_one_panel_per_n() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("shapes.svg");
+    let (code, stdout, err) = jamkit(&[
+        "draw-shape",
+        "fourier",
+        "--n",
+        "2,3,4,5",
+        "--delta",
+        "0,0.1,0.3",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("4 panel(s)"), "{stdout}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    for label in ["n = 2", "n = 5", "Δ = 0", "Δ = 0.1", "Δ = 0.3", "x / R⁰"] {
+        assert!(text.contains(label), "{label} missing");
+    }
+    let (code, _, err) = jamkit(&[
+        "draw-shape",
+        "fourier_sum",
+        "--modes",
+        "[(n: 2, a: 0.5), (n: 3, a: 0.1, b: 1.0)]",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let png = dir.path().join("shapes.png");
+    let (code, _, err) = jamkit(&["draw-shape", "-o", png.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(err.contains("SVG only"), "{err}");
+    let (code, _, err) = jamkit(&["draw-shape", "sphere", "-o", svg.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(err.contains("sphere"), "{err}");
+}
