@@ -117,32 +117,13 @@ pub fn dispatch<V: SceneVisitor>(
             let _: NoParams = parse_params(family, params)?;
             any_dim!(jamkit_sphere::Sphere)
         }
-        // Near-disks with Δ = 0 are disks: the sphere family, with no
-        // rotational coordinates and the same random stream, hence the
-        // same packing as `sphere` for the same seed.
         "fourier" => {
-            let mut p: jamkit_fourier::FourierParams = parse_params(family, params)?;
-            if p.delta == 0.0 {
-                p.inertia.get_or_insert(1.0); // no rotations at Δ = 0; only the other checks matter
-            }
-            let shape = jamkit_fourier::NearDisk::fourier(&p).map_err(near_disk_error)?;
-            if p.delta == 0.0 {
-                Ok(visitor.visit::<2, _>(jamkit_sphere::Sphere))
-            } else {
-                Ok(visitor.visit::<2, _>(shape))
-            }
+            let p: jamkit_fourier::FourierParams = parse_params(family, params)?;
+            near_disk(visitor, p.delta, jamkit_fourier::NearDisk::fourier(&p))
         }
         "fourier_sum" => {
-            let mut p: jamkit_fourier::FourierSumParams = parse_params(family, params)?;
-            if p.delta == 0.0 {
-                p.inertia.get_or_insert(1.0);
-            }
-            let shape = jamkit_fourier::NearDisk::fourier_sum(&p).map_err(near_disk_error)?;
-            if p.delta == 0.0 {
-                Ok(visitor.visit::<2, _>(jamkit_sphere::Sphere))
-            } else {
-                Ok(visitor.visit::<2, _>(shape))
-            }
+            let p: jamkit_fourier::FourierSumParams = parse_params(family, params)?;
+            near_disk(visitor, p.delta, jamkit_fourier::NearDisk::fourier_sum(&p))
         }
         "lobed" => {
             let p: jamkit_lobed::LobedParams = parse_params(family, params)?;
@@ -154,8 +135,20 @@ pub fn dispatch<V: SceneVisitor>(
     }
 }
 
-fn near_disk_error(e: jamkit_fourier::ParamError) -> ExperimentError {
-    ExperimentError::invalid(e.field, e.value, e.allowed)
+/// Near-disks with Δ = 0 are disks: they run as the sphere family, with no
+/// rotational coordinates and the same random stream, hence the same
+/// packing as `sphere` for the same seed.
+fn near_disk<V: SceneVisitor>(
+    visitor: V,
+    delta: f64,
+    shape: Result<jamkit_fourier::NearDisk, jamkit_fourier::ParamError>,
+) -> Result<V::Output, ExperimentError> {
+    let shape = shape.map_err(|e| ExperimentError::invalid(e.field, e.value, e.allowed))?;
+    Ok(if delta == 0.0 {
+        visitor.visit::<2, _>(jamkit_sphere::Sphere)
+    } else {
+        visitor.visit::<2, _>(shape)
+    })
 }
 
 /// The parameters of a family that has none.

@@ -292,7 +292,9 @@ impl NearDisk {
                 ));
             }
         }
-        let inertia = inertia.unwrap_or(delta);
+        // At Δ = 0 nothing turns (the registry runs such bodies as disks);
+        // the default I = Δ would be 0, so take 1 there.
+        let inertia = inertia.unwrap_or(if delta > 0.0 { delta } else { 1.0 });
         if !(inertia > 0.0 && inertia.is_finite()) {
             return Err(err(
                 "params.inertia",
