@@ -171,41 +171,18 @@ fn phi_and_pressure_protocols_reach_their_targets() {
 /// names the sample and the cap, and the run reports it instead of hanging.
 #[test]
 fn exhausted_search_is_a_clear_error() {
-    let dir = tempfile::tempdir().unwrap();
-    let e = jamkit_experiment::overrides::apply(
-        &experiment(2, 16, 1),
-        &["protocol.max_density_steps=5".into()],
-    )
-    .unwrap();
-    let report = run(
-        &e,
-        &RunOptions {
-            out: dir.path().to_path_buf(),
-            jobs: Some(1),
-            progress: false,
-        },
-    )
-    .unwrap();
-    assert!(report.packings.is_empty());
-    let msg = report.failures[0].to_string();
+    let first_failure = |set: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let e = jamkit_experiment::overrides::apply(&experiment(2, 16, 1), &[set.into()]).unwrap();
+        let report = run_into(&e, dir.path(), 1);
+        assert!(report.packings.is_empty());
+        report.failures[0].to_string()
+    };
+    let msg = first_failure("protocol.max_density_steps=5");
     assert!(
         msg.contains("sample sphere_d2_N16_s11") && msg.contains("max_density_steps = 5"),
         "{msg}"
     );
-    let e = jamkit_experiment::overrides::apply(
-        &experiment(2, 16, 1),
-        &["minimizer.max_steps=3".into()],
-    )
-    .unwrap();
-    let report = run(
-        &e,
-        &RunOptions {
-            out: dir.path().to_path_buf(),
-            jobs: Some(1),
-            progress: false,
-        },
-    )
-    .unwrap();
-    let msg = report.failures[0].to_string();
+    let msg = first_failure("minimizer.max_steps=3");
     assert!(msg.contains("FIRE did not converge in 3 steps"), "{msg}");
 }
