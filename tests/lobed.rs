@@ -127,3 +127,19 @@ fn example_experiment_jams() {
         assert!(p.orientations.iter().all(|o| o.len() == 1));
     }
 }
+
+/// `--set params.inertia=0.5` (a bare number, no `Some`) reaches the family,
+/// and a κ out of range is refused with the field named.
+#[test]
+fn parameters_can_be_set_from_the_command_line() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/examples/lobed.ron");
+    let e = Experiment::from_file(&file).unwrap();
+    for set in ["params.inertia=0.5", "params.inertia=Some(0.5)"] {
+        let e = overrides::apply(&e, &[set.into()]).unwrap();
+        e.validate().unwrap();
+        jamkit_experiment::grid::points(&e).unwrap_or_else(|err| panic!("{set}: {err}"));
+    }
+    let e = overrides::apply(&e, &["params.kappa=0.05".into()]).unwrap();
+    let err = jamkit_experiment::grid::points(&e).unwrap_err().to_string();
+    assert!(err.contains("params.kappa"), "{err}");
+}

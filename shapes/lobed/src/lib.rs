@@ -85,7 +85,9 @@ pub struct LobedParams {
     pub delta: f64,
     /// Sharpness `κ` of the lobes.
     pub kappa: f64,
-    /// Moment of inertia (`None`: `Δ`).
+    /// Moment of inertia (`None`: `Δ`). Also read from a bare number, which
+    /// is what `--set params.inertia=0.5` produces.
+    #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
 }
 
