@@ -34,6 +34,10 @@ pub enum Error {
         "the box edge {edge:.4} is shorter than twice the interaction range {range:.4} at phi = {phi:.6}: a body would meet its own periodic image; use more particles"
     )]
     BoxTooSmall { edge: f64, range: f64, phi: f64 },
+    /// The family or dimension does not provide what was asked (e.g. the
+    /// second derivatives of its gap, for the Hessian).
+    #[error("{0}")]
+    Unsupported(String),
     /// A NaN or infinity appeared in the energy or the forces.
     #[error("non-finite energy or force at phi = {phi:.12}: {what}")]
     NonFinite { phi: f64, what: String },

@@ -28,9 +28,9 @@ pub mod sizes;
 
 pub use error::{Error, Result};
 pub use family::{Dims, FamilyInfo, ParamSpec};
-pub use math::{MAX_ROT, RotVec, Vector};
+pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use packing::Packing;
 pub use periodic::PeriodicBox;
 pub use potential::Potential;
-pub use shape::{Contact, Shape};
+pub use shape::{Contact, GapHessian, Shape};
 pub use sizes::SizeDistribution;

@@ -9,6 +9,9 @@
 /// A point or displacement in `D` dimensions.
 pub type Vector<const D: usize> = nalgebra::SVector<f64, D>;
 
+/// A `D × D` matrix (second derivatives with respect to positions).
+pub type Matrix<const D: usize> = nalgebra::SMatrix<f64, D, D>;
+
 /// The largest number of rotational coordinates a body can have (3D rigid body).
 pub const MAX_ROT: usize = 3;
 

@@ -20,7 +20,8 @@
 //! Gaps depend on the two centres only through `r_ij = r_j − r_i` (minimum
 //! image), so `∂h/∂r_i = −∂h/∂r_j` and a [`Contact`] stores one of them.
 
-use crate::math::{RotVec, Vector};
+use crate::error::{Error, Result};
+use crate::math::{MAX_ROT, Matrix, RotVec, Vector};
 use rand::Rng;
 use std::fmt::Debug;
 
@@ -46,6 +47,53 @@ impl<const D: usize> Contact<D> {
             grad_r,
             grad_rot_i: [0.0; 3],
             grad_rot_j: [0.0; 3],
+        }
+    }
+}
+
+/// One contact's gap with its first **and second** derivatives, for the
+/// Hessian of the energy.
+///
+/// The gap depends on the centres only through `r_ij = r_j − r_i`, so with
+/// `∂/∂r_i = −∂/∂r_j` every second derivative involving `r_i` follows from
+/// the ones stored here:
+///
+/// ```text
+/// ∂²h/∂r_i∂r_i = ∂²h/∂r_j∂r_j = −∂²h/∂r_i∂r_j = rr,
+/// ∂²h/∂r_j∂q_i[a] = r_qi[a],   ∂²h/∂r_i∂q_i[a] = −r_qi[a]   (same for q_j).
+/// ```
+///
+/// Rotational derivatives are taken with respect to the increments that
+/// [`Shape::rotate`] applies, at zero increment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GapHessian<const D: usize> {
+    /// The gap and its first derivatives.
+    pub contact: Contact<D>,
+    /// `∂²h/∂r_j∂r_j` (symmetric).
+    pub rr: Matrix<D>,
+    /// `∂²h/∂r_j∂q_i[a]` for each rotational coordinate `a` of body `i`.
+    pub r_qi: [Vector<D>; MAX_ROT],
+    /// `∂²h/∂r_j∂q_j[a]`.
+    pub r_qj: [Vector<D>; MAX_ROT],
+    /// `∂²h/∂q_i[a]∂q_i[b]` (symmetric).
+    pub qi_qi: [RotVec; MAX_ROT],
+    /// `∂²h/∂q_j[a]∂q_j[b]` (symmetric).
+    pub qj_qj: [RotVec; MAX_ROT],
+    /// `∂²h/∂q_i[a]∂q_j[b]`, indexed `[a][b]`.
+    pub qi_qj: [RotVec; MAX_ROT],
+}
+
+impl<const D: usize> GapHessian<D> {
+    /// A contact between bodies without rotational coordinates.
+    pub fn translational(gap: f64, grad_r: Vector<D>, rr: Matrix<D>) -> Self {
+        Self {
+            contact: Contact::translational(gap, grad_r),
+            rr,
+            r_qi: [Vector::<D>::zeros(); MAX_ROT],
+            r_qj: [Vector::<D>::zeros(); MAX_ROT],
+            qi_qi: [[0.0; MAX_ROT]; MAX_ROT],
+            qj_qj: [[0.0; MAX_ROT]; MAX_ROT],
+            qi_qj: [[0.0; MAX_ROT]; MAX_ROT],
         }
     }
 }
@@ -111,6 +159,28 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         max_gap: f64,
         visit: F,
     );
+
+    /// Like [`Shape::contacts`], with the second derivatives of each gap
+    /// (for the Hessian; not a hot path). Must visit the same contacts, with
+    /// the same gaps and first derivatives, as `contacts`.
+    ///
+    /// The default reports that the family provides no second derivatives.
+    #[allow(clippy::too_many_arguments)]
+    fn gap_hessians<F: FnMut(GapHessian<D>)>(
+        &self,
+        _size_i: f64,
+        _o_i: &Self::Orientation,
+        _size_j: f64,
+        _o_j: &Self::Orientation,
+        _r_ij: &Vector<D>,
+        _max_gap: f64,
+        _visit: F,
+    ) -> Result<()> {
+        Err(Error::Unsupported(format!(
+            "family `{}` provides no second derivatives of its gap (no Hessian) in dimension {D}",
+            self.family()
+        )))
+    }
 
     /// Fewest contacts a non-rattler keeps (rattlers are removed iteratively
     /// below this). Default `D + 1`, the paper's choice for disks and

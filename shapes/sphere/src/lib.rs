@@ -4,14 +4,16 @@
 //! is the ball of radius `R`. The gap between two balls is
 //!
 //! ```text
-//! h_ij = |r_ij| − R_i − R_j,     ∂h/∂r_j = r̂_ij = −∂h/∂r_i
+//! h_ij = |r_ij| − R_i − R_j,     ∂h/∂r_j = r̂_ij = −∂h/∂r_i,
+//!
+//! ∂²h/∂r_j∂r_j = (1 − r̂ r̂ᵀ) / |r_ij|
 //! ```
 //!
 //! and a ball has no rotational coordinates: a sphere scene carries only
 //! `D` coordinates per body.
 
 use jamkit_core::math::unit_ball_volume;
-use jamkit_core::{Contact, Dims, FamilyInfo, Shape, Vector};
+use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, Matrix, Shape, Vector};
 use rand::Rng;
 
 /// The family's self-description for the registry.
@@ -80,6 +82,34 @@ impl<const D: usize> Shape<D> for Sphere {
             Vector::<D>::from_fn(|a, _| if a == 0 { 1.0 } else { 0.0 })
         };
         visit(Contact::translational(r - size_i - size_j, unit));
+    }
+
+    fn gap_hessians<F: FnMut(GapHessian<D>)>(
+        &self,
+        size_i: f64,
+        _o_i: &(),
+        size_j: f64,
+        _o_j: &(),
+        r_ij: &Vector<D>,
+        max_gap: f64,
+        mut visit: F,
+    ) -> jamkit_core::Result<()> {
+        let mut first = None;
+        self.contacts(size_i, &(), size_j, &(), r_ij, max_gap, |c| {
+            first = Some(c)
+        });
+        if let Some(c) = first {
+            let r = r_ij.norm();
+            // NOTE: at coincident centres the curvature 1/|r| is infinite;
+            // such a pair has no defined Hessian, and zero keeps it finite.
+            let rr = if r > 0.0 {
+                (Matrix::<D>::identity() - c.grad_r * c.grad_r.transpose()) / r
+            } else {
+                Matrix::<D>::zeros()
+            };
+            visit(GapHessian::translational(c.gap, c.grad_r, rr));
+        }
+        Ok(())
     }
 }
 
