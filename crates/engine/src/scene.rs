@@ -12,7 +12,7 @@
 
 use crate::fire::Objective;
 use crate::neighbors::NeighborList;
-use jamkit_core::{Contact, Packing, Potential, Shape, Vector};
+use jamkit_core::{Contact, GapHessian, Packing, Potential, Shape, Vector};
 
 /// A packing ready to be relaxed.
 #[derive(Clone, Debug)]
@@ -127,6 +127,51 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         extra: f64,
         mut visit: F,
     ) {
+        self.for_each_pair(extra, |p, i, j, d| {
+            p.shape.contacts(
+                p.sizes[i],
+                &p.orientations[i],
+                p.sizes[j],
+                &p.orientations[j],
+                d,
+                extra,
+                |c| visit(i, j, d, &c),
+            );
+        });
+    }
+
+    /// Like [`Scene::for_each_contact`], with the second derivatives of each
+    /// gap (for the Hessian). Fails when the family provides none.
+    pub fn for_each_gap_hessian<F: FnMut(usize, usize, &GapHessian<D>)>(
+        &mut self,
+        extra: f64,
+        mut visit: F,
+    ) -> jamkit_core::Result<()> {
+        let mut result = Ok(());
+        self.for_each_pair(extra, |p, i, j, d| {
+            if result.is_ok() {
+                result = p.shape.gap_hessians(
+                    p.sizes[i],
+                    &p.orientations[i],
+                    p.sizes[j],
+                    &p.orientations[j],
+                    d,
+                    extra,
+                    |c| visit(i, j, &c),
+                );
+            }
+        });
+        result
+    }
+
+    /// Visit every pair `i < j` whose bounding balls come within `extra` of
+    /// each other, with its separation `r_ij` (minimum image). `extra` up to
+    /// the skin uses the neighbour list; beyond, all pairs.
+    fn for_each_pair<F: FnMut(&Packing<D, S>, usize, usize, &Vector<D>)>(
+        &mut self,
+        extra: f64,
+        mut visit: F,
+    ) {
         self.refresh_neighbors();
         let p = &self.packing;
         let n = p.len();
@@ -134,15 +179,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             let d = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
             let cut = self.reach[i] + self.reach[j] + extra;
             if d.norm_squared() < cut * cut {
-                p.shape.contacts(
-                    p.sizes[i],
-                    &p.orientations[i],
-                    p.sizes[j],
-                    &p.orientations[j],
-                    &d,
-                    extra,
-                    |c| visit(i, j, &d, &c),
-                );
+                visit(p, i, j, &d);
             }
         };
         if extra <= self.neighbors.skin() {

@@ -1,0 +1,219 @@
+//! The Hessian of the energy in all generalised coordinates.
+//!
+//! With `V = Σ_c v(h_c)` over contacts, the paper's Eq. (25) splits the
+//! Hessian into a stiffness and a stress part,
+//!
+//! ```text
+//! H_ab = ∂²V/∂q_a∂q_b = K_ab + T_ab,
+//! K_ab = Σ_c v''(h_c) ∂h_c/∂q_a ∂h_c/∂q_b,     T_ab = Σ_c v'(h_c) ∂²h_c/∂q_a∂q_b,
+//! ```
+//!
+//! where `q` runs over the translations and rotational coordinates of every
+//! body. At the jamming point `v'(h) → 0` and `H → K`, the paper's choice.
+//!
+//! Each contact touches two bodies, so `H` is block-sparse: it is assembled
+//! here as a list of entries (both triangles, duplicates summed), from the
+//! second derivatives of every gap that the family provides
+//! ([`Shape::gap_hessians`]). The coordinates are the ones FIRE sees, in the
+//! same order (`D` translations then the rotational coordinates of body 0,
+//! then body 1, …); with rattlers removed, their rows and columns are left
+//! out, together with the contacts they make. The Hessian is **not**
+//! mass-weighted, as in the paper: its eigenvalues are `λ = ω²` with unit
+//! masses and unit moments of inertia.
+
+use jamkit_core::{GapHessian, Potential, Result, Shape};
+use jamkit_engine::Scene;
+
+/// What to assemble.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HessianOptions {
+    /// Only the stiffness part `K` (the paper's choice at φ_J).
+    pub stiffness_only: bool,
+    /// Leave out the rows and columns of rattlers, and their contacts.
+    pub remove_rattlers: bool,
+}
+
+/// A symmetric Hessian as a list of entries (both triangles).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hessian {
+    /// Number of rows (= columns).
+    pub size: usize,
+    /// Body of each row.
+    pub body: Vec<u32>,
+    /// Whether each row is a rotational coordinate.
+    pub rotational: Vec<bool>,
+    /// `(row, column, value)`; an index pair may repeat (the values add).
+    pub entries: Vec<(u32, u32, f64)>,
+}
+
+impl Hessian {
+    /// Assemble the Hessian of `scene`; `rattler` marks the bodies to leave
+    /// out when `options.remove_rattlers` (ignored otherwise).
+    pub fn of_scene<const D: usize, S: Shape<D>>(
+        scene: &mut Scene<D, S>,
+        rattler: &[bool],
+        options: HessianOptions,
+    ) -> Result<Self> {
+        let packing = scene.packing();
+        let k = packing.shape.rot_dof();
+        let stride = D + k;
+        let n = packing.len();
+        let kept = |i: usize| !(options.remove_rattlers && rattler[i]);
+        // Row of each kept body's first coordinate.
+        let mut first_row = vec![u32::MAX; n];
+        let mut body = Vec::new();
+        let mut rotational = Vec::new();
+        for i in (0..n).filter(|&i| kept(i)) {
+            first_row[i] = body.len() as u32;
+            for a in 0..stride {
+                body.push(i as u32);
+                rotational.push(a >= D);
+            }
+        }
+        let potential = scene.potential();
+        let mut entries = Vec::new();
+        scene.for_each_gap_hessian(0.0, |i, j, c| {
+            if kept(i) && kept(j) {
+                add_contact::<D>(
+                    &mut entries,
+                    [first_row[i], first_row[j]],
+                    k,
+                    potential,
+                    c,
+                    options.stiffness_only,
+                );
+            }
+        })?;
+        Ok(Self {
+            size: body.len(),
+            body,
+            rotational,
+            entries,
+        })
+    }
+
+    /// The Hessian as a dense column-major matrix (`size × size`).
+    pub fn dense(&self) -> faer::Mat<f64> {
+        let mut m = faer::Mat::<f64>::zeros(self.size, self.size);
+        for &(r, c, v) in &self.entries {
+            m[(r as usize, c as usize)] += v;
+        }
+        m
+    }
+
+    /// `H x`.
+    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.size];
+        for &(r, c, v) in &self.entries {
+            y[r as usize] += v * x[c as usize];
+        }
+        y
+    }
+}
+
+/// Add one contact's `v'' ∇h ∇hᵀ (+ v' ∇²h)` to the entries. Local
+/// coordinates of the pair: `(r_i, q_i, r_j, q_j)`, with `∂h/∂r_i = −∂h/∂r_j`.
+fn add_contact<const D: usize>(
+    entries: &mut Vec<(u32, u32, f64)>,
+    first_row: [u32; 2],
+    k: usize,
+    potential: Potential,
+    c: &GapHessian<D>,
+    stiffness_only: bool,
+) {
+    let h = c.contact.gap;
+    let (dv, ddv) = (potential.derivative(h), potential.second_derivative(h));
+    if dv == 0.0 && ddv == 0.0 {
+        return;
+    }
+    let s = D + k;
+    // Local gradient g (length 2s) and local Hessian L (2s × 2s).
+    let mut g = vec![0.0; 2 * s];
+    let mut l = vec![vec![0.0; 2 * s]; 2 * s];
+    let (ri, qi, rj, qj) = (0, D, s, s + D);
+    for a in 0..D {
+        g[ri + a] = -c.contact.grad_r[a];
+        g[rj + a] = c.contact.grad_r[a];
+    }
+    for a in 0..k {
+        g[qi + a] = c.contact.grad_rot_i[a];
+        g[qj + a] = c.contact.grad_rot_j[a];
+    }
+    if !stiffness_only && dv != 0.0 {
+        for a in 0..D {
+            for b in 0..D {
+                let v = c.rr[(a, b)];
+                l[ri + a][ri + b] = v;
+                l[rj + a][rj + b] = v;
+                l[ri + a][rj + b] = -v;
+                l[rj + a][ri + b] = -v;
+            }
+        }
+        for a in 0..k {
+            for b in 0..D {
+                let (ui, uj) = (c.r_qi[a][b], c.r_qj[a][b]);
+                l[rj + b][qi + a] = ui;
+                l[ri + b][qi + a] = -ui;
+                l[rj + b][qj + a] = uj;
+                l[ri + b][qj + a] = -uj;
+                l[qi + a][rj + b] = ui;
+                l[qi + a][ri + b] = -ui;
+                l[qj + a][rj + b] = uj;
+                l[qj + a][ri + b] = -uj;
+            }
+            for b in 0..k {
+                l[qi + a][qi + b] = c.qi_qi[a][b];
+                l[qj + a][qj + b] = c.qj_qj[a][b];
+                l[qi + a][qj + b] = c.qi_qj[a][b];
+                l[qj + b][qi + a] = c.qi_qj[a][b];
+            }
+        }
+    }
+    let row = |local: usize| first_row[local / s] + (local % s) as u32;
+    for x in 0..2 * s {
+        for y in 0..2 * s {
+            let v = ddv * g[x] * g[y] + dv * l[x][y];
+            if v != 0.0 {
+                entries.push((row(x), row(y), v));
+            }
+        }
+    }
+}
+
+/// The Hessian by central differences of the analytic gradient,
+/// `(∇V(q + ε e_b) − ∇V(q − ε e_b)) / 2ε`, symmetrised, as rows (every
+/// body kept). Rotations go through the family's `rotate`, so this checks
+/// [`Hessian::of_scene`] in the same coordinates; for non-commuting 3D
+/// rotations the symmetric part is the second derivative in the increments.
+pub fn finite_difference<const D: usize, S: Shape<D>>(
+    scene: &Scene<D, S>,
+    step: f64,
+) -> Vec<Vec<f64>> {
+    use jamkit_engine::Objective;
+    let n = scene.dof();
+    let mut columns = Vec::with_capacity(n);
+    let mut dq = vec![0.0; n];
+    let (mut plus, mut minus) = (vec![0.0; n], vec![0.0; n]);
+    for b in 0..n {
+        for (sign, out) in [(1.0, &mut plus), (-1.0, &mut minus)] {
+            let mut moved = scene.clone();
+            dq[b] = sign * step;
+            moved.displace(&dq);
+            moved.energy_gradient(out);
+        }
+        dq[b] = 0.0;
+        columns.push(
+            plus.iter()
+                .zip(&minus)
+                .map(|(p, m)| (p - m) / (2.0 * step))
+                .collect::<Vec<f64>>(),
+        );
+    }
+    (0..n)
+        .map(|a| {
+            (0..n)
+                .map(|b| 0.5 * (columns[b][a] + columns[a][b]))
+                .collect()
+        })
+        .collect()
+}

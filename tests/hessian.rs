@@ -1,0 +1,92 @@
+//! The analytic Hessian against central differences of the analytic
+//! gradient, for every family that provides second derivatives, on dense
+//! random configurations (many overlaps, so that the stress part `T` is
+//! exercised as much as the stiffness part `K`).
+
+use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
+use jamkit_engine::Scene;
+use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
+use jamkit_observe::hessian::{Hessian, HessianOptions, finite_difference};
+use jamkit_sphere::Sphere;
+use rand::SeedableRng;
+
+fn dense<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64) -> Scene<D, S> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let sizes = SizeDistribution::default().sample(n, &mut rng);
+    let packing = Packing::<D, S>::random(shape, sizes, 0.9, &mut rng).unwrap();
+    Scene::new(packing, Potential::Harmonic, 0.2)
+}
+
+/// Largest entry-wise difference between the analytic and the
+/// finite-difference Hessian, relative to the largest entry.
+///
+/// Tolerance 1e-6: with ε = 1e-6 the truncation error is ~ε² V'''' ~ 1e-12
+/// and the round-off ~1e-16 |∇V| / ε ~ 1e-10 relative to entries of order 1,
+/// so 1e-6 leaves four orders of margin yet catches any wrong term, sign or
+/// factor (all O(1) or O(Δ) ≥ 1e-2 here). A pair whose gap crosses 0 within
+/// ε would break the check (v'' jumps there): with random overlaps that has
+/// probability ~1e-6 per pair.
+fn check<const D: usize, S: Shape<D>>(shape: S, n: usize, seeds: std::ops::RangeInclusive<u64>) {
+    for seed in seeds {
+        let mut scene = dense::<D, S>(shape.clone(), n, seed);
+        let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default())
+            .unwrap()
+            .dense();
+        let fd = finite_difference(&scene, 1e-6);
+        let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        let mut err = 0.0f64;
+        for (a, row) in fd.iter().enumerate() {
+            for (b, x) in row.iter().enumerate() {
+                err = err.max((h[(a, b)] - x).abs());
+            }
+        }
+        assert!(scale > 0.5, "configuration should overlap");
+        assert!(
+            err < 1e-6 * scale,
+            "{shape:?} D={D} seed {seed}: error {err:e} vs scale {scale:e}"
+        );
+    }
+}
+
+#[test]
+fn sphere_hessian_matches_finite_differences_2d_and_3d() {
+    check::<2, _>(Sphere, 30, 1..=2);
+    check::<3, _>(Sphere, 30, 1..=2);
+}
+
+#[test]
+fn near_disk_hessian_matches_finite_differences() {
+    for n in 2..=5 {
+        let shape = NearDisk::fourier(&FourierParams {
+            n,
+            delta: 0.2,
+            inertia: None,
+        })
+        .unwrap();
+        check::<2, _>(shape, 24, 1..=2);
+    }
+    let modes = vec![
+        Mode {
+            n: 2,
+            a: 0.4,
+            b: 0.3,
+        },
+        Mode {
+            n: 3,
+            a: 0.2,
+            b: -1.0,
+        },
+        Mode {
+            n: 7,
+            a: 0.05,
+            b: 2.0,
+        },
+    ];
+    let sum = NearDisk::fourier_sum(&FourierSumParams {
+        modes,
+        delta: 0.2,
+        inertia: None,
+    })
+    .unwrap();
+    check::<2, _>(sum, 24, 1..=2);
+}
