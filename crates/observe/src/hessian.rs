@@ -16,8 +16,15 @@
 //! second derivatives of every gap that the family provides
 //! ([`Shape::gap_hessians`]). The coordinates are the ones FIRE sees, in the
 //! same order (`D` translations then the rotational coordinates of body 0,
-//! then body 1, …); with rattlers removed, their rows and columns are left
-//! out, together with the contacts they make. The Hessian is **not**
+//! then body 1, …).
+//!
+//! Rattlers never couple: the contacts a rattler makes are left out (at
+//! the end of a minimisation they carry no force, but a harmonic contact
+//! at `h = −10⁻¹³` still has `v'' = 1`). Kept, a rattler's rows are zero and
+//! it adds `f = D + rot_dof` zero modes, as the paper counts them (its
+//! `D(ω)` is normalised by all `3N` coordinates); removed, its rows and
+//! columns are left out. Without a rattler mask (an empty slice) every
+//! contact counts, and the matrix is exactly `∂²V/∂q∂q`. The Hessian is **not**
 //! mass-weighted, as in the paper: its eigenvalues are `λ = ω²` with unit
 //! masses and unit moments of inertia.
 
@@ -47,8 +54,9 @@ pub struct Hessian {
 }
 
 impl Hessian {
-    /// Assemble the Hessian of `scene`; `rattler` marks the bodies to leave
-    /// out when `options.remove_rattlers` (ignored otherwise).
+    /// Assemble the Hessian of `scene`; `rattler` marks the rattlers (empty:
+    /// none), whose contacts are dropped and, with
+    /// `options.remove_rattlers`, whose rows too.
     pub fn of_scene<const D: usize, S: Shape<D>>(
         scene: &mut Scene<D, S>,
         rattler: &[bool],
@@ -58,7 +66,8 @@ impl Hessian {
         let k = packing.shape.rot_dof();
         let stride = D + k;
         let n = packing.len();
-        let kept = |i: usize| !(options.remove_rattlers && rattler[i]);
+        let rattles = |i: usize| rattler.get(i).copied().unwrap_or(false);
+        let kept = |i: usize| !(options.remove_rattlers && rattles(i));
         // Row of each kept body's first coordinate.
         let mut first_row = vec![u32::MAX; n];
         let mut body = Vec::new();
@@ -73,7 +82,7 @@ impl Hessian {
         let potential = scene.potential();
         let mut entries = Vec::new();
         scene.for_each_gap_hessian(0.0, |i, j, c| {
-            if kept(i) && kept(j) {
+            if !rattles(i) && !rattles(j) {
                 add_contact::<D>(
                     &mut entries,
                     [first_row[i], first_row[j]],
