@@ -34,7 +34,11 @@ fn zero_modes(l: &[f64]) -> usize {
 /// a saddle or a wrong Hessian.
 fn assert_non_negative(l: &[f64], what: &str) {
     let max = l.last().copied().unwrap_or(0.0);
-    assert!(l[0] > -1e-12 * max, "{what}: λ_min = {:e}, λ_max = {max:e}", l[0]);
+    assert!(
+        l[0] > -1e-12 * max,
+        "{what}: λ_min = {:e}, λ_max = {max:e}",
+        l[0]
+    );
 }
 
 /// Jammed binary disks, N = 64: the full Hessian (K + T) is positive

@@ -10,14 +10,17 @@
 //! * [`registry`]: the explicit list of shape families, and the one place
 //!   where a family name becomes a typed `Scene<D, S>`;
 //! * [`runner`]: runs the samples in parallel, resumes, collects records;
-//! * [`record`]: packing files, `results.csv` and `summary.csv`, written
-//!   atomically.
+//! * [`record`]: packing files, `results.csv`, `summary.csv`, `dos.csv`
+//!   and `gaps.csv`, written atomically;
+//! * [`reload`]: a saved packing back as a typed scene (for the spectrum of
+//!   a packing on disk, and for new observables on a resumed run).
 
 pub mod error;
 pub mod grid;
 pub mod overrides;
 pub mod record;
 pub mod registry;
+pub mod reload;
 pub mod runner;
 pub mod schema;
 

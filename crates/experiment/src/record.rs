@@ -5,6 +5,8 @@
 //! the checkpoint from which a rerun resumes. Formats: `docs/formats.md`.
 
 use crate::error::ExperimentError;
+use jamkit_observe::gaps::GapCounts;
+use jamkit_observe::spectrum::{DosHistogram, DosParams, ZeroModes};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -33,6 +35,35 @@ pub struct Measures {
     pub wall_s: f64,
     /// Empty, or why this packing deserves a second look.
     pub flag: String,
+    /// The Hessian's spectrum, when asked for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spectrum: Option<SpectrumMeasures>,
+    /// Gap counts below each sample point, when asked for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gaps: Option<GapCounts>,
+}
+
+/// The spectrum of one packing, as stored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SpectrumMeasures {
+    /// Rows of the Hessian (`N_dof`).
+    pub coordinates: usize,
+    /// Zero modes by origin.
+    pub zero_modes: ZeroModes,
+    /// `ω₁` of this packing's `D(ω)`.
+    pub omega_1: Option<f64>,
+    /// `ω_*` of this packing's `D(ω)`.
+    pub omega_star: Option<f64>,
+    /// Smallest eigenvalue.
+    pub lambda_min: f64,
+    /// Largest eigenvalue.
+    pub lambda_max: f64,
+    /// The binned frequencies (summed over samples for `dos.csv`).
+    pub histogram: DosHistogram,
+    /// The bins and thresholds used.
+    pub dos: DosParams,
+    /// Seconds for assembly and diagonalisation.
+    pub wall_s: f64,
 }
 
 /// One packing on disk (`packings/<id>.json`).
@@ -55,9 +86,13 @@ pub struct PackingFile {
     /// Protocol name (`jam`, `phi`, `pressure`).
     pub protocol: String,
     /// Every setting that shapes this packing (family, parameters, sizes,
-    /// protocol, minimiser, potential, rattlers, observables, engine): a
-    /// rerun reuses the file only if these are unchanged.
+    /// protocol, minimiser, potential, rattlers, engine): a rerun reuses the
+    /// file only if these are unchanged.
     pub settings: serde_json::Value,
+    /// The observables measured on it; a rerun that asks for others
+    /// measures them again on the saved configuration.
+    #[serde(default)]
+    pub observables: serde_json::Value,
     /// Packing fraction.
     pub phi: f64,
     /// `V/N`.
@@ -177,6 +212,14 @@ pub fn results_csv(files: &[PackingFile]) -> String {
         ]
         .map(String::from),
     );
+    let with_spectrum = files.iter().any(|f| f.measures.spectrum.is_some());
+    let with_gaps = files.iter().any(|f| f.measures.gaps.is_some());
+    if with_spectrum {
+        head.extend(SPECTRUM_COLUMNS.map(String::from));
+    }
+    if with_gaps {
+        head.push("gaps".into());
+    }
     let mut out = head.join(",") + "\n";
     for f in files {
         let m = &f.measures;
@@ -202,7 +245,125 @@ pub fn results_csv(files: &[PackingFile]) -> String {
             format!("{:.3}", m.wall_s),
             csv_field(&m.flag),
         ]);
+        if with_spectrum {
+            row.extend(spectrum_cells(m.spectrum.as_ref()));
+        }
+        if with_gaps {
+            row.push(
+                m.gaps
+                    .as_ref()
+                    .map(|g| g.total().to_string())
+                    .unwrap_or_default(),
+            );
+        }
         out += &(row.join(",") + "\n");
+    }
+    out
+}
+
+const SPECTRUM_COLUMNS: [&str; 9] = [
+    "omega_1",
+    "omega_star",
+    "zero_modes",
+    "zero_translations",
+    "zero_rattlers",
+    "zero_extra",
+    "lambda_min",
+    "lambda_max",
+    "spectrum_s",
+];
+
+fn spectrum_cells(s: Option<&SpectrumMeasures>) -> Vec<String> {
+    let Some(s) = s else {
+        return vec![String::new(); SPECTRUM_COLUMNS.len()];
+    };
+    let e = |x: Option<f64>| x.map(|v| format!("{v:e}")).unwrap_or_default();
+    vec![
+        e(s.omega_1),
+        e(s.omega_star),
+        s.zero_modes.total.to_string(),
+        s.zero_modes.translations.to_string(),
+        s.zero_modes.rattlers.to_string(),
+        s.zero_modes.extra.to_string(),
+        format!("{:e}", s.lambda_min),
+        format!("{:e}", s.lambda_max),
+        format!("{:.3}", s.wall_s),
+    ]
+}
+
+/// `dos.csv`: `D(ω)` of each point, summed over its packings, one row per
+/// (point, bin).
+pub fn dos_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
+    let mut out = String::from("point,omega,omega_lo,omega_hi,count,dos\n");
+    for (label, files) in groups {
+        let Some(h) = pooled_histogram(files) else {
+            continue;
+        };
+        for (((c, w), d), &n) in h
+            .centres()
+            .iter()
+            .zip(h.edges.windows(2))
+            .zip(h.density())
+            .zip(&h.counts)
+        {
+            out += &format!(
+                "{},{c:e},{:e},{:e},{n},{d:e}\n",
+                csv_field(label),
+                w[0],
+                w[1]
+            );
+        }
+    }
+    out
+}
+
+/// `ω₁` and `ω_*` of the pooled `D(ω)` of `files`.
+fn pooled_frequencies(files: &[&PackingFile]) -> (Option<f64>, Option<f64>) {
+    let params = files.iter().find_map(|f| f.measures.spectrum.as_ref());
+    match (pooled_histogram(files), params) {
+        (Some(h), Some(s)) => (h.omega_1(), h.omega_star(&s.dos)),
+        _ => (None, None),
+    }
+}
+
+/// The histograms of `files` added up (`None` when none has a spectrum or
+/// their bins differ).
+pub fn pooled_histogram(files: &[&PackingFile]) -> Option<DosHistogram> {
+    let mut it = files.iter().filter_map(|f| f.measures.spectrum.as_ref());
+    let mut h = it.next()?.histogram.clone();
+    for s in it {
+        h.merge(&s.histogram).ok()?;
+    }
+    Some(h)
+}
+
+/// `gaps.csv`: `Z(h)` of each point from the summed counts of its
+/// packings, with `g(h)` between a sample point and the one before.
+pub fn gaps_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
+    let mut out = String::from("point,h,count_below,z,g\n");
+    for (label, files) in groups {
+        let mut it = files.iter().filter_map(|f| f.measures.gaps.as_ref());
+        let Some(first) = it.next() else {
+            continue;
+        };
+        let mut c = first.clone();
+        if it.any(|g| c.merge(g).is_err()) {
+            continue;
+        }
+        let (_, g) = c.density();
+        for (k, (h, z)) in c.h.iter().zip(c.cumulative()).enumerate() {
+            let g = if k == 0 {
+                String::new()
+            } else {
+                num(g[k - 1], true)
+            };
+            out += &format!(
+                "{},{h:e},{},{},{g}\n",
+                csv_field(label),
+                c.below[k],
+                num(z, true)
+            );
+        }
     }
     out
 }
@@ -244,6 +405,14 @@ pub struct PointSummary {
     pub wall_s: f64,
     /// Packings flagged.
     pub flagged: usize,
+    /// `ω₁` mean and s.e.m. over packings.
+    pub omega_1: (f64, f64),
+    /// `ω_*` mean and s.e.m. over packings (those where it is defined).
+    pub omega_star: (f64, f64),
+    /// `ω₁` and `ω_*` of the pooled `D(ω)` of the point.
+    pub pooled: (Option<f64>, Option<f64>),
+    /// Extra zero modes (quartic, for near-disks), mean and s.e.m.
+    pub zero_extra: (f64, f64),
 }
 
 /// Summaries of packings grouped by point (files must be grouped already,
@@ -268,6 +437,12 @@ pub fn summarize_points(groups: &[(String, Vec<&PackingFile>)]) -> Vec<PointSumm
                 fire_steps: mean_sem(&col(&|p| Some(p.measures.fire_steps as f64))).0,
                 wall_s: mean_sem(&col(&|p| Some(p.measures.wall_s))).0,
                 flagged: files.iter().filter(|p| !p.measures.flag.is_empty()).count(),
+                omega_1: mean_sem(&col(&|p| p.measures.spectrum.as_ref()?.omega_1)),
+                omega_star: mean_sem(&col(&|p| p.measures.spectrum.as_ref()?.omega_star)),
+                pooled: pooled_frequencies(files),
+                zero_extra: mean_sem(&col(&|p| {
+                    Some(p.measures.spectrum.as_ref()?.zero_modes.extra as f64)
+                })),
             }
         })
         .collect()
@@ -302,6 +477,22 @@ pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
         ]
         .map(String::from),
     );
+    let with_spectrum = firsts.iter().any(|f| f.measures.spectrum.is_some());
+    if with_spectrum {
+        head.extend(
+            [
+                "omega_1_mean",
+                "omega_1_sem",
+                "omega_star_mean",
+                "omega_star_sem",
+                "omega_1_pooled",
+                "omega_star_pooled",
+                "zero_extra_mean",
+                "zero_extra_sem",
+            ]
+            .map(String::from),
+        );
+    }
     let mut out = head.join(",") + "\n";
     for (s, first) in summarize_points(groups).iter().zip(&firsts) {
         let mut row = vec![
@@ -326,6 +517,19 @@ pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
             format!("{:.3}", s.wall_s),
             s.flagged.to_string(),
         ]);
+        if with_spectrum {
+            let e = |x: Option<f64>| x.map(|v| format!("{v:e}")).unwrap_or_default();
+            row.extend([
+                num(s.omega_1.0, true),
+                num(s.omega_1.1, true),
+                num(s.omega_star.0, true),
+                num(s.omega_star.1, true),
+                e(s.pooled.0),
+                e(s.pooled.1),
+                num(s.zero_extra.0, false),
+                num(s.zero_extra.1, true),
+            ]);
+        }
         out += &(row.join(",") + "\n");
     }
     out

@@ -7,15 +7,18 @@
 
 use crate::error::ExperimentError;
 use crate::grid::{self, Job, Point};
-use crate::record::{self, Measures, PackingFile};
+use crate::record::{self, Measures, PackingFile, SpectrumMeasures};
 use crate::registry::{self, SceneVisitor};
-use crate::schema::{Experiment, Observable, Protocol};
+use crate::reload::{PackingVisitor, reload};
+use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
     Fire, JamParams, PressureParams, Scene, compress_to_phi, compress_to_pressure, jam,
 };
-use jamkit_observe::summarize;
+use jamkit_observe::gaps::GapCounts;
+use jamkit_observe::spectrum::{self, Spectrum};
+use jamkit_observe::{JammingSummary, summarize};
 use rand::SeedableRng;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -67,19 +70,36 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         )
         .expect("valid template"),
     );
+    let observables = observables_value(experiment);
     let work = |job: &Job| -> Result<(PackingFile, bool), ExperimentError> {
         let path = packing_dir.join(format!("{}.json", job.id));
-        if let Some(done) =
-            PackingFile::load_matching(&path, &settings(experiment, &points[job.point], job))
-        {
-            bar.inc(1);
-            return Ok((done, true));
-        }
         let point = &points[job.point];
-        let file = run_job(experiment, point, job)?;
+        let done = PackingFile::load_matching(&path, &settings(experiment, point, job));
+        let (file, eigen, reused) = match done {
+            Some(done) if done.observables == observables => {
+                bar.inc(1);
+                return Ok((done, true));
+            }
+            // Same packing, other observables: measure them on the saved
+            // configuration instead of making it again.
+            Some(done) if done.positions.len() == done.particles => {
+                let (file, eigen) = remeasure(experiment, done)?;
+                (file, eigen, true)
+            }
+            _ => {
+                let (file, eigen) = run_job(experiment, point, job)?;
+                (file, eigen, false)
+            }
+        };
+        // The eigenvalues first: a packing file on disk means its sample is done.
+        if let Some(table) = eigen {
+            let dir = options.out.join("eigenvalues");
+            std::fs::create_dir_all(&dir).map_err(|e| ExperimentError::io(&dir, e))?;
+            record::write_atomic(&dir.join(format!("{}.csv", job.id)), table.as_bytes())?;
+        }
         file.save(&path)?;
         bar.inc(1);
-        Ok((file, false))
+        Ok((file, reused))
     };
     let results: Vec<Result<(PackingFile, bool), ExperimentError>> = match options.jobs {
         Some(threads) => rayon::ThreadPoolBuilder::new()
@@ -112,6 +132,18 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         &options.out.join("summary.csv"),
         record::summary_csv(&groups).as_bytes(),
     )?;
+    if experiment.spectrum().is_some() {
+        record::write_atomic(
+            &options.out.join("dos.csv"),
+            record::dos_csv(&groups).as_bytes(),
+        )?;
+    }
+    if experiment.gaps().is_some() {
+        record::write_atomic(
+            &options.out.join("gaps.csv"),
+            record::gaps_csv(&groups).as_bytes(),
+        )?;
+    }
     let summaries = record::summarize_points(&groups);
     Ok(RunReport {
         packings,
@@ -159,18 +191,22 @@ pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json
         "minimizer": e.minimizer,
         "potential": e.potential,
         "rattlers": e.rattlers,
-        "observables": e.observables,
         "engine": e.engine,
-        "output": e.output,
     })
 }
 
-/// Make one packing.
+/// The observables of `experiment`, as stored with each packing.
+fn observables_value(experiment: &Experiment) -> serde_json::Value {
+    serde_json::to_value(&experiment.observables).expect("observables serialise")
+}
+
+/// Make one packing; with it, the table of its eigenvalues when the
+/// experiment asks for them (`eigenvalues/<id>.csv`).
 pub fn run_job(
     experiment: &Experiment,
     point: &Point,
     job: &Job,
-) -> Result<PackingFile, ExperimentError> {
+) -> Result<(PackingFile, Option<String>), ExperimentError> {
     let visitor = SampleVisitor {
         experiment,
         point,
@@ -186,7 +222,7 @@ struct SampleVisitor<'a> {
 }
 
 impl SceneVisitor for SampleVisitor<'_> {
-    type Output = Result<PackingFile, ExperimentError>;
+    type Output = Result<(PackingFile, Option<String>), ExperimentError>;
 
     fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Self::Output {
         let (e, job) = (self.experiment, self.job);
@@ -242,45 +278,21 @@ impl SceneVisitor for SampleVisitor<'_> {
         }
         .map_err(sample_err)?;
 
-        let threshold = e
-            .rattlers
-            .min_contacts
-            .unwrap_or_else(|| scene.packing().shape.rattler_threshold());
-        let contacts = e
-            .observables
-            .contains(&Observable::Contacts)
-            .then(|| summarize(&mut scene, threshold));
-        let pressure = e
-            .observables
-            .contains(&Observable::Pressure)
-            .then(|| scene.pressure());
-        let expects_iso = scene.packing().shape.expects_isostatic();
-        let mut flags = scene.packing().shape.warnings();
-        if let (Some(s), Protocol::Jam { .. }, true) = (&contacts, &e.protocol, expects_iso)
-            && s.iso_margin < 1
-        {
-            flags.push(format!(
-                "hypostatic: iso_margin = {} < 1; some contact is likely not closed (the minimisation stopped early) or the packing is not rigid",
-                s.iso_margin
-            ));
-        }
-        let flag = flags.join("; ");
-        let measures = Measures {
-            phi: outcome.phi,
-            energy_per_particle: outcome.energy_per_particle,
-            n_contacts: contacts.as_ref().map(|s| s.n_contacts),
-            n_rattlers: contacts.as_ref().map(|s| s.n_rattlers),
-            z_j: contacts.as_ref().map(|s| s.z_j),
-            iso_margin: contacts.as_ref().map(|s| s.iso_margin),
-            pressure,
-            fire_steps: outcome.fire_steps,
-            minimizations: outcome.minimizations,
-            wall_s: start.elapsed().as_secs_f64(),
-            flag,
-        };
+        let observed = observe(e, &mut scene).map_err(sample_err)?;
+        let measures = observed.measures(
+            e,
+            Protocolled {
+                phi: outcome.phi,
+                energy_per_particle: outcome.energy_per_particle,
+                fire_steps: outcome.fire_steps,
+                minimizations: outcome.minimizations,
+                wall_s: start.elapsed().as_secs_f64(),
+            },
+            &scene.packing().shape,
+        );
         let p = scene.packing();
         let write = e.output.packings;
-        Ok(PackingFile {
+        let file = PackingFile {
             id: job.id.clone(),
             experiment: e.name.clone(),
             family: e.family.clone(),
@@ -290,6 +302,7 @@ impl SceneVisitor for SampleVisitor<'_> {
             seed: job.seed,
             protocol: e.protocol.name().to_string(),
             settings: settings(e, self.point, job),
+            observables: observables_value(e),
             phi: outcome.phi,
             energy_per_particle: outcome.energy_per_particle,
             measures,
@@ -313,9 +326,186 @@ impl SceneVisitor for SampleVisitor<'_> {
             } else {
                 Vec::new()
             },
-            rattler: contacts.map(|s| s.rattler).unwrap_or_default(),
-        })
+            rattler: observed.rattler(),
+        };
+        Ok((file, observed.eigenvalue_table))
     }
+}
+
+/// What the protocol ended with, as stored.
+struct Protocolled {
+    phi: f64,
+    energy_per_particle: f64,
+    fire_steps: u64,
+    minimizations: u64,
+    wall_s: f64,
+}
+
+/// The observables of one packing.
+struct Observed {
+    contacts: Option<JammingSummary>,
+    pressure: Option<f64>,
+    spectrum: Option<SpectrumMeasures>,
+    eigenvalue_table: Option<String>,
+    gaps: Option<GapCounts>,
+}
+
+/// Measure what `e` asks for on a relaxed scene.
+fn observe<const D: usize, S: Shape<D>>(
+    e: &Experiment,
+    scene: &mut Scene<D, S>,
+) -> jamkit_core::Result<Observed> {
+    let threshold = e
+        .rattlers
+        .min_contacts
+        .unwrap_or_else(|| scene.packing().shape.rattler_threshold());
+    let contacts = e.needs_contacts().then(|| summarize(scene, threshold));
+    let pressure = e.wants(&Observable::Pressure).then(|| scene.pressure());
+    let rattler = contacts.as_ref().map_or(&[][..], |s| &s.rattler[..]);
+    let (spectrum, eigenvalue_table) = match e.spectrum() {
+        Some(request) => {
+            let (m, table) = measure_spectrum(scene, rattler, &request)?;
+            (Some(m), table)
+        }
+        None => (None, None),
+    };
+    let gaps = e
+        .gaps()
+        .map(|params| GapCounts::of_scene(scene, rattler, &params));
+    Ok(Observed {
+        contacts,
+        pressure,
+        spectrum,
+        eigenvalue_table,
+        gaps,
+    })
+}
+
+impl Observed {
+    fn measures<const D: usize, S: Shape<D>>(
+        &self,
+        e: &Experiment,
+        run: Protocolled,
+        shape: &S,
+    ) -> Measures {
+        let contacts = self.contacts.as_ref();
+        let mut flags = shape.warnings();
+        if let (Some(s), Protocol::Jam { .. }, true) =
+            (contacts, &e.protocol, shape.expects_isostatic())
+            && s.iso_margin < 1
+        {
+            flags.push(format!(
+                "hypostatic: iso_margin = {} < 1; some contact is likely not closed (the minimisation stopped early) or the packing is not rigid",
+                s.iso_margin
+            ));
+        }
+        Measures {
+            phi: run.phi,
+            energy_per_particle: run.energy_per_particle,
+            n_contacts: contacts.map(|s| s.n_contacts),
+            n_rattlers: contacts.map(|s| s.n_rattlers),
+            z_j: contacts.map(|s| s.z_j),
+            iso_margin: contacts.map(|s| s.iso_margin),
+            pressure: self.pressure,
+            fire_steps: run.fire_steps,
+            minimizations: run.minimizations,
+            wall_s: run.wall_s,
+            flag: flags.join("; "),
+            spectrum: self.spectrum.clone(),
+            gaps: self.gaps.clone(),
+        }
+    }
+
+    fn rattler(&self) -> Vec<bool> {
+        self.contacts
+            .as_ref()
+            .map(|s| s.rattler.clone())
+            .unwrap_or_default()
+    }
+}
+
+/// Measure the observables of `e` on a saved packing (same settings,
+/// other observables); the protocol's own figures are kept, and the
+/// measuring time is added to `wall_s`.
+fn remeasure(
+    e: &Experiment,
+    file: PackingFile,
+) -> Result<(PackingFile, Option<String>), ExperimentError> {
+    struct Remeasure<'a> {
+        e: &'a Experiment,
+        file: PackingFile,
+    }
+    impl PackingVisitor for Remeasure<'_> {
+        type Output = Result<(PackingFile, Option<String>), ExperimentError>;
+        fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> Self::Output {
+            let (e, mut file) = (self.e, self.file);
+            let start = Instant::now();
+            let observed = observe(e, &mut scene).map_err(|source| ExperimentError::Sample {
+                sample: file.id.clone(),
+                source,
+            })?;
+            let old = &file.measures;
+            let run = Protocolled {
+                phi: old.phi,
+                energy_per_particle: old.energy_per_particle,
+                fire_steps: old.fire_steps,
+                minimizations: old.minimizations,
+                wall_s: old.wall_s + start.elapsed().as_secs_f64(),
+            };
+            file.measures = observed.measures(e, run, &scene.packing().shape);
+            file.rattler = observed.rattler();
+            file.observables = observables_value(e);
+            Ok((file, observed.eigenvalue_table))
+        }
+    }
+    let id = file.id.clone();
+    reload(&file.clone(), Remeasure { e, file })
+        .and_then(|r| r)
+        .map_err(|err| match err {
+            ExperimentError::Sample { .. } => err,
+            other => ExperimentError::invalid(format!("packing {id}"), "…", other.to_string()),
+        })
+}
+
+/// The spectrum of a jammed scene as stored, and the eigenvalue table if
+/// asked for.
+fn measure_spectrum<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    rattler: &[bool],
+    request: &SpectrumRequest,
+) -> jamkit_core::Result<(SpectrumMeasures, Option<String>)> {
+    let start = Instant::now();
+    let s = spectrum::measure(scene, rattler, request.hessian, request.modes, &request.dos)?;
+    let table = (request.eigenvalues || request.modes).then(|| eigenvalue_table(&s));
+    let measures = SpectrumMeasures {
+        coordinates: s.eigenvalues.len(),
+        zero_modes: s.zero,
+        omega_1: s.histogram.omega_1(),
+        omega_star: s.histogram.omega_star(&request.dos),
+        lambda_min: s.eigenvalues.first().copied().unwrap_or(f64::NAN),
+        lambda_max: s.eigenvalues.last().copied().unwrap_or(f64::NAN),
+        histogram: s.histogram,
+        dos: request.dos.clone(),
+        wall_s: start.elapsed().as_secs_f64(),
+    };
+    Ok((measures, table))
+}
+
+/// `eigenvalues/<id>.csv`: `lambda,omega` per mode, ascending, with
+/// `participation,rotational_share` when the eigenvectors were computed.
+pub fn eigenvalue_table(s: &Spectrum) -> String {
+    let mut out = String::from(match s.modes {
+        Some(_) => "lambda,omega,participation,rotational_share\n",
+        None => "lambda,omega\n",
+    });
+    for (n, &l) in s.eigenvalues.iter().enumerate() {
+        out += &format!("{l:e},{:e}", spectrum::frequency(l));
+        if let Some(m) = &s.modes {
+            out += &format!(",{:e},{:e}", m[n].participation, m[n].rotational_share);
+        }
+        out.push('\n');
+    }
+    out
 }
 
 /// The default output directory of an experiment: `out/<name>`.

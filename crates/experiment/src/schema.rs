@@ -24,6 +24,9 @@
 use crate::error::ExperimentError;
 use jamkit_core::{Potential, SizeDistribution};
 use jamkit_engine::{FireParams, JamParams, PressureParams};
+use jamkit_observe::gaps::GapParams;
+use jamkit_observe::hessian::HessianOptions;
+use jamkit_observe::spectrum::DosParams;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -221,12 +224,148 @@ pub struct Rattlers {
 }
 
 /// An observable measured on each packing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Observable {
     /// Contacts, rattlers, `z_J` and the isostaticity margin.
     Contacts,
     /// The virial pressure.
     Pressure,
+    /// The Hessian's eigenvalues: `D(ω)` (`dos.csv`), `ω₁`, `ω_*` and the
+    /// zero modes (`results.csv`). Written `Spectrum()` for the defaults.
+    Spectrum {
+        /// Only the stiffness part `K` (the paper's choice at φ_J).
+        #[serde(default = "yes")]
+        stiffness_only: bool,
+        /// Leave out the rattlers' rows (kept, each adds `f` zero modes and
+        /// `D(ω)` is normalised by all coordinates, as in the paper).
+        #[serde(default)]
+        remove_rattlers: bool,
+        /// Also the eigenvectors: participation ratio and rotational share
+        /// of every mode (in `eigenvalues/<id>.csv`; about twice the time).
+        #[serde(default)]
+        modes: bool,
+        /// Write every eigenvalue to `eigenvalues/<id>.csv`.
+        #[serde(default)]
+        eigenvalues: bool,
+        /// Bins and thresholds of `D(ω)`.
+        #[serde(default)]
+        dos: DosParams,
+    },
+    /// The gaps between non-rattlers: `Z(h)` and `g(h)` (`gaps.csv`).
+    /// Written `Gaps()` for the defaults.
+    Gaps {
+        /// Largest gap counted (the paper: 2).
+        #[serde(default = "default_h_cut")]
+        h_cut: f64,
+        /// Smallest sample point of `Z(h)`.
+        #[serde(default = "default_h_min")]
+        h_min: f64,
+        /// Sample points per decade.
+        #[serde(default = "default_points_per_decade")]
+        points_per_decade: usize,
+    },
+}
+
+fn yes() -> bool {
+    true
+}
+fn default_h_cut() -> f64 {
+    GapParams::default().h_cut
+}
+fn default_h_min() -> f64 {
+    GapParams::default().h_min
+}
+fn default_points_per_decade() -> usize {
+    GapParams::default().points_per_decade
+}
+
+/// The spectrum an experiment asks for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpectrumRequest {
+    /// What to assemble.
+    pub hessian: HessianOptions,
+    /// Eigenvectors too.
+    pub modes: bool,
+    /// Write the eigenvalues.
+    pub eigenvalues: bool,
+    /// Bins and thresholds.
+    pub dos: DosParams,
+}
+
+impl Experiment {
+    /// Whether `observable` is asked for (by variant, whatever its settings).
+    pub fn wants(&self, observable: &Observable) -> bool {
+        self.observables
+            .iter()
+            .any(|o| std::mem::discriminant(o) == std::mem::discriminant(observable))
+    }
+
+    /// The spectrum asked for, if any.
+    pub fn spectrum(&self) -> Option<SpectrumRequest> {
+        self.observables.iter().find_map(|o| match o {
+            Observable::Spectrum {
+                stiffness_only,
+                remove_rattlers,
+                modes,
+                eigenvalues,
+                dos,
+            } => Some(SpectrumRequest {
+                hessian: HessianOptions {
+                    stiffness_only: *stiffness_only,
+                    remove_rattlers: *remove_rattlers,
+                },
+                modes: *modes,
+                eigenvalues: *eigenvalues,
+                dos: dos.clone(),
+            }),
+            _ => None,
+        })
+    }
+
+    /// The gap sampling asked for, if any.
+    pub fn gaps(&self) -> Option<GapParams> {
+        self.observables.iter().find_map(|o| match *o {
+            Observable::Gaps {
+                h_cut,
+                h_min,
+                points_per_decade,
+            } => Some(GapParams {
+                h_cut,
+                h_min,
+                points_per_decade,
+            }),
+            _ => None,
+        })
+    }
+
+    /// Whether contacts and rattlers must be found (for themselves, or for
+    /// the spectrum and the gaps, which leave rattlers out).
+    pub fn needs_contacts(&self) -> bool {
+        self.wants(&Observable::Contacts) || self.spectrum().is_some() || self.gaps().is_some()
+    }
+
+    fn validate_observables(&self) -> Result<(), ExperimentError> {
+        for (k, o) in self.observables.iter().enumerate() {
+            if self.observables[..k]
+                .iter()
+                .any(|p| std::mem::discriminant(p) == std::mem::discriminant(o))
+            {
+                return Err(ExperimentError::invalid(
+                    "observables",
+                    format!("{o:?}"),
+                    "is listed twice; list each observable once",
+                ));
+            }
+        }
+        if let Some(s) = self.spectrum() {
+            s.dos.validate("observables.Spectrum.dos")?;
+        }
+        if let Some(g) = self.gaps() {
+            g.validate("observables.Gaps")?;
+        }
+        Ok(())
+    }
 }
 
 /// Engine tuning.
@@ -325,6 +464,7 @@ impl Experiment {
         self.sizes.validate()?;
         self.minimizer.validate("minimizer")?;
         self.validate_protocol()?;
+        self.validate_observables()?;
         if !(self.engine.skin > 0.0 && self.engine.skin <= 2.0) {
             return Err(ExperimentError::invalid(
                 "engine.skin",

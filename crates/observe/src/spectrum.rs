@@ -284,6 +284,73 @@ impl DosHistogram {
     }
 }
 
+/// The spectrum of one packing, with its zero modes sorted by origin.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spectrum {
+    /// Eigenvalues, ascending.
+    pub eigenvalues: Vec<f64>,
+    /// Shape of each mode (when eigenvectors were asked for).
+    pub modes: Option<Vec<ModeShape>>,
+    /// The frequencies binned for `D(ω)`.
+    pub histogram: DosHistogram,
+    /// Zero modes, by origin.
+    pub zero: ZeroModes,
+}
+
+/// Zero modes (`ω ≤ omega_zero`) and where the counting of degrees of
+/// freedom puts them.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ZeroModes {
+    /// All of them.
+    pub total: u64,
+    /// The `D` global translations of the periodic box.
+    pub translations: u64,
+    /// `f = D + rot_dof` per rattler kept in the Hessian (rattlers are
+    /// decoupled, so each is free in all its coordinates).
+    pub rattlers: u64,
+    /// The rest, `total − translations − rattlers`: for near-disks at φ_J
+    /// the quartic modes of a hypostatic packing; for spheres it should be 0.
+    pub extra: i64,
+}
+
+/// Assemble the Hessian of `scene`, diagonalise it and bin its frequencies.
+pub fn measure<const D: usize, S: jamkit_core::Shape<D>>(
+    scene: &mut jamkit_engine::Scene<D, S>,
+    rattler: &[bool],
+    options: crate::hessian::HessianOptions,
+    with_modes: bool,
+    params: &DosParams,
+) -> Result<Spectrum> {
+    let hessian = Hessian::of_scene(scene, rattler, options)?;
+    let (eigenvalues, modes) = if with_modes {
+        let (l, m) = eigenmodes(&hessian)?;
+        (l, Some(m))
+    } else {
+        (self::eigenvalues(&hessian)?, None)
+    };
+    let mut histogram = DosHistogram::new(params);
+    histogram.add(&eigenvalues, params);
+    let f = (D + scene.packing().shape.rot_dof()) as u64;
+    let rattlers_kept = if options.remove_rattlers {
+        0
+    } else {
+        rattler.iter().filter(|&&r| r).count() as u64
+    };
+    let (translations, rattlers) = (D as u64, f * rattlers_kept);
+    let total = histogram.zero_modes;
+    Ok(Spectrum {
+        eigenvalues,
+        modes,
+        histogram,
+        zero: ZeroModes {
+            total,
+            translations,
+            rattlers,
+            extra: total as i64 - (translations + rattlers) as i64,
+        },
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,120 @@
+//! A packing file back in memory: its family, box, bodies and potential as
+//! a typed [`Scene`], so that a saved packing can be analysed later (its
+//! spectrum, its gaps) without being made again.
+//!
+//! The file holds the family's parameters, the box edges, every centre,
+//! size and orientation, and the settings it was made with (potential,
+//! Verlet skin). Orientations come back through the family's
+//! `orientation_from_coords`, so they agree with the ones in memory to the
+//! last bit or two (an angle is stored, not its cosine and sine).
+
+use crate::error::ExperimentError;
+use crate::record::PackingFile;
+use crate::registry::{self, ParamMap, SceneVisitor};
+use crate::schema::EngineParams;
+use jamkit_core::{Packing, PeriodicBox, Potential, Shape, Vector};
+use jamkit_engine::Scene;
+
+/// Something to do with a reloaded scene.
+pub trait PackingVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Called with the scene of the packing file.
+    fn visit<const D: usize, S: Shape<D>>(self, scene: Scene<D, S>) -> Self::Output;
+}
+
+/// Rebuild the scene of `file` and hand it to `visitor`.
+pub fn reload<V: PackingVisitor>(
+    file: &PackingFile,
+    visitor: V,
+) -> Result<V::Output, ExperimentError> {
+    let bad = |field: &str, allowed: String| {
+        ExperimentError::invalid(format!("packing {}: {field}", file.id), "…", allowed)
+    };
+    if file.positions.len() != file.particles || file.radii.len() != file.particles {
+        return Err(bad(
+            "positions",
+            format!(
+                "the file holds no configuration for its {} bodies (was it written with output.packings = false?)",
+                file.particles
+            ),
+        ));
+    }
+    let params: ParamMap = serde_json::from_value(file.params.clone())
+        .map_err(|e| bad("params", format!("not a family parameter map: {e}")))?;
+    let setting = |key: &str| file.settings.get(key).cloned().unwrap_or_default();
+    let potential: Potential = serde_json::from_value(setting("potential")).unwrap_or_default();
+    let engine: EngineParams = serde_json::from_value(setting("engine")).unwrap_or_default();
+    let builder = Builder {
+        file,
+        potential,
+        skin: engine.skin,
+        visitor,
+    };
+    registry::dispatch(&file.family, file.dim, &params, builder)?
+}
+
+struct Builder<'a, V> {
+    file: &'a PackingFile,
+    potential: Potential,
+    skin: f64,
+    visitor: V,
+}
+
+impl<V: PackingVisitor> SceneVisitor for Builder<'_, V> {
+    type Output = Result<V::Output, ExperimentError>;
+
+    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Self::Output {
+        let f = self.file;
+        let bad = |field: &str, allowed: String| {
+            ExperimentError::invalid(format!("packing {}: {field}", f.id), "…", allowed)
+        };
+        let vector = |xs: &[f64], what: &str| -> Result<Vector<D>, ExperimentError> {
+            if xs.len() != D || xs.iter().any(|x| !x.is_finite()) {
+                return Err(bad(what, format!("must hold {D} finite numbers per entry")));
+            }
+            Ok(Vector::<D>::from_column_slice(xs))
+        };
+        let bbox = PeriodicBox::new(vector(&f.box_edges, "box")?);
+        let positions = f
+            .positions
+            .iter()
+            .map(|r| vector(r, "positions"))
+            .collect::<Result<Vec<_>, _>>()?;
+        let orientations = if shape.rot_dof() == 0 {
+            vec![shape.reference_orientation(); f.particles]
+        } else {
+            if f.orientations.len() != f.particles {
+                return Err(bad(
+                    "orientations",
+                    format!("must hold one entry per body ({})", f.particles),
+                ));
+            }
+            f.orientations
+                .iter()
+                .map(|o| {
+                    shape.orientation_from_coords(o).ok_or_else(|| {
+                        bad(
+                            "orientations",
+                            format!("{o:?} is not an orientation of family `{}`", f.family),
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?
+        };
+        let min_reach = f
+            .radii
+            .iter()
+            .map(|&s| shape.bounding_radius(s))
+            .fold(f64::INFINITY, f64::min);
+        let packing = Packing {
+            shape,
+            bbox,
+            positions,
+            orientations,
+            sizes: f.radii.clone(),
+        };
+        let scene = Scene::new(packing, self.potential, self.skin * min_reach);
+        Ok(self.visitor.visit(scene))
+    }
+}
