@@ -1,7 +1,8 @@
 //! `jamkit bench`: timings of the engine, for docs/performance.md.
 //!
 //! * `packing`: one binary-disk packing with the paper's protocol, one thread;
-//! * `eval`: time per energy-and-gradient evaluation against N.
+//! * `eval`: time per energy-and-gradient evaluation against N;
+//! * `spectrum`: Hessian assembly and eigensolvers (`bench_spectrum.rs`).
 
 use anyhow::Result;
 use clap::Subcommand;
@@ -32,10 +33,23 @@ pub enum BenchCommand {
         #[arg(long, value_delimiter = ',', default_value = "256,1024,4096,16384")]
         particles: Vec<usize>,
     },
+    /// Time Hessian assembly and eigenvalues of near-disks (n = 2, Δ = 0.1).
+    Spectrum {
+        /// Particle numbers (3 coordinates each).
+        #[arg(long, value_delimiter = ',', default_value = "256,512,1024")]
+        particles: Vec<usize>,
+        /// Also time nalgebra's symmetric eigensolver (slow at N = 1024).
+        #[arg(long)]
+        nalgebra: bool,
+    },
 }
 
 pub fn run(what: BenchCommand) -> Result<()> {
     match what {
+        BenchCommand::Spectrum {
+            particles,
+            nalgebra,
+        } => crate::bench_spectrum::run(&particles, nalgebra),
         BenchCommand::Packing {
             particles,
             seeds,

@@ -4,6 +4,7 @@
 //! * `jamkit validate FILE [--set KEY=VALUE …]`
 //! * `jamkit shapes`
 //! * `jamkit bench [packing|eval]`
+//! * `jamkit spectrum PACKING.json [--stiffness-only] [--remove-rattlers] [--modes] -o FILE.csv`
 //! * `jamkit draw PACKING.json -o FILE.svg|FILE.png [--size PIXELS]`
 //! * `jamkit draw-shape [fourier|fourier_sum] [--n 2,3] [--delta 0,0.1] [--modes RON …] -o FILE.svg`
 
@@ -17,6 +18,8 @@ macro_rules! out {
 }
 
 mod bench;
+mod bench_spectrum;
+mod spectrum;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
@@ -66,6 +69,24 @@ enum Command {
     Bench {
         #[command(subcommand)]
         what: bench::BenchCommand,
+    },
+    /// Eigenvalues of a saved packing's Hessian, one per line, ascending.
+    Spectrum {
+        /// A packing file written by `run` (DIR/packings/<id>.json).
+        packing: PathBuf,
+        /// Only the stiffness part K (default: the full Hessian K + T).
+        #[arg(long)]
+        stiffness_only: bool,
+        /// Leave out the rattlers' rows (the file's rattler flags).
+        #[arg(long)]
+        remove_rattlers: bool,
+        /// Also write each mode's participation ratio and rotational share
+        /// (a CSV with a header: lambda,omega,participation,rotational_share).
+        #[arg(long)]
+        modes: bool,
+        /// The file to write (`-` for standard output).
+        #[arg(short, long, value_name = "FILE")]
+        out: PathBuf,
     },
     /// Draw a 2D packing file: true outlines, periodic images, rattlers.
     Draw {
@@ -187,6 +208,31 @@ fn real_main() -> Result<()> {
             Ok(())
         }
         Command::Bench { what } => bench::run(what),
+        Command::Spectrum {
+            packing,
+            stiffness_only,
+            remove_rattlers,
+            modes,
+            out,
+        } => {
+            let options = jamkit_observe::hessian::HessianOptions {
+                stiffness_only,
+                remove_rattlers,
+            };
+            let (text, summary) = spectrum::of_file(&packing, options, modes)?;
+            if out.as_os_str() == "-" {
+                use std::io::Write;
+                let _ = std::io::stdout().write_all(text.as_bytes());
+            } else {
+                jamkit_experiment::record::write_atomic(&out, text.as_bytes())?;
+                out!(
+                    "{}: {summary}; written to {}",
+                    packing.display(),
+                    out.display()
+                );
+            }
+            Ok(())
+        }
         Command::Draw { packing, out, size } => {
             let p = jamkit_draw::Packing2d::load(&packing)?;
             jamkit_draw::draw_packing(&p, &out, size)?;

@@ -130,7 +130,10 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
     let mut out = Vec::new();
     for particles in experiment.particles.values() {
         for params in &combos {
-            registry::dispatch(&experiment.family, experiment.dim, params, CheckOnly)?;
+            let check = CheckOnly {
+                hessian: experiment.spectrum().is_some(),
+            };
+            registry::dispatch(&experiment.family, experiment.dim, params, check)??;
             out.push(Point {
                 index: out.len(),
                 particles,
@@ -204,11 +207,24 @@ fn param_axes(
 }
 
 /// A visitor that only checks that the shape can be built.
-struct CheckOnly;
+/// Builds the shape (which checks its parameters) and, when the spectrum
+/// is asked for, that the family gives the second derivatives of its gap.
+struct CheckOnly {
+    hessian: bool,
+}
 
 impl registry::SceneVisitor for CheckOnly {
-    type Output = ();
-    fn visit<const D: usize, S: jamkit_core::Shape<D>>(self, _shape: S) {}
+    type Output = Result<(), ExperimentError>;
+    fn visit<const D: usize, S: jamkit_core::Shape<D>>(self, shape: S) -> Self::Output {
+        if !self.hessian {
+            return Ok(());
+        }
+        let o = shape.reference_orientation();
+        let apart = jamkit_core::Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
+        shape
+            .gap_hessians(1.0, &o, 1.0, &o, &apart, f64::INFINITY, |_| {})
+            .map_err(|e| ExperimentError::invalid("observables", "Spectrum", e.to_string()))
+    }
 }
 
 #[cfg(test)]

@@ -132,6 +132,15 @@ impl PackingFile {
         serde_json::from_slice(&text).ok()
     }
 
+    /// Load, with an error that says what is wrong with the file.
+    pub fn load_checked(path: &Path) -> Result<Self, ExperimentError> {
+        let text = std::fs::read(path).map_err(|e| ExperimentError::io(path, e))?;
+        serde_json::from_slice(&text).map_err(|e| ExperimentError::Parse {
+            file: path.display().to_string(),
+            message: format!("not a jamkit packing file: {e}"),
+        })
+    }
+
     /// Load only if it was made with exactly these settings.
     pub fn load_matching(path: &Path, settings: &serde_json::Value) -> Option<Self> {
         Self::load(path).filter(|f| &f.settings == settings)

@@ -144,10 +144,8 @@ fn add_contact<const D: usize>(
         g[ri + a] = -c.contact.grad_r[a];
         g[rj + a] = c.contact.grad_r[a];
     }
-    for a in 0..k {
-        g[qi + a] = c.contact.grad_rot_i[a];
-        g[qj + a] = c.contact.grad_rot_j[a];
-    }
+    g[qi..qi + k].copy_from_slice(&c.contact.grad_rot_i[..k]);
+    g[qj..qj + k].copy_from_slice(&c.contact.grad_rot_j[..k]);
     if !stiffness_only && dv != 0.0 {
         for a in 0..D {
             for b in 0..D {

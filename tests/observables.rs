@@ -1,0 +1,167 @@
+//! The spectrum and the gaps through the experiment runner and the
+//! command line: files written, normalisations, resume with other
+//! observables, and `jamkit spectrum` on a saved packing.
+
+use jamkit_experiment::Experiment;
+use jamkit_experiment::runner::{RunOptions, RunReport, run};
+use std::path::Path;
+
+fn experiment(observables: &str) -> Experiment {
+    let text = format!(
+        r#"(name: "obs", family: "fourier", params: {{"n": 2, "delta": 0.1}}, particles: 32, samples: 2, seed: 3,
+            observables: {observables})"#
+    );
+    Experiment::from_ron(&text, "inline").unwrap()
+}
+
+fn run_into(e: &Experiment, dir: &Path) -> RunReport {
+    let report = run(
+        e,
+        &RunOptions {
+            out: dir.to_path_buf(),
+            jobs: Some(2),
+            progress: false,
+        },
+    )
+    .unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    report
+}
+
+/// Rows of a CSV file as maps from the header's names.
+fn csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            head.iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+fn num(row: &std::collections::HashMap<String, String>, key: &str) -> f64 {
+    row[key]
+        .parse()
+        .unwrap_or_else(|_| panic!("{key} = {:?}", row[key]))
+}
+
+/// D(ω) integrates to the fraction of modes above the zero threshold
+/// (exactly, up to round-off: it is counts over N_dof and the bin width),
+/// Z(h) rises from 0 to exactly 1 at h_cut, and every packing has its
+/// eigenvalue table with one row per coordinate.
+#[test]
+fn spectrum_and_gaps_are_written_and_normalised() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = experiment("[Contacts, Spectrum(eigenvalues: true), Gaps()]");
+    let report = run_into(&e, dir.path());
+    let results = csv(&dir.path().join("results.csv"));
+    assert_eq!(results.len(), 2);
+    let mut zero = 0.0;
+    for r in &results {
+        zero += num(r, "zero_modes");
+        // Hypostatic near-disks: N_f − N_c + 1 zero modes (tests/spectrum.rs),
+        // so some beyond the translations and rattlers.
+        assert!(num(r, "zero_extra") > 0.0);
+        assert!(num(r, "gaps") > 0.0);
+        let id = &r["id"];
+        let table =
+            std::fs::read_to_string(dir.path().join(format!("eigenvalues/{id}.csv"))).unwrap();
+        assert_eq!(table.lines().count(), 1 + 3 * 32, "{id}");
+    }
+    let dos = csv(&dir.path().join("dos.csv"));
+    let integral: f64 = dos
+        .iter()
+        .map(|r| num(r, "dos") * (num(r, "omega_hi") - num(r, "omega_lo")))
+        .sum();
+    let modes = 2.0 * 3.0 * 32.0;
+    let outside: f64 = report
+        .packings
+        .iter()
+        .map(|p| p.measures.spectrum.as_ref().unwrap().histogram.outside as f64)
+        .sum();
+    assert!(
+        (integral - (modes - zero - outside) / modes).abs() < 1e-12,
+        "∫D = {integral}"
+    );
+    let gaps = csv(&dir.path().join("gaps.csv"));
+    let z: Vec<f64> = gaps.iter().map(|r| num(r, "z")).collect();
+    assert!(z.windows(2).all(|w| w[1] >= w[0]), "Z(h) must not decrease");
+    assert_eq!(*z.last().unwrap(), 1.0);
+    assert!(z[0] < 0.01, "almost no gaps below 1e-12: Z = {}", z[0]);
+}
+
+/// A rerun that asks for other observables measures them on the saved
+/// packings: nothing is jammed again (same FIRE steps, same φ), and the
+/// records hold exactly the new observables.
+#[test]
+fn new_observables_are_measured_on_saved_packings() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = run_into(&experiment("[Contacts]"), dir.path());
+    let second = run_into(&experiment("[Contacts, Spectrum()]"), dir.path());
+    assert_eq!(second.reused, 2);
+    for (a, b) in first.packings.iter().zip(&second.packings) {
+        assert_eq!(a.measures.fire_steps, b.measures.fire_steps);
+        assert_eq!(a.phi.to_bits(), b.phi.to_bits());
+        assert_eq!(a.measures.n_contacts, b.measures.n_contacts);
+        assert!(a.measures.spectrum.is_none() && b.measures.spectrum.is_some());
+    }
+    assert!(dir.path().join("dos.csv").exists());
+}
+
+/// `jamkit spectrum` on a saved packing gives the eigenvalues the run
+/// computed in memory (the same Hessian, K only, rattlers kept), up to the
+/// round-off of storing orientations as angles: 1e-9 of λ_max.
+#[test]
+fn spectrum_command_reproduces_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = run_into(
+        &experiment("[Contacts, Spectrum(eigenvalues: true)]"),
+        dir.path(),
+    );
+    let id = &report.packings[0].id;
+    let packing = dir.path().join(format!("packings/{id}.json"));
+    let out = dir.path().join("spectrum.txt");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_jamkit"))
+        .args([
+            "spectrum",
+            packing.to_str().unwrap(),
+            "--stiffness-only",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let cli: Vec<f64> = std::fs::read_to_string(&out)
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    let run: Vec<f64> = csv(&dir.path().join(format!("eigenvalues/{id}.csv")))
+        .iter()
+        .map(|r| num(r, "lambda"))
+        .collect();
+    assert_eq!(cli.len(), run.len());
+    assert!(cli.windows(2).all(|w| w[1] >= w[0]), "ascending");
+    let max = run.last().unwrap().abs();
+    for (a, b) in cli.iter().zip(&run) {
+        assert!((a - b).abs() < 1e-9 * max, "{a} vs {b}");
+    }
+    // A file that is not a packing is an error with a message, not a panic.
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_jamkit"))
+        .args(["spectrum", "Cargo.toml", "-o", "-"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(err.contains("not a jamkit packing file"), "{err}");
+}
