@@ -50,10 +50,6 @@ pub struct SpectrumMeasures {
     pub coordinates: usize,
     /// Zero modes by origin.
     pub zero_modes: ZeroModes,
-    /// `ω₁` of this packing's `D(ω)`.
-    pub omega_1: Option<f64>,
-    /// `ω_*` of this packing's `D(ω)`.
-    pub omega_star: Option<f64>,
     /// Smallest eigenvalue.
     pub lambda_min: f64,
     /// Largest eigenvalue.
@@ -288,8 +284,8 @@ fn spectrum_cells(s: Option<&SpectrumMeasures>) -> Vec<String> {
     };
     let e = |x: Option<f64>| x.map(|v| format!("{v:e}")).unwrap_or_default();
     vec![
-        e(s.omega_1),
-        e(s.omega_star),
+        e(s.omega_1()),
+        e(s.omega_star()),
         s.zero_modes.total.to_string(),
         s.zero_modes.translations.to_string(),
         s.zero_modes.rattlers.to_string(),
@@ -298,6 +294,19 @@ fn spectrum_cells(s: Option<&SpectrumMeasures>) -> Vec<String> {
         format!("{:e}", s.lambda_max),
         format!("{:.3}", s.wall_s),
     ]
+}
+
+impl SpectrumMeasures {
+    /// `ω₁` of this packing's `D(ω)` (derived from the histogram, so that
+    /// it always follows the current definition).
+    pub fn omega_1(&self) -> Option<f64> {
+        self.histogram.omega_1()
+    }
+
+    /// `ω_*` of this packing's `D(ω)`.
+    pub fn omega_star(&self) -> Option<f64> {
+        self.histogram.omega_star(&self.dos)
+    }
 }
 
 /// `dos.csv`: `D(ω)` of each point, summed over its packings, one row per
@@ -446,8 +455,8 @@ pub fn summarize_points(groups: &[(String, Vec<&PackingFile>)]) -> Vec<PointSumm
                 fire_steps: mean_sem(&col(&|p| Some(p.measures.fire_steps as f64))).0,
                 wall_s: mean_sem(&col(&|p| Some(p.measures.wall_s))).0,
                 flagged: files.iter().filter(|p| !p.measures.flag.is_empty()).count(),
-                omega_1: mean_sem(&col(&|p| p.measures.spectrum.as_ref()?.omega_1)),
-                omega_star: mean_sem(&col(&|p| p.measures.spectrum.as_ref()?.omega_star)),
+                omega_1: mean_sem(&col(&|p| p.measures.spectrum.as_ref()?.omega_1())),
+                omega_star: mean_sem(&col(&|p| p.measures.spectrum.as_ref()?.omega_star())),
                 pooled: pooled_frequencies(files),
                 zero_extra: mean_sem(&col(&|p| {
                     Some(p.measures.spectrum.as_ref()?.zero_modes.extra as f64)

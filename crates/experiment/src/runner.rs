@@ -480,8 +480,6 @@ fn measure_spectrum<const D: usize, S: Shape<D>>(
     let measures = SpectrumMeasures {
         coordinates: s.eigenvalues.len(),
         zero_modes: s.zero,
-        omega_1: s.histogram.omega_1(),
-        omega_star: s.histogram.omega_star(&request.dos),
         lambda_min: s.eigenvalues.first().copied().unwrap_or(f64::NAN),
         lambda_max: s.eigenvalues.last().copied().unwrap_or(f64::NAN),
         histogram: s.histogram,

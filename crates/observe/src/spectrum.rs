@@ -21,7 +21,10 @@
 //! * `ω₁`: the bin centre where `D(ω)` is largest;
 //! * `ω_*`: where `D` falls to `d_star = 0.1` below `omega_star_below = 0.1`:
 //!   scanning down from `omega_star_below`, the first crossing of `D` below
-//!   `d_star`, interpolated linearly in `log ω` between the two bins.
+//!   `d_star`, interpolated linearly in `log ω` between the two bins. It is
+//!   the lower edge of the plateau, so it must lie above the band at `ω₁`;
+//!   when the band reaches into the range (near-disks with Δ ≳ 0.03, where
+//!   the paper's `ω_* ∝ Δ^{1/2}` is above 0.1), `ω_*` is undefined.
 //!
 //! Each mode's *participation ratio* `PR = (Σ_i w_i)² / (N_b Σ_i w_i²)` with
 //! `w_i` the squared weight of the normalised eigenvector on body `i` (1 for
@@ -265,15 +268,19 @@ impl DosHistogram {
 
     /// `ω_*`: scanning down from `omega_star_below`, where `D` first falls
     /// below `d_star`, interpolated in `log ω` between the two bin centres.
-    /// `None` when `D` stays above `d_star` over the whole range, or is
+    /// `None` when `D` stays above `d_star` down to the band at `ω₁`, or is
     /// already below it at the top.
     pub fn omega_star(&self, params: &DosParams) -> Option<f64> {
         let (d, c) = (self.density(), self.centres());
         let top = c.iter().rposition(|&w| w < params.omega_star_below)?;
-        if d[top] < params.d_star {
+        let band = self.omega_1()?;
+        if d[top] < params.d_star || c[top] <= band {
             return None;
         }
         for k in (0..top).rev() {
+            if c[k] <= band {
+                return None;
+            }
             if d[k] < params.d_star {
                 // D(c[k]) < d_star ≤ D(c[k+1]): interpolate in log ω.
                 let t = (params.d_star - d[k]) / (d[k + 1] - d[k]);
