@@ -6,6 +6,7 @@
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::Scene;
 use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
+use jamkit_lobed::{Lobed, LobedParams};
 use jamkit_observe::hessian::{Hessian, HessianOptions, finite_difference};
 use jamkit_sphere::Sphere;
 use rand::SeedableRng;
@@ -89,4 +90,20 @@ fn near_disk_hessian_matches_finite_differences() {
     })
     .unwrap();
     check::<2, _>(sum, 24, 1..=2);
+}
+
+/// The tutorial's family gets its Hessian from the shared first-order
+/// formula and its own `G''`: sharp lobes (κ = 4) make `G''` large, which is
+/// where a wrong curvature term would show.
+#[test]
+fn lobed_hessian_matches_finite_differences() {
+    for kappa in [0.5, 4.0] {
+        let shape = Lobed::new(&LobedParams {
+            delta: 0.15,
+            kappa,
+            inertia: None,
+        })
+        .unwrap();
+        check::<2, _>(shape, 24, 1..=2);
+    }
 }

@@ -8,6 +8,8 @@
 //! * [`shape`]: the [`Shape`] trait a shape family implements (volume,
 //!   bounding radius, rotational coordinates and the *contacts* between two
 //!   bodies, each a gap `h` with its first derivatives);
+//! * [`first_order`]: the paper's first-order near-disk gap with its second
+//!   derivatives, for any profile (shared by the near-disk families);
 //! * [`potential`]: scalar contact potentials `v(h)` (harmonic, Hertzian);
 //! * [`sizes`]: size distributions (binary, monodisperse, uniform);
 //! * [`packing`]: a configuration of bodies in a box, in flat generalised
@@ -19,6 +21,7 @@
 
 pub mod error;
 pub mod family;
+pub mod first_order;
 pub mod math;
 pub mod packing;
 pub mod periodic;

@@ -34,7 +34,8 @@
 //! printed gap. (For the odd `F_n = sin(nφ)/n` this is the mirror image of
 //! `R⁰[1 + Δ F(φ − θ_i)]`; both describe the same family of shapes.)
 
-use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, Matrix, ParamSpec, Shape, Vector};
+use jamkit_core::first_order::{Profile, gap_hessian};
+use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, ParamSpec, Shape, Vector};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -406,6 +407,28 @@ impl NearDisk {
         perimeter * perimeter / (4.0 * PI * self.relative_area())
     }
 
+    /// `(F, F', F'')` of both bodies of a pair (see [`NearDisk::f_pair`]),
+    /// for the Hessian.
+    fn f_pair_second(
+        &self,
+        z_i: (f64, f64),
+        z_j: (f64, f64),
+        w_conj: (f64, f64),
+    ) -> [(f64, f64, f64); 2] {
+        let e = [cmul(z_i, w_conj), cmul((-z_j.0, -z_j.1), w_conj)];
+        let mut out = [(0.0, 0.0, 0.0); 2];
+        for (m, &phase) in self.modes.iter().zip(&self.phases) {
+            let n = m.n as f64;
+            for (o, &e) in out.iter_mut().zip(&e) {
+                let p = cmul(cpow(e, m.n), phase);
+                o.0 += m.a * p.1;
+                o.1 += m.a * n * p.0;
+                o.2 -= m.a * n * n * p.1;
+            }
+        }
+        out
+    }
+
     /// `F(A)` and `F'(A)` for both bodies of a pair: `A_i = θ_i − θ_ij` and
     /// `A_j = θ_j − θ_ij − π`, from `z_i = e^{iθ_i}`, `z_j = e^{iθ_j}` and
     /// `w̄ = e^{−iθ_ij}`: `e^{iA_i} = z_i w̄`, `e^{iA_j} = −z_j w̄`, and
@@ -429,28 +452,6 @@ impl NearDisk {
         }
         out
     }
-}
-
-/// `(F, F', F'')` of both bodies of a pair (see [`NearDisk::f_pair`]), for
-/// the Hessian.
-fn f_pair_second(
-    shape: &NearDisk,
-    z_i: (f64, f64),
-    z_j: (f64, f64),
-    w_conj: (f64, f64),
-) -> [(f64, f64, f64); 2] {
-    let e = [cmul(z_i, w_conj), cmul((-z_j.0, -z_j.1), w_conj)];
-    let mut out = [(0.0, 0.0, 0.0); 2];
-    for (m, &phase) in shape.modes.iter().zip(&shape.phases) {
-        let n = m.n as f64;
-        for (o, &e) in out.iter_mut().zip(&e) {
-            let p = cmul(cpow(e, m.n), phase);
-            o.0 += m.a * p.1;
-            o.1 += m.a * n * p.0;
-            o.2 -= m.a * n * n * p.1;
-        }
-    }
-    out
 }
 
 impl Shape<2> for NearDisk {
@@ -556,16 +557,9 @@ impl Shape<2> for NearDisk {
             grad_rot_j: [-d * size_j * df_j, 0.0, 0.0],
         });
     }
-    /// Second derivatives of the first-order gap. With `G = Δ[R_i F'(A_i) +
-    /// R_j F'(A_j)]`, `G₂ = Δ[R_i F''(A_i) + R_j F''(A_j)]`, `c_i = Δ R_i
-    /// F''(A_i)` and `∂A/∂r_j = −t/r`:
-    ///
-    /// ```text
-    /// ∂²h/∂r_j∂r_j = t tᵀ (1/r − G₂/r²) − (G/r²)(u tᵀ + t uᵀ),
-    /// ∂²h/∂r_j∂θ_i = c_i t / r,   ∂²h/∂r_j∂θ_j = c_j t / r,
-    /// ∂²h/∂θ_i² = −c_i,   ∂²h/∂θ_j² = −c_j,   ∂²h/∂θ_i∂θ_j = 0.
-    /// ```
-    fn gap_hessians<F: FnMut(GapHessian<2>)>(
+    /// Second derivatives of the first-order gap
+    /// ([`jamkit_core::first_order`], with `P = F`).
+    fn gap_hessians<V: FnMut(GapHessian<2>)>(
         &self,
         size_i: f64,
         o_i: &Angle,
@@ -573,45 +567,25 @@ impl Shape<2> for NearDisk {
         o_j: &Angle,
         r_ij: &Vector<2>,
         max_gap: f64,
-        mut visit: F,
+        mut visit: V,
     ) -> jamkit_core::Result<()> {
-        let mut first = None;
-        self.contacts(size_i, o_i, size_j, o_j, r_ij, max_gap, |c| first = Some(c));
-        let Some(contact) = first else {
-            return Ok(());
-        };
         let r = r_ij.norm();
-        if !(r > 0.0) {
-            // NOTE: coincident centres: the curvature terms ~1/r diverge;
-            // report the first derivatives with a zero second derivative.
-            visit(GapHessian::translational(
-                contact.gap,
-                contact.grad_r,
-                Matrix::<2>::zeros(),
-            ));
+        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return Ok(());
         }
-        let u = r_ij / r;
-        let t = Vector::<2>::new(-u[1], u[0]);
-        let [(_, df_i, ddf_i), (_, df_j, ddf_j)] =
-            f_pair_second(self, (o_i.cos, o_i.sin), (o_j.cos, o_j.sin), (u[0], -u[1]));
-        let d = self.delta;
-        let g = d * (size_i * df_i + size_j * df_j);
-        let (c_i, c_j) = (d * size_i * ddf_i, d * size_j * ddf_j);
-        let g2 = c_i + c_j;
-        let tt = t * t.transpose();
-        let ut = u * t.transpose() + t * u.transpose();
-        let mut h = GapHessian::translational(
-            contact.gap,
-            contact.grad_r,
-            tt * (1.0 / r - g2 / (r * r)) - ut * (g / (r * r)),
-        );
-        h.contact = contact;
-        h.r_qi[0] = t * (c_i / r);
-        h.r_qj[0] = t * (c_j / r);
-        h.qi_qi[0][0] = -c_i;
-        h.qj_qj[0][0] = -c_j;
-        visit(h);
+        let u = if r > 0.0 {
+            r_ij / r
+        } else {
+            Vector::<2>::new(1.0, 0.0)
+        };
+        let [p_i, p_j] = self
+            .f_pair_second((o_i.cos, o_i.sin), (o_j.cos, o_j.sin), (u[0], -u[1]))
+            .map(|(value, slope, curvature)| Profile {
+                value,
+                slope,
+                curvature,
+            });
+        visit(gap_hessian(r_ij, size_i, size_j, self.delta, p_i, p_j));
         Ok(())
     }
 }

@@ -44,7 +44,8 @@
 //! `cos A`. The `−π` in `A_j` flips the sign of both, which `G` (π-periodic)
 //! does not see.
 
-use jamkit_core::{Contact, Dims, FamilyInfo, ParamSpec, RotVec, Shape, Vector};
+use jamkit_core::first_order::{Profile, gap_hessian};
+use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, ParamSpec, RotVec, Shape, Vector};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -399,6 +400,50 @@ impl Shape<2> for Lobed {
             grad_rot_i: [-d * size_i * dg_i, 0.0, 0.0],
             grad_rot_j: [-d * size_j * dg_j, 0.0, 0.0],
         });
+    }
+
+    /// The same gap with its second derivatives, for the Hessian: the
+    /// first-order gap is the paper's for any profile, so
+    /// [`jamkit_core::first_order::gap_hessian`] does the work once it has
+    /// `G`, `G'` and `G''` at the two angles (this path is not hot, so `A`
+    /// comes from `atan2`).
+    fn gap_hessians<V: FnMut(GapHessian<2>)>(
+        &self,
+        size_i: f64,
+        o_i: &Angle,
+        size_j: f64,
+        o_j: &Angle,
+        r_ij: &Vector<2>,
+        max_gap: f64,
+        mut visit: V,
+    ) -> jamkit_core::Result<()> {
+        let r = r_ij.norm();
+        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
+            return Ok(());
+        }
+        let u = if r > 0.0 {
+            r_ij * (1.0 / r)
+        } else {
+            Vector::<2>::new(1.0, 0.0)
+        };
+        let profile = |o: &Angle| {
+            let (cos, sin) = (o.cos * u[0] + o.sin * u[1], o.sin * u[0] - o.cos * u[1]);
+            let (value, slope) = self.profile_from_phase(cos, sin);
+            Profile {
+                value,
+                slope,
+                curvature: self.profile_second(sin.atan2(cos)),
+            }
+        };
+        visit(gap_hessian(
+            r_ij,
+            size_i,
+            size_j,
+            self.delta,
+            profile(o_i),
+            profile(o_j),
+        ));
+        Ok(())
     }
 }
 
