@@ -1,6 +1,6 @@
 //! `jamkit`: the command line.
 //!
-//! * `jamkit run FILE [--out DIR] [--jobs N] [--set KEY=VALUE …]`
+//! * `jamkit run FILE… [--out DIR] [--jobs N] [--set KEY=VALUE …]`
 //! * `jamkit validate FILE [--set KEY=VALUE …]`
 //! * `jamkit shapes`
 //! * `jamkit bench [packing|eval]`
@@ -43,8 +43,11 @@ struct Cli {
 enum Command {
     /// Run an experiment file; results go to DIR (default out/<name>).
     Run {
-        /// The RON experiment file.
-        file: PathBuf,
+        /// The RON experiment file(s), run one after the other (files with
+        /// the same name share an output directory and add up their
+        /// observables on the same packings).
+        #[arg(required = true, num_args = 1..)]
+        files: Vec<PathBuf>,
         /// Output directory; a rerun into the same directory resumes.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -131,6 +134,22 @@ fn load(file: &std::path::Path, sets: &[String]) -> Result<Experiment> {
     Ok(experiment)
 }
 
+/// The files a run of `experiment` writes, for the closing line.
+fn written(experiment: &Experiment) -> String {
+    let mut files = vec!["results.csv", "summary.csv"];
+    if let Some(s) = experiment.spectrum() {
+        files.push("dos.csv");
+        if s.eigenvalues || s.modes {
+            files.push("eigenvalues/");
+        }
+    }
+    if experiment.gaps().is_some() {
+        files.push("gaps.csv");
+    }
+    files.push("packings/");
+    files.join(", ")
+}
+
 fn main() {
     if let Err(e) = real_main() {
         eprintln!("error: {e:#}");
@@ -141,38 +160,48 @@ fn main() {
 fn real_main() -> Result<()> {
     match Cli::parse().command {
         Command::Run {
-            file,
+            files,
             out,
             jobs,
             sets,
         } => {
-            let experiment = load(&file, &sets)?;
-            let out = out.unwrap_or_else(|| default_out(&experiment));
             if jobs == Some(0) {
                 bail!("--jobs = 0: must be at least 1");
             }
-            let options = RunOptions {
-                out: out.clone(),
-                jobs,
-                progress: std::io::stderr().is_terminal(),
-            };
-            let report = run(&experiment, &options)
-                .with_context(|| format!("running {}", file.display()))?;
-            print_table(&report);
-            out!(
-                "\n{} packings ({} reused from an earlier run) in {}: results.csv, summary.csv, packings/",
-                report.packings.len(),
-                report.reused,
-                out.display()
-            );
-            if !report.failures.is_empty() {
+            // Check every file before running any.
+            let experiments = files
+                .iter()
+                .map(|f| load(f, &sets))
+                .collect::<Result<Vec<_>>>()?;
+            let mut failed = 0;
+            for (file, experiment) in files.iter().zip(&experiments) {
+                if files.len() > 1 {
+                    out!("\n== {} ==", file.display());
+                }
+                let out = out.clone().unwrap_or_else(|| default_out(experiment));
+                let options = RunOptions {
+                    out: out.clone(),
+                    jobs,
+                    progress: std::io::stderr().is_terminal(),
+                };
+                let report = run(experiment, &options)
+                    .with_context(|| format!("running {}", file.display()))?;
+                print_table(&report);
+                out!(
+                    "\n{} packings ({} reused from an earlier run) in {}: {}",
+                    report.packings.len(),
+                    report.reused,
+                    out.display(),
+                    written(experiment)
+                );
                 for f in &report.failures {
                     eprintln!("error: {f}");
                 }
+                failed += report.failures.len();
+            }
+            if failed > 0 {
                 bail!(
-                    "{} of {} samples failed (the others are saved; rerun to retry only the failed ones)",
-                    report.failures.len(),
-                    report.failures.len() + report.packings.len()
+                    "{failed} samples failed (the others are saved; rerun to retry only the failed ones)"
                 );
             }
             Ok(())

@@ -96,11 +96,12 @@ fn spectrum_and_gaps_are_written_and_normalised() {
 
 /// A rerun that asks for other observables measures them on the saved
 /// packings: nothing is jammed again (same FIRE steps, same φ), and the
-/// records hold exactly the new observables.
+/// records keep what was measured before, so experiments sharing an
+/// output directory add up their observables.
 #[test]
 fn new_observables_are_measured_on_saved_packings() {
     let dir = tempfile::tempdir().unwrap();
-    let first = run_into(&experiment("[Contacts]"), dir.path());
+    let first = run_into(&experiment("[Contacts, Gaps()]"), dir.path());
     let second = run_into(&experiment("[Contacts, Spectrum()]"), dir.path());
     assert_eq!(second.reused, 2);
     for (a, b) in first.packings.iter().zip(&second.packings) {
@@ -108,8 +109,12 @@ fn new_observables_are_measured_on_saved_packings() {
         assert_eq!(a.phi.to_bits(), b.phi.to_bits());
         assert_eq!(a.measures.n_contacts, b.measures.n_contacts);
         assert!(a.measures.spectrum.is_none() && b.measures.spectrum.is_some());
+        assert_eq!(a.measures.gaps, b.measures.gaps, "gaps kept");
     }
     assert!(dir.path().join("dos.csv").exists());
+    // Asking for less than the files hold changes nothing.
+    let third = run_into(&experiment("[Contacts]"), dir.path());
+    assert_eq!(third.packings, second.packings);
 }
 
 /// `jamkit spectrum` on a saved packing gives the eigenvalues the run

@@ -70,20 +70,23 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         )
         .expect("valid template"),
     );
-    let observables = observables_value(experiment);
     let work = |job: &Job| -> Result<(PackingFile, bool), ExperimentError> {
         let path = packing_dir.join(format!("{}.json", job.id));
         let point = &points[job.point];
         let done = PackingFile::load_matching(&path, &settings(experiment, point, job));
         let (file, eigen, reused) = match done {
-            Some(done) if done.observables == observables => {
+            Some(done) if covers(&stored(&done), experiment) => {
                 bar.inc(1);
                 return Ok((done, true));
             }
             // Same packing, other observables: measure them on the saved
-            // configuration instead of making it again.
+            // configuration instead of making it again, keeping the ones
+            // measured before (so that experiments sharing an output
+            // directory add up their observables).
             Some(done) if done.positions.len() == done.particles => {
-                let (file, eigen) = remeasure(experiment, done)?;
+                let mut merged = experiment.clone();
+                merged.observables = union(&stored(&done), &experiment.observables);
+                let (file, eigen) = remeasure(&merged, done)?;
                 (file, eigen, true)
             }
             _ => {
@@ -198,6 +201,30 @@ pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json
 /// The observables of `experiment`, as stored with each packing.
 fn observables_value(experiment: &Experiment) -> serde_json::Value {
     serde_json::to_value(&experiment.observables).expect("observables serialise")
+}
+
+/// The observables a packing file holds (none if they do not parse).
+fn stored(file: &PackingFile) -> Vec<Observable> {
+    serde_json::from_value(file.observables.clone()).unwrap_or_default()
+}
+
+/// Whether `have` holds every observable `experiment` asks for, with the
+/// same options.
+fn covers(have: &[Observable], experiment: &Experiment) -> bool {
+    experiment.observables.iter().all(|o| have.contains(o))
+}
+
+/// `wanted`, plus the observables of `have` of a kind `wanted` does not
+/// list (a kind listed in both takes `wanted`'s options).
+fn union(have: &[Observable], wanted: &[Observable]) -> Vec<Observable> {
+    let kind = std::mem::discriminant::<Observable>;
+    let mut out = wanted.to_vec();
+    out.extend(
+        have.iter()
+            .filter(|h| !wanted.iter().any(|w| kind(w) == kind(h)))
+            .cloned(),
+    );
+    out
 }
 
 /// Make one packing; with it, the table of its eigenvalues when the
