@@ -5,6 +5,7 @@
 //! * `jamkit shapes`
 //! * `jamkit bench [packing|eval]`
 //! * `jamkit spectrum PACKING.json [--stiffness-only] [--remove-rattlers] [--modes] -o FILE.csv`
+//! * `jamkit report DIR… -o OUT`
 //! * `jamkit draw PACKING.json -o FILE.svg|FILE.png [--size PIXELS]`
 //! * `jamkit draw-shape [fourier|fourier_sum] [--n 2,3] [--delta 0,0.1] [--modes RON …] -o FILE.svg`
 
@@ -72,6 +73,22 @@ enum Command {
     Bench {
         #[command(subcommand)]
         what: bench::BenchCommand,
+    },
+    /// The paper's figures from runs of experiments/paper/: PNG and SVG
+    /// plots, fitted exponents and a markdown summary (OUT/report.md).
+    Report {
+        /// Output directories of runs (each with packings/).
+        #[arg(required = true, num_args = 1..)]
+        dirs: Vec<PathBuf>,
+        /// Directory for the figures and report.md.
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+        /// γ of the gap distribution, for the guides and the collapse.
+        #[arg(long, default_value_t = 0.41)]
+        gamma: f64,
+        /// Bootstrap resamples per fitted exponent.
+        #[arg(long, default_value_t = 500)]
+        resamples: usize,
     },
     /// Eigenvalues of a saved packing's Hessian, one per line, ascending.
     Spectrum {
@@ -237,6 +254,32 @@ fn real_main() -> Result<()> {
             Ok(())
         }
         Command::Bench { what } => bench::run(what),
+        Command::Report {
+            dirs,
+            out,
+            gamma,
+            resamples,
+        } => {
+            if !(gamma > 0.0 && gamma < 1.0) {
+                bail!("--gamma = {gamma}: must lie in (0, 1)");
+            }
+            if resamples < 2 {
+                bail!("--resamples = {resamples}: must be at least 2");
+            }
+            let options = jamkit_report::Options {
+                gamma,
+                resamples,
+                ..Default::default()
+            };
+            let r = jamkit_report::report(&dirs, &out, &options)?;
+            out!(
+                "{} figures (PNG and SVG), {} fitted exponents: {}",
+                r.figures.len(),
+                r.fits.len(),
+                out.join("report.md").display()
+            );
+            Ok(())
+        }
         Command::Spectrum {
             packing,
             stiffness_only,

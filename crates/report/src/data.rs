@@ -1,0 +1,129 @@
+//! The packings of one or more runs, grouped into points of the paper's
+//! near-disk ensembles: family, mode number `n`, amplitude `Δ` and `N`.
+
+use crate::ReportError;
+use jamkit_experiment::record::PackingFile;
+use jamkit_observe::gaps::GapCounts;
+use jamkit_observe::spectrum::DosHistogram;
+use std::path::Path;
+
+/// One packing, reduced to what the figures need.
+#[derive(Clone, Debug)]
+pub struct Sample {
+    /// Packing fraction at jamming.
+    pub phi: f64,
+    /// `z_J` among non-rattlers (if contacts were measured).
+    pub z_j: Option<f64>,
+    /// Non-rattlers `N_nr`.
+    pub n_nr: Option<usize>,
+    /// Rattler fraction `N_r / N`.
+    pub rattler_fraction: Option<f64>,
+    /// `ω₁` (if the spectrum was measured and it is defined).
+    pub omega_1: Option<f64>,
+    /// `ω_*`.
+    pub omega_star: Option<f64>,
+    /// The binned spectrum.
+    pub dos: Option<DosHistogram>,
+    /// Gap counts.
+    pub gaps: Option<GapCounts>,
+}
+
+impl Sample {
+    /// `δz_J = z_J − z_iso`, `z_iso = 2d − 2d/N_nr` (the paper's Eq. (2),
+    /// with the non-rattlers).
+    pub fn dz(&self, dim: usize) -> Option<f64> {
+        let (z, n) = (self.z_j?, self.n_nr? as f64);
+        let d = dim as f64;
+        (n > 0.0).then(|| z - (2.0 * d - 2.0 * d / n))
+    }
+}
+
+/// All packings of one (family, n, Δ, N).
+#[derive(Clone, Debug)]
+pub struct Point {
+    /// Family name.
+    pub family: String,
+    /// Dimension.
+    pub dim: usize,
+    /// Mode number.
+    pub n: u32,
+    /// Amplitude Δ.
+    pub delta: f64,
+    /// Bodies.
+    pub particles: usize,
+    /// Its packings.
+    pub samples: Vec<Sample>,
+}
+
+/// The points found in `dirs` (each a run's output directory), and the
+/// number of packing files skipped (not a `fourier` near-disk with `n` and
+/// `delta`, or unreadable).
+pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportError> {
+    let mut points: Vec<Point> = Vec::new();
+    let mut skipped = 0;
+    for dir in dirs {
+        let dir = dir.as_ref().join("packings");
+        let entries = std::fs::read_dir(&dir).map_err(|e| ReportError::Io {
+            path: dir.clone(),
+            error: e,
+        })?;
+        let mut paths: Vec<_> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "json"))
+            .collect();
+        paths.sort();
+        for path in paths {
+            let Some(file) = PackingFile::load(&path) else {
+                skipped += 1;
+                continue;
+            };
+            let param = |k: &str| file.params.get(k).and_then(|v| v.as_f64());
+            let (Some(n), Some(delta)) = (param("n"), param("delta")) else {
+                skipped += 1;
+                continue;
+            };
+            let m = &file.measures;
+            let sample = Sample {
+                phi: m.phi,
+                z_j: m.z_j,
+                n_nr: m.n_rattlers.map(|r| file.particles - r),
+                rattler_fraction: m.n_rattlers.map(|r| r as f64 / file.particles as f64),
+                omega_1: m.spectrum.as_ref().and_then(|s| s.omega_1()),
+                omega_star: m.spectrum.as_ref().and_then(|s| s.omega_star()),
+                dos: m.spectrum.as_ref().map(|s| s.histogram.clone()),
+                gaps: m.gaps.clone(),
+            };
+            let key = |p: &Point| {
+                p.family == file.family
+                    && p.dim == file.dim
+                    && p.n == n as u32
+                    && p.delta == delta
+                    && p.particles == file.particles
+            };
+            match points.iter_mut().find(|p| key(p)) {
+                Some(p) => p.samples.push(sample),
+                None => points.push(Point {
+                    family: file.family.clone(),
+                    dim: file.dim,
+                    n: n as u32,
+                    delta,
+                    particles: file.particles,
+                    samples: vec![sample],
+                }),
+            }
+        }
+    }
+    points.sort_by(|a, b| {
+        (a.n, a.particles)
+            .cmp(&(b.n, b.particles))
+            .then(a.delta.total_cmp(&b.delta))
+    });
+    Ok((points, skipped))
+}
+
+/// Mean and standard error of the mean of the values `f` gives (NaN when
+/// there are none).
+pub fn mean_sem<T>(items: &[T], f: impl Fn(&T) -> Option<f64>) -> (f64, f64) {
+    let v: Vec<f64> = items.iter().filter_map(f).collect();
+    jamkit_experiment::record::mean_sem(&v)
+}

@@ -1,0 +1,921 @@
+//! The paper's figures and the summary table.
+//!
+//! Each figure is built from whatever the runs measured: φ_J and `f_r`
+//! need `Contacts`, `δz_J` too, `Z(h)` needs `Gaps`, `D(ω)`, `ω₁` and `ω_*`
+//! need `Spectrum`. "The largest N" is, for each `n`, the largest system
+//! size present; the finite-size study (Fig. 9) needs `n = 2` at two sizes
+//! or more.
+//!
+//! Fit ranges (stated in the summary with every exponent):
+//!
+//! * `δz_J ∝ Δ^{1/2}`: points with `δz_J ≥ 8/N_nr` (well above the
+//!   finite-size floor `2/N_nr`, the paper's "δz_J ≫ 1/N") and `Δ ≤ 0.1`;
+//! * `ω₁ ∝ Δ`: points with `Δ ≤ 0.1` where ω₁ is defined;
+//! * `ω_* ∝ Δ^{1/2}`: points where ω_* is defined in at least half the
+//!   packings;
+//! * `Z(h) ∼ h^{1−γ}` at the smallest Δ: `10 Δ^μ ≤ h ≤ 0.1`, and `Z ∼ h` at
+//!   the largest Δ: `h ≤ Δ^μ / 10`, both only where each sample point has at
+//!   least 20 gaps below it (`μ = 1/(2(1 − γ))`).
+
+use crate::ReportError;
+use crate::data::{Point, Sample, load, mean_sem};
+use crate::fit::{PowerLaw, line, power_law};
+use crate::plot::{Figure, Guide, Series};
+use jamkit_observe::gaps::GapCounts;
+use jamkit_observe::spectrum::DosHistogram;
+use plotters::prelude::SeriesLabelPosition;
+use rand::{RngExt, SeedableRng};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Report settings.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// `γ` of the gap distribution (the paper: 0.41).
+    pub gamma: f64,
+    /// Bootstrap resamples per fit.
+    pub resamples: usize,
+    /// Seed of the bootstrap.
+    pub seed: u64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            gamma: 0.41,
+            resamples: 500,
+            seed: 1,
+        }
+    }
+}
+
+/// One fitted exponent, beside its mean-field value.
+#[derive(Clone, Debug)]
+pub struct FitRow {
+    /// What was fitted (`δz_J`, `ω₁`, …).
+    pub quantity: String,
+    /// Mode number.
+    pub n: u32,
+    /// System size.
+    pub particles: usize,
+    /// The fit.
+    pub fit: PowerLaw,
+    /// Mean-field exponent.
+    pub expected: f64,
+    /// Accepted deviation from it (the tolerance).
+    pub tolerance: f64,
+}
+
+impl FitRow {
+    /// Whether the exponent is within the tolerance of the prediction.
+    pub fn agrees(&self) -> bool {
+        (self.fit.exponent - self.expected).abs() <= self.tolerance
+    }
+}
+
+/// What a report produced.
+#[derive(Clone, Debug)]
+pub struct Report {
+    /// Figure files written (without extension: each has `.svg` and `.png`).
+    pub figures: Vec<PathBuf>,
+    /// Every fitted exponent.
+    pub fits: Vec<FitRow>,
+    /// The markdown summary (also written to `OUT/report.md`).
+    pub markdown: String,
+}
+
+/// Read the runs in `dirs`, write figures and `report.md` into `out`.
+pub fn report(dirs: &[PathBuf], out: &Path, options: &Options) -> Result<Report, ReportError> {
+    let (points, skipped) = load(dirs)?;
+    if points.is_empty() {
+        let list: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+        return Err(ReportError::NoData(list.join(", ")));
+    }
+    std::fs::create_dir_all(out).map_err(|e| ReportError::Io {
+        path: out.to_path_buf(),
+        error: e,
+    })?;
+    let mut r = Builder {
+        out: out.to_path_buf(),
+        options: options.clone(),
+        points,
+        figures: Vec::new(),
+        fits: Vec::new(),
+        claims: Vec::new(),
+        notes: Vec::new(),
+    };
+    if skipped > 0 {
+        r.notes
+            .push(format!("{skipped} packing files were not near-disk packings with n and Δ, or unreadable, and were left out."));
+    }
+    r.phi_and_rattlers()?;
+    r.finite_size()?;
+    r.dz_against_delta()?;
+    r.gaps()?;
+    r.spectra()?;
+    let markdown = r.markdown(dirs);
+    let path = out.join("report.md");
+    std::fs::write(&path, &markdown).map_err(|e| ReportError::Io { path, error: e })?;
+    Ok(Report {
+        figures: r.figures,
+        fits: r.fits,
+        markdown,
+    })
+}
+
+/// A row of the summary table.
+struct Claim {
+    claim: String,
+    measured: String,
+    agrees: String,
+}
+
+struct Builder {
+    out: PathBuf,
+    options: Options,
+    points: Vec<Point>,
+    figures: Vec<PathBuf>,
+    fits: Vec<FitRow>,
+    claims: Vec<Claim>,
+    notes: Vec<String>,
+}
+
+fn fmt(x: f64) -> String {
+    if x.is_nan() {
+        "—".into()
+    } else {
+        format!("{x:.4}")
+    }
+}
+
+impl Builder {
+    fn mode_numbers(&self) -> Vec<u32> {
+        let mut ns: Vec<u32> = self.points.iter().map(|p| p.n).collect();
+        ns.dedup();
+        ns
+    }
+
+    /// The points of mode `n` at its largest N, by Δ.
+    fn largest(&self, n: u32) -> Vec<&Point> {
+        let big = self
+            .points
+            .iter()
+            .filter(|p| p.n == n)
+            .map(|p| p.particles)
+            .max()
+            .unwrap_or(0);
+        self.points
+            .iter()
+            .filter(|p| p.n == n && p.particles == big)
+            .collect()
+    }
+
+    fn save(&mut self, name: &str, figure: Figure) -> Result<(), ReportError> {
+        let stem = self.out.join(name);
+        figure.write(&stem)?;
+        self.figures.push(stem);
+        Ok(())
+    }
+
+    fn claim(&mut self, claim: &str, measured: String, agrees: &str) {
+        self.claims.push(Claim {
+            claim: claim.into(),
+            measured,
+            agrees: agrees.into(),
+        });
+    }
+
+    /// Figs. 7 and 8.
+    fn phi_and_rattlers(&mut self) -> Result<(), ReportError> {
+        let ns = self.mode_numbers();
+        let mut phi = Vec::new();
+        let mut fr = Vec::new();
+        let mut rises = Vec::new();
+        let mut falls = Vec::new();
+        let mut at_largest_delta = Vec::new();
+        for &n in &ns {
+            let pts = self.largest(n);
+            let series = |f: &dyn Fn(&Sample) -> Option<f64>| -> Vec<(f64, f64, f64)> {
+                pts.iter()
+                    .map(|p| {
+                        let (m, e) = mean_sem(&p.samples, f);
+                        (p.delta, m, e)
+                    })
+                    .filter(|s| s.1.is_finite())
+                    .collect()
+            };
+            let big = pts.first().map_or(0, |p| p.particles);
+            let p_series = series(&|s| Some(s.phi));
+            let r_series = series(&|s| s.rattler_fraction);
+            if let (Some(a), Some(b)) = (p_series.first(), p_series.last()) {
+                rises.push(format!(
+                    "n = {n}: {:.4} → {:.4} (Δ = {:e} → {:e})",
+                    a.1, b.1, a.0, b.0
+                ));
+                at_largest_delta.push((n, b.0, b.1));
+            }
+            if let (Some(a), Some(b)) = (r_series.first(), r_series.last()) {
+                falls.push((n, a.1, b.1));
+            }
+            phi.push(Series {
+                label: format!("n = {n} (N = {big})"),
+                points: p_series,
+                line: false,
+            });
+            fr.push(Series {
+                label: format!("n = {n} (N = {big})"),
+                points: r_series,
+                line: false,
+            });
+        }
+        self.save(
+            "fig07_phi_j",
+            Figure {
+                title: "Fig. 7: packing fraction at jamming".into(),
+                x_label: "Δ".into(),
+                y_label: "φ_J".into(),
+                log_x: true,
+                log_y: false,
+                series: phi,
+                guides: Vec::new(),
+                legend: SeriesLabelPosition::LowerRight,
+            },
+        )?;
+        if fr.iter().any(|s| !s.points.is_empty()) {
+            self.save(
+                "fig08_rattlers",
+                Figure {
+                    title: "Fig. 8: fraction of rattlers".into(),
+                    x_label: "Δ".into(),
+                    y_label: "f_r = N_r / N".into(),
+                    log_x: true,
+                    log_y: false,
+                    series: fr,
+                    guides: Vec::new(),
+                    legend: SeriesLabelPosition::UpperRight,
+                },
+            )?;
+        }
+        // φ_J rises for every n; more slowly for larger n (compared at the
+        // largest Δ common to all n).
+        let rise_ok = self.mode_numbers().iter().all(|&n| {
+            let pts = self.largest(n);
+            let (a, b) = (pts.first(), pts.last());
+            match (a, b) {
+                (Some(a), Some(b)) => {
+                    mean_sem(&b.samples, |s| Some(s.phi)).0
+                        > mean_sem(&a.samples, |s| Some(s.phi)).0
+                }
+                _ => false,
+            }
+        });
+        at_largest_delta.sort_by_key(|t| t.0);
+        let common = at_largest_delta
+            .iter()
+            .map(|t| t.1)
+            .fold(f64::INFINITY, f64::min);
+        let ordered = at_largest_delta
+            .windows(2)
+            .all(|w| w[1].2 <= w[0].2 || w[0].1 != common);
+        self.claim(
+            "φ_J rises with Δ for every n (Fig. 7)",
+            rises.join("; "),
+            if rise_ok { "yes" } else { "no" },
+        );
+        let order: Vec<String> = at_largest_delta
+            .iter()
+            .map(|(n, d, p)| format!("n = {n}: {p:.4} at Δ = {d:e}"))
+            .collect();
+        self.claim(
+            "… and more slowly for larger n (Fig. 7)",
+            order.join("; "),
+            match (at_largest_delta.len() > 1, ordered) {
+                (false, _) => "needs several n",
+                (true, true) => "yes",
+                (true, false) => "no",
+            },
+        );
+        let fall_text: Vec<String> = falls
+            .iter()
+            .map(|(n, a, b)| format!("n = {n}: {:.1} % → {:.1} %", 100.0 * a, 100.0 * b))
+            .collect();
+        let fall_ok = !falls.is_empty() && falls.iter().all(|(_, a, b)| b < a);
+        self.claim(
+            "f_r falls with Δ (Fig. 8)",
+            fall_text.join("; "),
+            if fall_ok { "yes" } else { "no" },
+        );
+        Ok(())
+    }
+
+    /// δz_J against Δ for every n at the largest N, with fits (Fig. 10).
+    fn dz_against_delta(&mut self) -> Result<(), ReportError> {
+        let mut series = Vec::new();
+        let mut guides = Vec::new();
+        for n in self.mode_numbers() {
+            let pts = self.largest(n);
+            let dim = pts.first().map_or(2, |p| p.dim);
+            let big = pts.first().map_or(0, |p| p.particles);
+            let values: Vec<(f64, Vec<f64>, f64)> = pts
+                .iter()
+                .map(|p| {
+                    let v: Vec<f64> = p.samples.iter().filter_map(|s| s.dz(dim)).collect();
+                    let nnr = mean_sem(&p.samples, |s| s.n_nr.map(|x| x as f64)).0;
+                    (p.delta, v, nnr)
+                })
+                .collect();
+            series.push(Series {
+                label: format!("n = {n}"),
+                points: values
+                    .iter()
+                    .map(|(d, v, _)| {
+                        let (m, e) = jamkit_experiment::record::mean_sem(v);
+                        (*d, m, e)
+                    })
+                    .collect(),
+                line: false,
+            });
+            let fit_points: Vec<(f64, Vec<f64>)> = values
+                .iter()
+                .filter(|(d, v, nnr)| {
+                    let m = jamkit_experiment::record::mean_sem(v).0;
+                    *d <= 0.1 && m >= 8.0 / nnr
+                })
+                .map(|(d, v, _)| (*d, v.clone()))
+                .collect();
+            if let Some(f) = self.fit(&fit_points, 3) {
+                guides.push(Guide::power_law(
+                    format!("fit n = {n}: Δ^{:.2}", f.exponent),
+                    f.prefactor,
+                    f.exponent,
+                    f.range.0,
+                    f.range.1,
+                ));
+                self.fits.push(FitRow {
+                    quantity: "δz_J".into(),
+                    n,
+                    particles: big,
+                    fit: f,
+                    expected: 0.5,
+                    tolerance: 0.1,
+                });
+            }
+        }
+        if series
+            .iter()
+            .all(|s| s.points.iter().all(|p| !p.1.is_finite()))
+        {
+            return Ok(());
+        }
+        self.save(
+            "fig10_dz",
+            Figure {
+                title: "Fig. 10: excess contacts at the largest N".into(),
+                x_label: "Δ".into(),
+                y_label: "δz_J = z_J − z_iso".into(),
+                log_x: true,
+                log_y: true,
+                series,
+                guides,
+                legend: SeriesLabelPosition::LowerRight,
+            },
+        )?;
+        let rows: Vec<&FitRow> = self.fits.iter().filter(|f| f.quantity == "δz_J").collect();
+        let text: Vec<String> = rows.iter().map(|f| fit_text(f)).collect();
+        let ok = !rows.is_empty() && rows.iter().all(|f| f.agrees());
+        self.claim(
+            "δz_J ∝ Δ^{1/2} for all n (Fig. 10)",
+            text.join("; "),
+            verdict(ok, rows.is_empty()),
+        );
+        Ok(())
+    }
+
+    /// Least-squares power law with bootstrap; `None` below `min` points.
+    fn fit(&self, points: &[(f64, Vec<f64>)], min: usize) -> Option<PowerLaw> {
+        let usable = points.iter().filter(|(_, v)| !v.is_empty()).count();
+        if usable < min {
+            return None;
+        }
+        power_law(points, self.options.resamples, self.options.seed)
+    }
+
+    /// Fig. 9: n = 2 at several N, and the collapse.
+    fn finite_size(&mut self) -> Result<(), ReportError> {
+        let pts: Vec<&Point> = self.points.iter().filter(|p| p.n == 2).collect();
+        let mut sizes: Vec<usize> = pts.iter().map(|p| p.particles).collect();
+        sizes.sort_unstable();
+        sizes.dedup();
+        if sizes.len() < 2 {
+            self.notes.push(
+                "Fig. 9 (finite size) needs n = 2 at two system sizes or more: skipped.".into(),
+            );
+            return Ok(());
+        }
+        let mut raw = Vec::new();
+        let mut collapse = Vec::new();
+        let mut smallest: Option<(f64, f64, f64, usize, f64)> = None;
+        for &size in &sizes {
+            let mut a = Vec::new();
+            let mut b = Vec::new();
+            for p in pts.iter().filter(|p| p.particles == size) {
+                let (dz, e) = mean_sem(&p.samples, |s| s.dz(p.dim));
+                let nnr = mean_sem(&p.samples, |s| s.n_nr.map(|x| x as f64)).0;
+                let scaled = mean_sem(&p.samples, |s| Some(s.dz(p.dim)? * s.n_nr? as f64));
+                a.push((p.delta, dz, e));
+                let x = nnr * nnr * p.delta;
+                b.push((x, scaled.0, scaled.1));
+                if smallest.is_none_or(|s| x < s.0) && scaled.0.is_finite() {
+                    smallest = Some((x, scaled.0, scaled.1, size, p.delta));
+                }
+            }
+            raw.push(Series {
+                label: format!("N = {size}"),
+                points: a,
+                line: false,
+            });
+            collapse.push(Series {
+                label: format!("N = {size}"),
+                points: b,
+                line: false,
+            });
+        }
+        let span = |s: &[Series]| {
+            s.iter()
+                .flat_map(|s| s.points.iter().map(|p| p.0))
+                .filter(|x| *x > 0.0)
+                .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)))
+        };
+        let (d0, d1) = span(&raw);
+        self.save(
+            "fig09a_dz_finite_size",
+            Figure {
+                title: "Fig. 9(a): δz_J for n = 2 and several N".into(),
+                x_label: "Δ".into(),
+                y_label: "δz_J = z_J − z_iso".into(),
+                log_x: true,
+                log_y: true,
+                series: raw,
+                guides: vec![Guide::power_law("∝ Δ^{1/2}", 3.0, 0.5, d0, d1)],
+                legend: SeriesLabelPosition::LowerRight,
+            },
+        )?;
+        let (x0, x1) = span(&collapse);
+        self.save(
+            "fig09b_dz_collapse",
+            Figure {
+                title: "Fig. 9(b): finite-size collapse".into(),
+                x_label: "N_nr² Δ".into(),
+                y_label: "δz_J N_nr".into(),
+                log_x: true,
+                log_y: true,
+                series: collapse,
+                guides: vec![
+                    Guide::power_law("δz_J N_nr = 2", 2.0, 0.0, x0, x1),
+                    Guide::power_law("∝ (N_nr² Δ)^{1/2}", 3.0, 0.5, x0, x1),
+                ],
+                legend: SeriesLabelPosition::UpperLeft,
+            },
+        )?;
+        if let Some((x, v, e, size, delta)) = smallest {
+            let ok = (v - 2.0).abs() <= 0.5_f64.max(2.0 * e);
+            self.claim(
+                "δz_J N_nr → 2 as N_nr² Δ → 0, and the data collapse (Fig. 9)",
+                format!(
+                    "δz_J N_nr = {v:.2} ± {e:.2} at the smallest N_nr² Δ = {x:.3} (N = {size}, Δ = {delta:e}); collapse: see fig09b"
+                ),
+                if ok { "yes (within 0.5)" } else { "no" },
+            );
+        }
+        Ok(())
+    }
+
+    /// Fig. 11: Z(h) per n, its collapse, and the two slopes.
+    fn gaps(&mut self) -> Result<(), ReportError> {
+        let gamma = self.options.gamma;
+        let mu = 1.0 / (2.0 * (1.0 - gamma));
+        let mut any = false;
+        for n in self.mode_numbers() {
+            let pts: Vec<Point> = self.largest(n).into_iter().cloned().collect();
+            let with: Vec<(&Point, GapCounts)> = pts
+                .iter()
+                .filter_map(|p| Some((p, pooled_gaps(&p.samples)?)))
+                .collect();
+            if with.is_empty() {
+                continue;
+            }
+            any = true;
+            let mut raw = Vec::new();
+            let mut collapse = Vec::new();
+            for (p, g) in &with {
+                let z = g.cumulative();
+                let curve: Vec<(f64, f64, f64)> =
+                    g.h.iter()
+                        .zip(&z)
+                        .filter(|(_, z)| **z > 0.0)
+                        .map(|(&h, &z)| (h, z, 0.0))
+                        .collect();
+                collapse.push(Series {
+                    label: format!("Δ = {:e}", p.delta),
+                    points: curve
+                        .iter()
+                        .map(|&(h, z, _)| (h / p.delta.powf(mu), z / p.delta.sqrt(), 0.0))
+                        .collect(),
+                    line: true,
+                });
+                raw.push(Series {
+                    label: format!("Δ = {:e}", p.delta),
+                    points: curve,
+                    line: true,
+                });
+            }
+            let (h0, h1) = raw
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| p.0))
+                .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+            self.save(
+                &format!("fig11_gaps_n{n}"),
+                Figure {
+                    title: format!("Fig. 11: cumulative gap distribution, n = {n}"),
+                    x_label: "h".into(),
+                    y_label: "Z(h)".into(),
+                    log_x: true,
+                    log_y: true,
+                    series: raw,
+                    guides: vec![
+                        Guide::power_law_through(
+                            format!("∝ h^(1−γ), γ = {gamma}"),
+                            1.0 - gamma,
+                            anchor(&with[0].1, 0.1),
+                            h0,
+                            h1,
+                        ),
+                        Guide::power_law_through(
+                            "∝ h",
+                            1.0,
+                            anchor(&with[with.len() - 1].1, 0.01),
+                            h0,
+                            h1,
+                        ),
+                    ],
+                    legend: SeriesLabelPosition::LowerRight,
+                },
+            )?;
+            self.save(
+                &format!("fig11_gaps_collapse_n{n}"),
+                Figure {
+                    title: format!("Fig. 11: collapse, n = {n} (μ = {mu:.3})"),
+                    x_label: "h / Δ^μ".into(),
+                    y_label: "Z / Δ^{1/2}".into(),
+                    log_x: true,
+                    log_y: true,
+                    series: collapse,
+                    guides: Vec::new(),
+                    legend: SeriesLabelPosition::LowerRight,
+                },
+            )?;
+            // Slopes at the smallest and largest Δ.
+            let big = with[0].0.particles;
+            let (small, large) = (&with[0], &with[with.len() - 1]);
+            let lo = fit_gap_slope(small.0, 10.0 * small.0.delta.powf(mu), 0.1, &self.options);
+            if let Some(f) = lo {
+                self.fits.push(FitRow {
+                    quantity: format!("Z(h) at Δ = {:e}", small.0.delta),
+                    n,
+                    particles: big,
+                    fit: f,
+                    expected: 1.0 - gamma,
+                    tolerance: 0.15,
+                });
+            }
+            if with.len() > 1 {
+                let hi = fit_gap_slope(large.0, 0.0, large.0.delta.powf(mu) / 10.0, &self.options);
+                if let Some(f) = hi {
+                    self.fits.push(FitRow {
+                        quantity: format!("Z(h) at Δ = {:e}", large.0.delta),
+                        n,
+                        particles: big,
+                        fit: f,
+                        expected: 1.0,
+                        tolerance: 0.15,
+                    });
+                }
+            }
+        }
+        if !any {
+            self.notes
+                .push("Fig. 11 (gaps) needs the Gaps observable: skipped.".into());
+            return Ok(());
+        }
+        for (which, expected) in [("smallest", 1.0 - gamma), ("largest", 1.0)] {
+            let rows: Vec<&FitRow> = self
+                .fits
+                .iter()
+                .filter(|f| f.quantity.starts_with("Z(h)") && f.expected == expected)
+                .collect();
+            let text: Vec<String> = rows.iter().map(|f| fit_text(f)).collect();
+            let ok = !rows.is_empty() && rows.iter().all(|f| f.agrees());
+            self.claim(
+                &if which == "smallest" {
+                    format!("Z(h) ∼ h^(1−γ) = h^{:.2} at small Δ (Fig. 11)", 1.0 - gamma)
+                } else {
+                    "Z(h) ∼ h at large Δ (Fig. 11)".into()
+                },
+                text.join("; "),
+                verdict(ok, rows.is_empty()),
+            );
+        }
+        self.claim(
+            "Z/Δ^{1/2} collapses against h/Δ^μ (Fig. 11)",
+            "see fig11_gaps_collapse_n*".into(),
+            "by eye",
+        );
+        Ok(())
+    }
+
+    /// Figs. 12 and 13.
+    fn spectra(&mut self) -> Result<(), ReportError> {
+        let mut omega = Vec::new();
+        let mut guides = Vec::new();
+        let mut any = false;
+        for n in self.mode_numbers() {
+            let pts: Vec<Point> = self.largest(n).into_iter().cloned().collect();
+            let mut dos = Vec::new();
+            for p in &pts {
+                let Some(h) = pooled_dos(&p.samples) else {
+                    continue;
+                };
+                // Empty bins break the line (log axis), so a band is not
+                // joined to the plateau across the gap between them.
+                let pts: Vec<(f64, f64, f64)> = h
+                    .centres()
+                    .iter()
+                    .zip(h.density())
+                    .map(|(&w, d)| (w, d, 0.0))
+                    .collect();
+                dos.push(Series {
+                    label: format!("Δ = {:e}", p.delta),
+                    points: pts,
+                    line: true,
+                });
+            }
+            if dos.is_empty() {
+                continue;
+            }
+            any = true;
+            self.save(
+                &format!("fig12_dos_n{n}"),
+                Figure {
+                    title: format!("Fig. 12: density of states, n = {n} (zero modes left out)"),
+                    x_label: "ω".into(),
+                    y_label: "D(ω)".into(),
+                    log_x: true,
+                    log_y: true,
+                    series: dos,
+                    guides: Vec::new(),
+                    legend: SeriesLabelPosition::LowerLeft,
+                },
+            )?;
+            let big = pts.first().map_or(0, |p| p.particles);
+            for (name, get, expected, keep) in [
+                (
+                    "ω₁",
+                    (|s: &Sample| s.omega_1) as fn(&Sample) -> Option<f64>,
+                    1.0,
+                    (|p: &Point, _: &[f64]| p.delta <= 0.1) as fn(&Point, &[f64]) -> bool,
+                ),
+                (
+                    "ω_*",
+                    |s: &Sample| s.omega_star,
+                    0.5,
+                    |p: &Point, v: &[f64]| 2 * v.len() >= p.samples.len(),
+                ),
+            ] {
+                let values: Vec<(f64, Vec<f64>)> = pts
+                    .iter()
+                    .map(|p| {
+                        let v: Vec<f64> = p.samples.iter().filter_map(get).collect();
+                        let v = if keep(p, &v) { v } else { Vec::new() };
+                        (p.delta, v)
+                    })
+                    .collect();
+                omega.push(Series {
+                    label: format!("{name}, n = {n}"),
+                    points: values
+                        .iter()
+                        .filter(|(_, v)| !v.is_empty())
+                        .map(|(d, v)| {
+                            let (m, e) = jamkit_experiment::record::mean_sem(v);
+                            (*d, m, e)
+                        })
+                        .collect(),
+                    line: false,
+                });
+                if let Some(f) = self.fit(&values, 3) {
+                    guides.push(Guide::power_law(
+                        format!("fit {name}, n = {n}: Δ^{:.2}", f.exponent),
+                        f.prefactor,
+                        f.exponent,
+                        f.range.0,
+                        f.range.1,
+                    ));
+                    self.fits.push(FitRow {
+                        quantity: name.into(),
+                        n,
+                        particles: big,
+                        fit: f,
+                        expected,
+                        tolerance: 0.15,
+                    });
+                }
+            }
+        }
+        if !any {
+            self.notes
+                .push("Figs. 12 and 13 need the Spectrum observable: skipped.".into());
+            return Ok(());
+        }
+        self.save(
+            "fig13_omega",
+            Figure {
+                title: "Fig. 13: characteristic frequencies".into(),
+                x_label: "Δ".into(),
+                y_label: "ω₁, ω_*".into(),
+                log_x: true,
+                log_y: true,
+                series: omega,
+                guides,
+                legend: SeriesLabelPosition::LowerRight,
+            },
+        )?;
+        for (name, claim) in [
+            ("ω₁", "ω₁ ∝ Δ (Fig. 13)"),
+            ("ω_*", "ω_* ∝ Δ^{1/2} (Fig. 13)"),
+        ] {
+            let rows: Vec<&FitRow> = self.fits.iter().filter(|f| f.quantity == name).collect();
+            let text: Vec<String> = rows.iter().map(|f| fit_text(f)).collect();
+            let ok = !rows.is_empty() && rows.iter().all(|f| f.agrees());
+            self.claim(claim, text.join("; "), verdict(ok, rows.is_empty()));
+        }
+        Ok(())
+    }
+
+    fn markdown(&self, dirs: &[PathBuf]) -> String {
+        let mut m = String::from("# jamkit report\n\n");
+        let list: Vec<String> = dirs.iter().map(|d| format!("`{}`", d.display())).collect();
+        let _ = writeln!(m, "Runs: {}.\n", list.join(", "));
+        let _ = writeln!(
+            m,
+            "| n | N | Δ values | packings per point |\n|---|---|---|---|"
+        );
+        for n in self.mode_numbers() {
+            let mut sizes: Vec<usize> = self
+                .points
+                .iter()
+                .filter(|p| p.n == n)
+                .map(|p| p.particles)
+                .collect();
+            sizes.sort_unstable();
+            sizes.dedup();
+            for size in sizes {
+                let pts: Vec<&Point> = self
+                    .points
+                    .iter()
+                    .filter(|p| p.n == n && p.particles == size)
+                    .collect();
+                let deltas: Vec<String> = pts.iter().map(|p| format!("{:e}", p.delta)).collect();
+                let counts: Vec<usize> = pts.iter().map(|p| p.samples.len()).collect();
+                let (lo, hi) = (
+                    counts.iter().min().unwrap_or(&0),
+                    counts.iter().max().unwrap_or(&0),
+                );
+                let _ = writeln!(m, "| {n} | {size} | {} | {lo}–{hi} |", deltas.join(", "));
+            }
+        }
+        m += "\n## The paper's claims\n\n| paper's claim | our measurement | agrees? |\n|---|---|---|\n";
+        for c in &self.claims {
+            let _ = writeln!(m, "| {} | {} | {} |", c.claim, c.measured, c.agrees);
+        }
+        m += "\nExponents are least-squares slopes on log–log axes through the point means; ± is the standard deviation over bootstrap resamples of the packings of each point. Fit ranges: δz_J over points with δz_J ≥ 8/N_nr and Δ ≤ 0.1; ω₁ over Δ ≤ 0.1; ω_* where it is defined in at least half the packings; Z(h) over 10 Δ^μ ≤ h ≤ 0.1 at the smallest Δ and h ≤ Δ^μ/10 at the largest, where each sample point has at least 20 gaps below it. \"Agrees\" means within the stated tolerance of the mean-field exponent (0.1 for δz_J, 0.15 otherwise).\n\n## Fits\n\n| quantity | n | N | exponent | mean field | range of Δ or h | points |\n|---|---|---|---|---|---|---|\n";
+        for f in &self.fits {
+            let _ = writeln!(
+                m,
+                "| {} | {} | {} | {:.3} ± {:.3} | {} | {:.3e} … {:.3e} | {} |",
+                f.quantity,
+                f.n,
+                f.particles,
+                f.fit.exponent,
+                f.fit.error,
+                fmt(f.expected),
+                f.fit.range.0,
+                f.fit.range.1,
+                f.fit.points
+            );
+        }
+        m += "\n## Figures\n\n";
+        for f in &self.figures {
+            let name = f
+                .file_name()
+                .map(|s| s.to_string_lossy().to_string())
+                .unwrap_or_default();
+            let _ = writeln!(m, "![{name}]({name}.png)\n");
+        }
+        if !self.notes.is_empty() {
+            m += "## Notes\n\n";
+            for n in &self.notes {
+                let _ = writeln!(m, "* {n}");
+            }
+        }
+        m
+    }
+}
+
+fn fit_text(f: &FitRow) -> String {
+    format!(
+        "n = {}: {:.2} ± {:.2} ({:.3e}…{:.3e}, {} pts)",
+        f.n, f.fit.exponent, f.fit.error, f.fit.range.0, f.fit.range.1, f.fit.points
+    )
+}
+
+fn verdict(ok: bool, none: bool) -> &'static str {
+    match (none, ok) {
+        (true, _) => "too few points to fit",
+        (false, true) => "yes",
+        (false, false) => "no",
+    }
+}
+
+/// `(h, Z(h))` at the sample point nearest `h` (for anchoring a guide).
+fn anchor(g: &GapCounts, h: f64) -> (f64, f64) {
+    let z = g.cumulative();
+    let k = (0..g.h.len())
+        .min_by(|&a, &b| (g.h[a] / h).ln().abs().total_cmp(&(g.h[b] / h).ln().abs()))
+        .unwrap_or(0);
+    (g.h[k], z[k])
+}
+
+/// The gap counts of `samples` added up.
+fn pooled_gaps(samples: &[Sample]) -> Option<GapCounts> {
+    let mut it = samples.iter().filter_map(|s| s.gaps.as_ref());
+    let mut g = it.next()?.clone();
+    for other in it {
+        g.merge(other).ok()?;
+    }
+    Some(g)
+}
+
+/// The histograms of `samples` added up.
+fn pooled_dos(samples: &[Sample]) -> Option<DosHistogram> {
+    let mut it = samples.iter().filter_map(|s| s.dos.as_ref());
+    let mut h = it.next()?.clone();
+    for other in it {
+        h.merge(other).ok()?;
+    }
+    Some(h)
+}
+
+/// Slope of `log Z` against `log h` over `lo ≤ h ≤ hi`, where the pooled
+/// counts are at least 20 per sample point, with a bootstrap over packings.
+fn fit_gap_slope(p: &Point, lo: f64, hi: f64, options: &Options) -> Option<PowerLaw> {
+    let counts: Vec<&GapCounts> = p.samples.iter().filter_map(|s| s.gaps.as_ref()).collect();
+    let pooled = pooled_gaps(&p.samples)?;
+    let keep: Vec<usize> = (0..pooled.h.len())
+        .filter(|&k| pooled.h[k] >= lo && pooled.h[k] <= hi && pooled.below[k] >= 20)
+        .collect();
+    if keep.len() < 3 {
+        return None;
+    }
+    let z_at = |c: &[&GapCounts]| -> Option<Vec<(f64, f64)>> {
+        let total: u64 = c.iter().map(|g| g.total()).sum();
+        let pts: Vec<(f64, f64)> = keep
+            .iter()
+            .map(|&k| {
+                let below: u64 = c.iter().map(|g| g.below[k]).sum();
+                (pooled.h[k], below as f64 / total as f64)
+            })
+            .collect();
+        pts.iter().all(|p| p.1 > 0.0).then_some(pts)
+    };
+    let xy = z_at(&counts)?;
+    let (prefactor, exponent) = line(&xy)?;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(options.seed);
+    let mut slopes = Vec::new();
+    for _ in 0..options.resamples {
+        let pick: Vec<&GapCounts> = (0..counts.len())
+            .map(|_| counts[rng.random_range(0..counts.len())])
+            .collect();
+        if let Some((_, b)) = z_at(&pick).and_then(|xy| line(&xy)) {
+            slopes.push(b);
+        }
+    }
+    let mean = slopes.iter().sum::<f64>() / slopes.len().max(1) as f64;
+    let var =
+        slopes.iter().map(|b| (b - mean).powi(2)).sum::<f64>() / (slopes.len().max(2) - 1) as f64;
+    Some(PowerLaw {
+        exponent,
+        error: var.sqrt(),
+        prefactor,
+        range: (xy[0].0, xy[xy.len() - 1].0),
+        points: xy.len(),
+    })
+}

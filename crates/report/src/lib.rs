@@ -1,0 +1,47 @@
+//! # jamkit-report
+//!
+//! `jamkit report DIR… -o OUT`: the paper's figures regenerated from our own
+//! runs, with fitted exponents beside the mean-field predictions.
+//!
+//! * [`data`]: the packing files of one or more runs, grouped into points
+//!   `(n, Δ, N)` of the near-disk ensembles;
+//! * [`fit`]: power laws on log–log axes with bootstrap errors over packings;
+//! * [`plot`]: figures with error bars and guide lines, SVG and PNG;
+//! * [`figures`]: the paper's Figs. 7–13 and the markdown summary with the
+//!   table "paper's claim | our measurement | agrees?".
+//!
+//! A figure whose data are absent (no spectrum measured, one system size
+//! only, …) is skipped and the summary says so.
+
+pub mod data;
+pub mod figures;
+pub mod fit;
+pub mod plot;
+
+pub use figures::{Options, Report, report};
+
+use std::path::PathBuf;
+
+/// What can go wrong while reporting.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// A directory or file could not be read or written.
+    #[error("{path}: {error}")]
+    Io {
+        /// The path.
+        path: PathBuf,
+        /// The error.
+        error: std::io::Error,
+    },
+    /// No near-disk packing was found.
+    #[error(
+        "no packings of the `fourier` family (with parameters n and delta) under {0}; give the output directories of runs of experiments/paper/"
+    )]
+    NoData(String),
+    /// A figure had nothing to draw.
+    #[error("figure `{0}` has no finite point to draw")]
+    Empty(String),
+    /// The plotting library failed.
+    #[error("drawing failed: {0}")]
+    Plot(String),
+}

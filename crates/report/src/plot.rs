@@ -1,0 +1,353 @@
+//! One kind of figure: markers with error bars and guide lines, on linear
+//! or logarithmic axes, written as SVG and PNG.
+//!
+//! Logarithmic axes are drawn in `log₁₀` coordinates with ticks labelled
+//! as powers of ten, which keeps one code path for every combination of
+//! axes. Text needs a font (to draw it in PNG, to measure it in both):
+//! DejaVu Sans ships inside the binary
+//! (`fonts/`, Bitstream Vera licence), so the pictures look the same on
+//! every machine and need no system font.
+
+use crate::ReportError;
+use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// A series of points `(x, y, error of y)` (error 0 or NaN: none). A
+/// point whose `y` is not finite (or not positive on a log axis) breaks a
+/// line there.
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// Legend text.
+    pub label: String,
+    /// Points.
+    pub points: Vec<(f64, f64, f64)>,
+    /// Join the points with a line (and draw no markers).
+    pub line: bool,
+}
+
+/// A guide: the straight line `y = a x^b` (on log–log axes), or any curve
+/// given by points, drawn dashed.
+#[derive(Clone, Debug)]
+pub struct Guide {
+    /// Legend text.
+    pub label: String,
+    /// Points of the curve (two suffice for a power law).
+    pub points: Vec<(f64, f64)>,
+}
+
+impl Guide {
+    /// `y = a x^b` between `x0` and `x1`.
+    pub fn power_law(label: impl Into<String>, a: f64, b: f64, x0: f64, x1: f64) -> Self {
+        Self {
+            label: label.into(),
+            points: vec![(x0, a * x0.powf(b)), (x1, a * x1.powf(b))],
+        }
+    }
+
+    /// `y ∝ x^b` through the point `at`, between `x0` and `x1`.
+    pub fn power_law_through(
+        label: impl Into<String>,
+        b: f64,
+        at: (f64, f64),
+        x0: f64,
+        x1: f64,
+    ) -> Self {
+        Self::power_law(label, at.1 / at.0.powf(b), b, x0, x1)
+    }
+}
+
+/// A whole figure.
+#[derive(Clone, Debug)]
+pub struct Figure {
+    /// Title above the plot.
+    pub title: String,
+    /// x-axis label.
+    pub x_label: String,
+    /// y-axis label.
+    pub y_label: String,
+    /// Logarithmic x axis.
+    pub log_x: bool,
+    /// Logarithmic y axis.
+    pub log_y: bool,
+    /// Data.
+    pub series: Vec<Series>,
+    /// Dashed guides.
+    pub guides: Vec<Guide>,
+    /// Corner of the legend (where the data leave room).
+    pub legend: SeriesLabelPosition,
+}
+
+const WIDTH: u32 = 720;
+const HEIGHT: u32 = 540;
+
+const COLORS: [RGBColor; 8] = [
+    RGBColor(0, 0, 0),
+    RGBColor(214, 39, 40),
+    RGBColor(31, 119, 180),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(140, 86, 75),
+    RGBColor(23, 190, 207),
+];
+
+fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let bytes: &'static [u8] = include_bytes!("../fonts/DejaVuSans.ttf");
+        // NOTE: cannot fail for this font; if it did, PNG text would be
+        // missing and SVG unaffected, so the error is not fatal.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, bytes);
+    });
+}
+
+impl Figure {
+    /// Write `<stem>.svg` and `<stem>.png`. A figure with no finite point
+    /// is an error (nothing to show).
+    pub fn write(&self, stem: &Path) -> Result<(), ReportError> {
+        let (x, y) = self
+            .ranges()
+            .ok_or_else(|| ReportError::Empty(self.title.clone()))?;
+        // Both backends measure text with the registered font.
+        register_font();
+        let svg = stem.with_extension("svg");
+        self.draw(
+            SVGBackend::new(&svg, (WIDTH, HEIGHT)).into_drawing_area(),
+            x,
+            y,
+        )
+        .map_err(|e| ReportError::Plot(format!("{}: {e}", svg.display())))?;
+        let png = stem.with_extension("png");
+        self.draw(
+            BitMapBackend::new(&png, (WIDTH, HEIGHT)).into_drawing_area(),
+            x,
+            y,
+        )
+        .map_err(|e| ReportError::Plot(format!("{}: {e}", png.display())))?;
+        Ok(())
+    }
+
+    fn tx(&self, x: f64) -> Option<f64> {
+        transform(x, self.log_x)
+    }
+
+    fn ty(&self, y: f64) -> Option<f64> {
+        transform(y, self.log_y)
+    }
+
+    /// Axis ranges in drawing coordinates, with a 5 % margin.
+    fn ranges(&self) -> Option<((f64, f64), (f64, f64))> {
+        let mut xs = Vec::new();
+        let mut ys = Vec::new();
+        for s in &self.series {
+            for &(x, y, _) in &s.points {
+                if let (Some(x), Some(y)) = (self.tx(x), self.ty(y)) {
+                    xs.push(x);
+                    ys.push(y);
+                }
+            }
+        }
+        if xs.is_empty() {
+            return None;
+        }
+        let span = |v: &[f64]| {
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                    (a.min(x), b.max(x))
+                });
+            let pad = if hi > lo { 0.05 * (hi - lo) } else { 0.5 };
+            (lo - pad, hi + pad)
+        };
+        Some((span(&xs), span(&ys)))
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, Shift>,
+        (x0, x1): (f64, f64),
+        (y0, y1): (f64, f64),
+    ) -> Result<(), Box<dyn std::error::Error + '_>>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(&self.title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(48)
+            .y_label_area_size(72)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
+        let label = |log: bool| {
+            move |v: &f64| {
+                if log {
+                    power_of_ten(*v)
+                } else {
+                    format!("{v:.3}")
+                }
+            }
+        };
+        let (fx, fy) = (label(self.log_x), label(self.log_y));
+        chart
+            .configure_mesh()
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .axis_desc_style(("sans-serif", 18))
+            .label_style(("sans-serif", 14))
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()?;
+        let clip = |x: f64, y: f64| x >= x0 && x <= x1 && y >= y0 && y <= y1;
+        for (k, s) in self.series.iter().enumerate() {
+            let color = COLORS[k % COLORS.len()];
+            let pts: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .filter_map(|&(x, y, _)| Some((self.tx(x)?, self.ty(y)?)))
+                .collect();
+            let anno = if s.line {
+                // One polyline per run of drawable points.
+                let mut runs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+                for &(x, y, _) in &s.points {
+                    match (self.tx(x), self.ty(y)) {
+                        (Some(x), Some(y)) => runs.last_mut().expect("one run").push((x, y)),
+                        _ => runs.push(Vec::new()),
+                    }
+                }
+                chart.draw_series(
+                    runs.into_iter()
+                        .filter(|r| !r.is_empty())
+                        .map(|r| PathElement::new(r, color.stroke_width(2))),
+                )?
+            } else {
+                chart.draw_series(
+                    pts.iter()
+                        .map(|&(x, y)| Circle::new((x, y), 4, color.filled())),
+                )?
+            };
+            anno.label(s.label.clone()).legend(move |(x, y)| {
+                Rectangle::new([(x, y - 4), (x + 12, y + 4)], color.filled())
+            });
+            // Error bars: y ± err, in drawing coordinates.
+            let bars = s.points.iter().filter_map(|&(x, y, e)| {
+                if !(e > 0.0) {
+                    return None;
+                }
+                let x = self.tx(x)?;
+                let lo = self.ty(y - e).unwrap_or(y0);
+                let hi = self.ty(y + e)?;
+                Some(PathElement::new(
+                    vec![(x, lo.max(y0)), (x, hi.min(y1))],
+                    color.stroke_width(1),
+                ))
+            });
+            chart.draw_series(bars)?;
+        }
+        for (k, g) in self.guides.iter().enumerate() {
+            let color = COLORS[(k + 1) % COLORS.len()].mix(0.7);
+            let pts: Vec<(f64, f64)> = g
+                .points
+                .iter()
+                .filter_map(|&(x, y)| Some((self.tx(x)?, self.ty(y)?)))
+                .collect();
+            let pts = clip_line(&pts, (x0, x1), (y0, y1));
+            if pts.len() < 2 || !pts.iter().all(|&(x, y)| clip(x, y)) {
+                continue;
+            }
+            chart
+                .draw_series(std::iter::once(DashedPathElement::new(
+                    pts,
+                    8,
+                    6,
+                    color.stroke_width(2),
+                )))?
+                .label(g.label.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 12, y)], color));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .position(self.legend.clone())
+            .draw()?;
+        root.present()?;
+        Ok(())
+    }
+}
+
+/// `log₁₀ v` on a log axis, `v` on a linear one; `None` where undefined.
+fn transform(v: f64, log: bool) -> Option<f64> {
+    match (log, v.is_finite()) {
+        (_, false) => None,
+        (true, _) if v > 0.0 => Some(v.log10()),
+        (true, _) => None,
+        (false, _) => Some(v),
+    }
+}
+
+/// A tick label for `log₁₀ v = e`: `10^e` for whole `e`, else the value.
+fn power_of_ten(e: f64) -> String {
+    if (e - e.round()).abs() < 1e-9 {
+        let k = e.round() as i64;
+        match k {
+            0 => "1".into(),
+            1 => "10".into(),
+            _ => format!("1e{k}"),
+        }
+    } else {
+        format!("{:.1e}", 10f64.powf(e))
+    }
+}
+
+/// The part of the straight segments through `pts` inside the box (guides
+/// are straight lines in drawing coordinates, so two end points suffice).
+fn clip_line(pts: &[(f64, f64)], (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> Vec<(f64, f64)> {
+    if pts.len() != 2 {
+        return pts.to_vec();
+    }
+    let ((ax, ay), (bx, by)) = (pts[0], pts[1]);
+    // Liang–Barsky: parameter t ∈ [0, 1] along a → b.
+    let (dx, dy) = (bx - ax, by - ay);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [(-dx, ax - x0), (dx, x1 - ax), (-dy, ay - y0), (dy, y1 - ay)] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return Vec::new();
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    if t0 > t1 {
+        return Vec::new();
+    }
+    vec![(ax + t0 * dx, ay + t0 * dy), (ax + t1 * dx, ay + t1 * dy)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_powers_of_ten() {
+        assert_eq!(power_of_ten(-3.0), "1e-3");
+        assert_eq!(power_of_ten(0.0), "1");
+        assert_eq!(power_of_ten(-0.5), "3.2e-1");
+    }
+
+    #[test]
+    fn guides_are_clipped_to_the_box() {
+        let c = clip_line(&[(-1.0, -1.0), (3.0, 3.0)], (0.0, 2.0), (0.0, 1.0));
+        assert_eq!(c, vec![(0.0, 0.0), (1.0, 1.0)]);
+        assert!(clip_line(&[(5.0, 5.0), (6.0, 6.0)], (0.0, 1.0), (0.0, 1.0)).is_empty());
+    }
+}

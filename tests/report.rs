@@ -1,0 +1,86 @@
+//! `jamkit report` on a small run made here: every figure written as a
+//! non-empty SVG and PNG, every fitted exponent finite, the summary table
+//! present, and clear errors for directories without near-disk packings.
+
+use jamkit_experiment::Experiment;
+use jamkit_experiment::runner::{RunOptions, run};
+use std::path::Path;
+
+fn small_run(dir: &Path) {
+    let text = r#"(name: "rep", family: "fourier",
+        params: {"n": 2, "delta": [0.01, 0.03, 0.1, 0.3]}, particles: [16, 32], samples: 2, seed: 5,
+        observables: [Contacts, Spectrum(), Gaps(h_min: 1e-8, points_per_decade: 4)])"#;
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    let report = run(
+        &e,
+        &RunOptions {
+            out: dir.to_path_buf(),
+            jobs: Some(2),
+            progress: false,
+        },
+    )
+    .unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+}
+
+#[test]
+fn report_writes_figures_fits_and_summary() {
+    let runs = tempfile::tempdir().unwrap();
+    let out = tempfile::tempdir().unwrap();
+    small_run(runs.path());
+    let options = jamkit_report::Options {
+        resamples: 50,
+        ..Default::default()
+    };
+    let r = jamkit_report::report(&[runs.path().to_path_buf()], out.path(), &options).unwrap();
+    // φ_J, f_r, δz_J, finite size (two N), collapse, Z(h) and its collapse,
+    // D(ω), ω₁/ω_*: at least eight figures from this run.
+    assert!(r.figures.len() >= 8, "{:?}", r.figures);
+    for stem in &r.figures {
+        let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
+        assert!(
+            svg.contains("<svg") && svg.len() > 2000,
+            "{}",
+            stem.display()
+        );
+        let png = std::fs::read(stem.with_extension("png")).unwrap();
+        assert_eq!(&png[1..4], b"PNG", "{}", stem.display());
+        assert!(png.len() > 5000, "{}: {} bytes", stem.display(), png.len());
+    }
+    // ω₁ is defined at every Δ ≤ 0.1 (three points), so it is fitted.
+    assert!(r.fits.iter().any(|f| f.quantity == "ω₁"), "{:?}", r.fits);
+    for f in &r.fits {
+        assert!(
+            f.fit.exponent.is_finite() && f.fit.error.is_finite() && f.fit.error >= 0.0,
+            "{f:?}"
+        );
+        assert!(f.fit.points >= 3);
+    }
+    let md = std::fs::read_to_string(out.path().join("report.md")).unwrap();
+    assert_eq!(md, r.markdown);
+    assert!(md.contains("| paper's claim | our measurement | agrees? |"));
+    assert!(md.contains("ω₁ ∝ Δ"));
+}
+
+#[test]
+fn report_refuses_directories_without_near_disks() {
+    let empty = tempfile::tempdir().unwrap();
+    std::fs::create_dir(empty.path().join("packings")).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let err = jamkit_report::report(
+        &[empty.path().to_path_buf()],
+        out.path(),
+        &jamkit_report::Options::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("no packings of the `fourier` family"), "{err}");
+    let missing = jamkit_report::report(
+        &[empty.path().join("nowhere")],
+        out.path(),
+        &jamkit_report::Options::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.len() > 10 && missing.contains("nowhere"), "{missing}");
+}
