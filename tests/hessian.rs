@@ -5,11 +5,13 @@
 
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::Scene;
-use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
+use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_lobed::{Lobed, LobedParams};
 use jamkit_observe::hessian::{Hessian, HessianOptions, finite_difference};
 use jamkit_sphere::Sphere;
 use rand::SeedableRng;
+
+mod common;
 
 fn dense<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64) -> Scene<D, S> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -66,29 +68,7 @@ fn near_disk_hessian_matches_finite_differences() {
         .unwrap();
         check::<2, _>(shape, 24, 1..=2);
     }
-    let modes = vec![
-        Mode {
-            n: 2,
-            a: 0.4,
-            b: 0.3,
-        },
-        Mode {
-            n: 3,
-            a: 0.2,
-            b: -1.0,
-        },
-        Mode {
-            n: 7,
-            a: 0.05,
-            b: 2.0,
-        },
-    ];
-    let sum = NearDisk::fourier_sum(&FourierSumParams {
-        modes,
-        delta: 0.2,
-        inertia: None,
-    })
-    .unwrap();
+    let sum = common::multi_mode();
     check::<2, _>(sum, 24, 1..=2);
 }
 

@@ -2,29 +2,14 @@
 
 use jamkit_experiment::Experiment;
 use jamkit_experiment::record::PackingFile;
-use jamkit_experiment::runner::{RunOptions, run};
+mod common;
+use common::run_into;
 
 fn experiment(dim: usize, particles: usize, samples: usize) -> Experiment {
     let text = format!(
         r#"(name: "small", dim: {dim}, family: "sphere", particles: {particles}, samples: {samples}, seed: 11)"#
     );
     Experiment::from_ron(&text, "inline").unwrap()
-}
-
-fn run_into(
-    e: &Experiment,
-    dir: &std::path::Path,
-    jobs: usize,
-) -> jamkit_experiment::runner::RunReport {
-    run(
-        e,
-        &RunOptions {
-            out: dir.to_path_buf(),
-            jobs: Some(jobs),
-            progress: false,
-        },
-    )
-    .unwrap()
 }
 
 /// Every packing ends inside the paper's window, with a rigid contact

@@ -5,39 +5,16 @@ use jamkit_core::{Packing, Potential, SizeDistribution, Vector};
 use jamkit_engine::{Objective, Scene, check::gradient_error};
 use jamkit_experiment::Experiment;
 use jamkit_experiment::runner::{RunOptions, run};
-use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
+use jamkit_fourier::{FourierParams, NearDisk};
 use rand::SeedableRng;
+
+mod common;
+use common::multi_mode;
 
 fn fourier(n: u32, delta: f64) -> NearDisk {
     NearDisk::fourier(&FourierParams {
         n,
         delta,
-        inertia: None,
-    })
-    .unwrap()
-}
-
-fn multi_mode() -> NearDisk {
-    let modes = vec![
-        Mode {
-            n: 2,
-            a: 0.4,
-            b: 0.3,
-        },
-        Mode {
-            n: 3,
-            a: 0.2,
-            b: -1.0,
-        },
-        Mode {
-            n: 7,
-            a: 0.05,
-            b: 2.0,
-        },
-    ];
-    NearDisk::fourier_sum(&FourierSumParams {
-        modes,
-        delta: 0.2,
         inertia: None,
     })
     .unwrap()

@@ -3,7 +3,7 @@
 //! observables, and `jamkit spectrum` on a saved packing.
 
 use jamkit_experiment::Experiment;
-use jamkit_experiment::runner::{RunOptions, RunReport, run};
+mod common;
 use std::path::Path;
 
 fn experiment(observables: &str) -> Experiment {
@@ -12,20 +12,6 @@ fn experiment(observables: &str) -> Experiment {
             observables: {observables})"#
     );
     Experiment::from_ron(&text, "inline").unwrap()
-}
-
-fn run_into(e: &Experiment, dir: &Path) -> RunReport {
-    let report = run(
-        e,
-        &RunOptions {
-            out: dir.to_path_buf(),
-            jobs: Some(2),
-            progress: false,
-        },
-    )
-    .unwrap();
-    assert!(report.failures.is_empty(), "{:?}", report.failures);
-    report
 }
 
 /// Rows of a CSV file as maps from the header's names.
@@ -57,7 +43,7 @@ fn num(row: &std::collections::HashMap<String, String>, key: &str) -> f64 {
 fn spectrum_and_gaps_are_written_and_normalised() {
     let dir = tempfile::tempdir().unwrap();
     let e = experiment("[Contacts, Spectrum(eigenvalues: true), Gaps()]");
-    let report = run_into(&e, dir.path());
+    let report = common::run_ok(&e, dir.path(), 2);
     let results = csv(&dir.path().join("results.csv"));
     assert_eq!(results.len(), 2);
     let mut zero = 0.0;
@@ -101,8 +87,8 @@ fn spectrum_and_gaps_are_written_and_normalised() {
 #[test]
 fn new_observables_are_measured_on_saved_packings() {
     let dir = tempfile::tempdir().unwrap();
-    let first = run_into(&experiment("[Contacts, Gaps()]"), dir.path());
-    let second = run_into(&experiment("[Contacts, Spectrum()]"), dir.path());
+    let first = common::run_ok(&experiment("[Contacts, Gaps()]"), dir.path(), 2);
+    let second = common::run_ok(&experiment("[Contacts, Spectrum()]"), dir.path(), 2);
     assert_eq!(second.reused, 2);
     for (a, b) in first.packings.iter().zip(&second.packings) {
         assert_eq!(a.measures.fire_steps, b.measures.fire_steps);
@@ -113,7 +99,7 @@ fn new_observables_are_measured_on_saved_packings() {
     }
     assert!(dir.path().join("dos.csv").exists());
     // Asking for less than the files hold changes nothing.
-    let third = run_into(&experiment("[Contacts]"), dir.path());
+    let third = common::run_ok(&experiment("[Contacts]"), dir.path(), 2);
     assert_eq!(third.packings, second.packings);
 }
 
@@ -123,9 +109,10 @@ fn new_observables_are_measured_on_saved_packings() {
 #[test]
 fn spectrum_command_reproduces_the_run() {
     let dir = tempfile::tempdir().unwrap();
-    let report = run_into(
+    let report = common::run_ok(
         &experiment("[Contacts, Spectrum(eigenvalues: true)]"),
         dir.path(),
+        2,
     );
     let id = &report.packings[0].id;
     let packing = dir.path().join(format!("packings/{id}.json"));

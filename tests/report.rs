@@ -3,7 +3,7 @@
 //! present, and clear errors for directories without near-disk packings.
 
 use jamkit_experiment::Experiment;
-use jamkit_experiment::runner::{RunOptions, run};
+mod common;
 use std::path::Path;
 
 fn small_run(dir: &Path) {
@@ -11,16 +11,7 @@ fn small_run(dir: &Path) {
         params: {"n": 2, "delta": [0.01, 0.03, 0.1, 0.3]}, particles: [16, 32], samples: 2, seed: 5,
         observables: [Contacts, Spectrum(), Gaps(h_min: 1e-8, points_per_decade: 4)])"#;
     let e = Experiment::from_ron(text, "inline").unwrap();
-    let report = run(
-        &e,
-        &RunOptions {
-            out: dir.to_path_buf(),
-            jobs: Some(2),
-            progress: false,
-        },
-    )
-    .unwrap();
-    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    common::run_ok(&e, dir, 2);
 }
 
 #[test]

@@ -67,6 +67,24 @@ pub struct FitRow {
 }
 
 impl FitRow {
+    /// A row not yet fitted.
+    fn new(quantity: &str, n: u32, particles: usize, expected: f64, tolerance: f64) -> Self {
+        Self {
+            quantity: quantity.into(),
+            n,
+            particles,
+            fit: PowerLaw {
+                exponent: f64::NAN,
+                error: f64::NAN,
+                prefactor: f64::NAN,
+                range: (f64::NAN, f64::NAN),
+                points: 0,
+            },
+            expected,
+            tolerance,
+        }
+    }
+
     /// Whether the exponent is within the tolerance of the prediction.
     pub fn agrees(&self) -> bool {
         (self.fit.exponent - self.expected).abs() <= self.tolerance
@@ -343,22 +361,9 @@ impl Builder {
                 })
                 .map(|(d, v, _)| (*d, v.clone()))
                 .collect();
-            if let Some(f) = self.fit(&fit_points, 3) {
-                guides.push(Guide::power_law(
-                    format!("fit n = {n}: Δ^{:.2}", f.exponent),
-                    f.prefactor,
-                    f.exponent,
-                    f.range.0,
-                    f.range.1,
-                ));
-                self.fits.push(FitRow {
-                    quantity: "δz_J".into(),
-                    n,
-                    particles: big,
-                    fit: f,
-                    expected: 0.5,
-                    tolerance: 0.1,
-                });
+            let row = FitRow::new("δz_J", n, big, 0.5, 0.1);
+            if let Some(g) = self.fit_and_record(&fit_points, row) {
+                guides.push(g);
             }
         }
         if series
@@ -391,13 +396,23 @@ impl Builder {
         Ok(())
     }
 
-    /// Least-squares power law with bootstrap; `None` below `min` points.
-    fn fit(&self, points: &[(f64, Vec<f64>)], min: usize) -> Option<PowerLaw> {
-        let usable = points.iter().filter(|(_, v)| !v.is_empty()).count();
-        if usable < min {
+    /// Fit a power law with bootstrap errors to `points` (at least three
+    /// with values), record it as `row`, and return its guide line.
+    fn fit_and_record(&mut self, points: &[(f64, Vec<f64>)], mut row: FitRow) -> Option<Guide> {
+        if points.iter().filter(|(_, v)| !v.is_empty()).count() < 3 {
             return None;
         }
-        power_law(points, self.options.resamples, self.options.seed)
+        let f = power_law(points, self.options.resamples, self.options.seed)?;
+        let guide = Guide::power_law(
+            format!("fit {}, n = {}: Δ^{:.2}", row.quantity, row.n, f.exponent),
+            f.prefactor,
+            f.exponent,
+            f.range.0,
+            f.range.1,
+        );
+        row.fit = f;
+        self.fits.push(row);
+        Some(guide)
     }
 
     /// Fig. 9: n = 2 at several N, and the collapse.
@@ -578,26 +593,20 @@ impl Builder {
             let big = with[0].0.particles;
             let (small, large) = (&with[0], &with[with.len() - 1]);
             let lo = fit_gap_slope(small.0, 10.0 * small.0.delta.powf(mu), 0.1, &self.options);
-            if let Some(f) = lo {
+            if let Some(fit) = lo {
+                let name = format!("Z(h) at Δ = {:e}", small.0.delta);
                 self.fits.push(FitRow {
-                    quantity: format!("Z(h) at Δ = {:e}", small.0.delta),
-                    n,
-                    particles: big,
-                    fit: f,
-                    expected: 1.0 - gamma,
-                    tolerance: 0.15,
+                    fit,
+                    ..FitRow::new(&name, n, big, 1.0 - gamma, 0.15)
                 });
             }
             if with.len() > 1 {
                 let hi = fit_gap_slope(large.0, 0.0, large.0.delta.powf(mu) / 10.0, &self.options);
-                if let Some(f) = hi {
+                if let Some(fit) = hi {
+                    let name = format!("Z(h) at Δ = {:e}", large.0.delta);
                     self.fits.push(FitRow {
-                        quantity: format!("Z(h) at Δ = {:e}", large.0.delta),
-                        n,
-                        particles: big,
-                        fit: f,
-                        expected: 1.0,
-                        tolerance: 0.15,
+                        fit,
+                        ..FitRow::new(&name, n, big, 1.0, 0.15)
                     });
                 }
             }
@@ -711,22 +720,9 @@ impl Builder {
                         .collect(),
                     line: false,
                 });
-                if let Some(f) = self.fit(&values, 3) {
-                    guides.push(Guide::power_law(
-                        format!("fit {name}, n = {n}: Δ^{:.2}", f.exponent),
-                        f.prefactor,
-                        f.exponent,
-                        f.range.0,
-                        f.range.1,
-                    ));
-                    self.fits.push(FitRow {
-                        quantity: name.into(),
-                        n,
-                        particles: big,
-                        fit: f,
-                        expected,
-                        tolerance: 0.15,
-                    });
+                let row = FitRow::new(name, n, big, expected, 0.15);
+                if let Some(g) = self.fit_and_record(&values, row) {
+                    guides.push(g);
                 }
             }
         }

@@ -1,0 +1,56 @@
+//! Fixtures shared by the end-to-end tests (each test file that needs them
+//! declares `mod common;`, so not every item is used by every file).
+#![allow(dead_code)]
+
+use jamkit_experiment::Experiment;
+use jamkit_experiment::runner::{RunOptions, RunReport, run};
+use jamkit_fourier::{FourierSumParams, Mode, NearDisk};
+use std::path::Path;
+
+/// A three-mode `fourier_sum` near-disk (n = 2, 3, 7 with phases), Δ = 0.2:
+/// the hard case for derivative checks.
+pub fn multi_mode() -> NearDisk {
+    let modes = vec![
+        Mode {
+            n: 2,
+            a: 0.4,
+            b: 0.3,
+        },
+        Mode {
+            n: 3,
+            a: 0.2,
+            b: -1.0,
+        },
+        Mode {
+            n: 7,
+            a: 0.05,
+            b: 2.0,
+        },
+    ];
+    NearDisk::fourier_sum(&FourierSumParams {
+        modes,
+        delta: 0.2,
+        inertia: None,
+    })
+    .unwrap()
+}
+
+/// Run `e` into `dir` without a progress bar.
+pub fn run_into(e: &Experiment, dir: &Path, jobs: usize) -> RunReport {
+    run(
+        e,
+        &RunOptions {
+            out: dir.to_path_buf(),
+            jobs: Some(jobs),
+            progress: false,
+        },
+    )
+    .unwrap()
+}
+
+/// [`run_into`], and every sample must succeed.
+pub fn run_ok(e: &Experiment, dir: &Path, jobs: usize) -> RunReport {
+    let report = run_into(e, dir, jobs);
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    report
+}
