@@ -95,9 +95,7 @@ impl<const D: usize> Shape<D> for Sphere {
         mut visit: F,
     ) -> jamkit_core::Result<()> {
         let mut first = None;
-        self.contacts(size_i, &(), size_j, &(), r_ij, max_gap, |c| {
-            first = Some(c)
-        });
+        self.contacts(size_i, &(), size_j, &(), r_ij, max_gap, |c| first = Some(c));
         if let Some(c) = first {
             let r = r_ij.norm();
             // NOTE: at coincident centres the curvature 1/|r| is infinite;
