@@ -111,9 +111,15 @@ fn assemble<const D: usize>(
     }
     for p in 0..t_i.len() {
         for q in 0..t_i.len() {
+            h.qi_qj[p][q] = t_i[p].dot(&h.r_qj[q]);
+        }
+        // NOTE: the diagonal blocks are filled from one triangle so that
+        // they are symmetric bit for bit, not only to round-off.
+        for q in p..t_i.len() {
             h.qi_qi[p][q] = t_i[p].dot(&h.r_qi[q]) + second_i[p][q];
             h.qj_qj[p][q] = t_j[p].dot(&h.r_qj[q]) + second_j[p][q];
-            h.qi_qj[p][q] = t_i[p].dot(&h.r_qj[q]);
+            h.qi_qi[q][p] = h.qi_qi[p][q];
+            h.qj_qj[q][p] = h.qj_qj[p][q];
         }
     }
     h
