@@ -293,7 +293,14 @@ impl<const D: usize> Nmer<D> {
             if s.norm() > m.norm() { s } else { m }
         });
         let extent = far.norm();
-        let u = far / extent;
+        // The axis's sign is a convention: point it along the body axis (a
+        // dimer keeps its offsets), else along the first non-zero component.
+        let sign = [axis, 0, 1]
+            .iter()
+            .map(|&c| far[c])
+            .find(|x| x.abs() > 1e-12 * extent)
+            .map_or(1.0, f64::signum);
+        let u = far * (sign / extent);
         let linear = offsets
             .iter()
             .all(|s| (s - u * s.dot(&u)).norm() <= LINEAR_TOL * extent);
@@ -379,5 +386,146 @@ impl<const D: usize> Nmer<D> {
         } else {
             self.inertia * size * size
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use jamkit_core::{Contact, Shape};
+    use std::f64::consts::PI;
+
+    fn dimer<const D: usize>(alpha: f64) -> Nmer<D> {
+        Nmer::<D>::new(&NmerParams {
+            alpha: Some(alpha),
+            spheres: None,
+            inertia: None,
+        })
+        .unwrap()
+    }
+
+    /// A dimer's geometry from α: centres ±(α − 1) on the axis, reach α,
+    /// area 2π − lens (2D) and volume 8π/3 − lens (3D), written out with
+    /// the textbook circle-segment and spherical-cap formulas.
+    #[test]
+    fn dimer_geometry_follows_alpha() {
+        for alpha in [1.1, 1.5, 2.0, 2.5] {
+            let d = 2.0 * (alpha - 1.0);
+            let (s2, s3) = (dimer::<2>(alpha), dimer::<3>(alpha));
+            assert_relative_eq!(s2.offsets()[1][0], alpha - 1.0, epsilon = 1e-15);
+            assert_relative_eq!(s3.offsets()[1][2], alpha - 1.0, epsilon = 1e-15);
+            assert_relative_eq!(
+                Shape::<2>::bounding_radius(&s2, 0.5),
+                0.5 * alpha,
+                epsilon = 1e-15
+            );
+            // Two unit disks at distance d overlap in 2 segments of half-angle acos(d/2).
+            let lens2 = if d < 2.0 {
+                2.0 * (d / 2.0f64).acos() - 0.5 * d * (4.0 - d * d).sqrt()
+            } else {
+                0.0
+            };
+            assert_relative_eq!(s2.unit_volume(), 2.0 * PI - lens2, max_relative = 1e-13);
+            // Two unit balls: 2 caps of height 1 − d/2.
+            let h = (1.0 - d / 2.0f64).max(0.0);
+            let lens3 = 2.0 * PI * h * h * (3.0 - h) / 3.0;
+            assert_relative_eq!(
+                s3.unit_volume(),
+                8.0 * PI / 3.0 - lens3,
+                max_relative = 1e-13
+            );
+            assert!(s3.is_linear() && Shape::<3>::rot_dof(&s3) == 2);
+            assert_eq!(Shape::<3>::rattler_threshold(&s3), 6);
+            assert_eq!(Shape::<2>::rattler_threshold(&s2), 4);
+        }
+    }
+
+    /// Swapping the bodies (and reversing r_ij) gives the same contacts:
+    /// the same gaps, `∂h/∂r_j` reversed, the rotational derivatives swapped.
+    #[test]
+    fn contacts_are_symmetric_in_the_two_bodies() {
+        let s = dimer::<3>(1.7);
+        let oi = Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap();
+        let oj = Quaternion::normalized(-0.7, 0.1, 0.4, 0.2).unwrap();
+        let r = Vector::<3>::new(0.5, 0.6, -0.3);
+        let collect = |a: &Quaternion, b: &Quaternion, r: Vector<3>, sa: f64, sb: f64| {
+            let mut v: Vec<Contact<3>> = Vec::new();
+            s.contacts(sa, a, sb, b, &r, f64::INFINITY, |c| v.push(c));
+            v
+        };
+        let ij = collect(&oi, &oj, r, 0.6, 0.5);
+        let ji = collect(&oj, &oi, -r, 0.5, 0.6);
+        assert_eq!(ij.len(), 4);
+        // Sphere pair (a, b) of ij is pair (b, a) of ji: index 2a + b ↔ 2b + a.
+        for a in 0..2 {
+            for b in 0..2 {
+                let (x, y) = (&ij[2 * a + b], &ji[2 * b + a]);
+                assert_relative_eq!(x.gap, y.gap, epsilon = 1e-14);
+                assert_relative_eq!(x.grad_r, -y.grad_r, epsilon = 1e-14);
+                for k in 0..2 {
+                    assert_relative_eq!(x.grad_rot_i[k], y.grad_rot_j[k], epsilon = 1e-14);
+                }
+            }
+        }
+    }
+
+    /// A 3D chain given along a skew line is recognised as linear (two
+    /// rotational coordinates) and put on the body z axis; a bent one has
+    /// three. The centre of mass is the origin.
+    #[test]
+    fn linear_bodies_are_detected_and_aligned() {
+        let chain = |bend: f64| NmerParams {
+            alpha: None,
+            spheres: Some(vec![
+                SphereSpec {
+                    offset: vec![1.0, 2.0, 3.0],
+                    radius: 0.8,
+                },
+                SphereSpec {
+                    offset: vec![1.5, 2.5, 3.5 + bend],
+                    radius: 1.0,
+                },
+                SphereSpec {
+                    offset: vec![2.0, 3.0, 4.0],
+                    radius: 0.8,
+                },
+            ]),
+            inertia: None,
+        };
+        let s = Nmer::<3>::new(&chain(0.0)).unwrap();
+        assert!(s.is_linear());
+        assert_eq!(Shape::<3>::rot_dof(&s), 2);
+        for o in s.offsets() {
+            assert_eq!((o[0], o[1]), (0.0, 0.0));
+        }
+        assert_relative_eq!(s.offsets()[2][2], 0.75f64.sqrt(), epsilon = 1e-14);
+        let bent = Nmer::<3>::new(&chain(0.3)).unwrap();
+        assert_eq!(Shape::<3>::rot_dof(&bent), 3);
+        let com: Vector<3> = bent
+            .offsets()
+            .iter()
+            .zip(bent.radii())
+            .map(|(o, r)| o * r.powi(3))
+            .sum();
+        assert_relative_eq!(com.norm(), 0.0, epsilon = 1e-14);
+    }
+
+    /// Geometric inertia: a dimer in 2D has I = (R⁰)² ((α − 1)² + ½).
+    #[test]
+    fn inertia_from_geometry_and_override() {
+        let s = dimer::<2>(1.5);
+        assert_relative_eq!(
+            s.moment_of_inertia(0.5),
+            0.25 * (0.25 + 0.5),
+            epsilon = 1e-15
+        );
+        let fixed = Nmer::<2>::new(&NmerParams {
+            alpha: Some(1.5),
+            spheres: None,
+            inertia: Some(0.3),
+        })
+        .unwrap();
+        assert_eq!(fixed.moment_of_inertia(0.7), 0.3);
     }
 }
