@@ -179,14 +179,17 @@ pub struct Nmer<const D: usize> {
 }
 
 impl<const D: usize> Nmer<D> {
-    /// Build and validate a body. Fails with the field named on: both or
+    /// Build and validate a body. Fails with the field named on: a `D`
+    /// other than 2 or 3; both or
     /// neither of `alpha`/`spheres`; `α` not finite or `< 1` (`α = 1` is
     /// one sphere, see [`NmerParams::is_single_sphere`]); fewer than 2 or
     /// more than [`MAX_SPHERES`] spheres; an offset of the wrong length or
     /// not finite; a radius not positive and finite; a sphere inside
     /// another; an inertia not positive and finite.
     pub fn new(p: &NmerParams) -> Result<Self, ParamError> {
-        assert!(D == 2 || D == 3, "nmer bodies exist in 2D and 3D");
+        if !(D == 2 || D == 3) {
+            return Err(err("dim", D, "nmer bodies exist in dim 2 or 3"));
+        }
         let axis = if D == 3 { 2 } else { 0 };
         let spheres: Vec<(Vector<D>, f64)> = match (&p.alpha, &p.spheres) {
             (Some(_), Some(_)) => {
