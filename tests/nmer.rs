@@ -583,3 +583,26 @@ fn alpha_one_is_the_sphere_family() {
     assert_eq!(dimers[0].phi.to_bits(), spheres[0].phi.to_bits());
     assert!(dimers[0].spheres.is_empty() && dimers[0].orientations.is_empty());
 }
+
+/// Bodies made of spheres start without overlaps (V = 0 exactly at
+/// φ = 0.1 in 2D and 3D), and a start too dense for random sequential
+/// placement is refused with the field named, not a panic or a hang.
+#[test]
+fn random_start_is_overlap_free() {
+    fn start<const D: usize>(shape: Nmer<D>, phi: f64) -> Result<f64, String>
+    where
+        Nmer<D>: Shape<D>,
+    {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let sizes = SizeDistribution::default().sample(200, &mut rng);
+        let p = Packing::<D, Nmer<D>>::random(shape, sizes, phi, &mut rng)
+            .map_err(|e| e.to_string())?;
+        let mut s = Scene::new(p, Potential::Harmonic, 0.2);
+        let mut g = vec![0.0; s.dof()];
+        Ok(s.energy_gradient(&mut g))
+    }
+    assert_eq!(start(dimer::<2>(2.0), 0.1), Ok(0.0));
+    assert_eq!(start(dimer::<3>(2.0), 0.1), Ok(0.0));
+    let err = start(dimer::<2>(1.5), 0.85).unwrap_err();
+    assert!(err.contains("protocol.phi_start"), "{err}");
+}
