@@ -7,6 +7,7 @@ use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::Scene;
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_lobed::{Lobed, LobedParams};
+use jamkit_nmer::{Nmer, NmerParams, SphereSpec};
 use jamkit_observe::hessian::{Hessian, HessianOptions, finite_difference};
 use jamkit_sphere::Sphere;
 use rand::SeedableRng;
@@ -16,7 +17,10 @@ mod common;
 fn dense<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64) -> Scene<D, S> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let sizes = SizeDistribution::default().sample(n, &mut rng);
-    let packing = Packing::<D, S>::random(shape, sizes, 0.9, &mut rng).unwrap();
+    // Bodies made of spheres start overlap-free (`overlap_free_start`), so
+    // every family starts dilute and is compressed affinely.
+    let mut packing = Packing::<D, S>::random(shape, sizes, 0.1, &mut rng).unwrap();
+    packing.set_phi(0.9);
     Scene::new(packing, Potential::Harmonic, 0.2)
 }
 
@@ -86,4 +90,40 @@ fn lobed_hessian_matches_finite_differences() {
         .unwrap();
         check::<2, _>(shape, 24, 1..=2);
     }
+}
+
+/// Rigid bodies made of spheres: dimers in 2D and 3D (two rotational
+/// coordinates in 3D, about axes perpendicular to the body) and a bent
+/// trimer in 3D (three), where the rotational blocks see the
+/// non-commuting quaternion increments. Several sphere pairs of two bodies
+/// overlap at once in these dense configurations.
+#[test]
+fn nmer_hessian_matches_finite_differences_2d_and_3d() {
+    let dimer = |alpha: f64| NmerParams {
+        alpha: Some(alpha),
+        spheres: None,
+        inertia: None,
+    };
+    for alpha in [1.5, 2.0] {
+        check::<2, _>(Nmer::<2>::new(&dimer(alpha)).unwrap(), 16, 1..=2);
+        check::<3, _>(Nmer::<3>::new(&dimer(alpha)).unwrap(), 16, 1..=2);
+    }
+    let trimer = NmerParams {
+        alpha: None,
+        spheres: Some(
+            [
+                ([0.0, 0.0, 0.0], 1.0),
+                ([1.2, 0.3, 0.0], 0.7),
+                ([-0.4, 1.1, 0.2], 0.8),
+            ]
+            .iter()
+            .map(|(o, r)| SphereSpec {
+                offset: o.to_vec(),
+                radius: *r,
+            })
+            .collect(),
+        ),
+        inertia: None,
+    };
+    check::<3, _>(Nmer::<3>::new(&trimer).unwrap(), 16, 1..=2);
 }

@@ -14,6 +14,10 @@ use crate::periodic::PeriodicBox;
 use crate::shape::Shape;
 use rand::{Rng, RngExt};
 
+/// Most random draws for one body of an overlap-free start
+/// ([`Shape::overlap_free_start`]).
+pub const MAX_PLACEMENT_TRIES: usize = 100_000;
+
 /// Bodies of one family in a periodic box.
 #[derive(Clone, Debug)]
 pub struct Packing<const D: usize, S: Shape<D>> {
@@ -47,6 +51,9 @@ impl<const D: usize, S: Shape<D>> Packing<D, S> {
         let total: f64 = sizes.iter().map(|&s| shape.volume(s)).sum();
         let edge = (total / phi).powf(1.0 / D as f64);
         let bbox = PeriodicBox::cubic(edge);
+        if shape.overlap_free_start() {
+            return Self::random_without_overlaps(shape, sizes, bbox, phi, rng);
+        }
         let positions = (0..sizes.len())
             .map(|_| Vector::<D>::from_fn(|_, _| edge * rng.random::<f64>()))
             .map(|r| bbox.wrap(r))
@@ -54,6 +61,61 @@ impl<const D: usize, S: Shape<D>> Packing<D, S> {
         let orientations = (0..sizes.len())
             .map(|_| shape.random_orientation(rng))
             .collect();
+        Ok(Self {
+            shape,
+            bbox,
+            positions,
+            orientations,
+            sizes,
+        })
+    }
+
+    /// Random sequential placement: each body in turn gets a uniform
+    /// centre and orientation, redrawn until none of its contacts with the
+    /// bodies already placed has a negative gap (at most
+    /// [`MAX_PLACEMENT_TRIES`] draws per body, then an error). The stream
+    /// draws centre then orientation per try, so the result is fixed by
+    /// the seed. `O(N²)` contact tests, negligible at the dilute start.
+    fn random_without_overlaps<R: Rng + ?Sized>(
+        shape: S,
+        sizes: Vec<f64>,
+        bbox: PeriodicBox<D>,
+        phi: f64,
+        rng: &mut R,
+    ) -> Result<Self> {
+        let edge = bbox.edges()[0];
+        let mut positions: Vec<Vector<D>> = Vec::with_capacity(sizes.len());
+        let mut orientations = Vec::with_capacity(sizes.len());
+        for (i, &size) in sizes.iter().enumerate() {
+            let mut placed = false;
+            for _ in 0..MAX_PLACEMENT_TRIES {
+                let r = bbox.wrap(Vector::<D>::from_fn(|_, _| edge * rng.random::<f64>()));
+                let o = shape.random_orientation(rng);
+                let overlaps = positions.iter().zip(&orientations).zip(&sizes).any(
+                    |((rj, oj), &sj): ((&Vector<D>, &S::Orientation), &f64)| {
+                        let r_ij = bbox.minimum_image(r - rj);
+                        let mut hit = false;
+                        shape.contacts(sj, oj, size, &o, &r_ij, 0.0, |c| hit |= c.gap < 0.0);
+                        hit
+                    },
+                );
+                if !overlaps {
+                    positions.push(r);
+                    orientations.push(o);
+                    placed = true;
+                    break;
+                }
+            }
+            if !placed {
+                return Err(Error::invalid(
+                    "protocol.phi_start",
+                    phi,
+                    format!(
+                        "no overlap-free place for body {i} after {MAX_PLACEMENT_TRIES} random tries; start from a lower packing fraction"
+                    ),
+                ));
+            }
+        }
         Ok(Self {
             shape,
             bbox,

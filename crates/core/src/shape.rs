@@ -182,6 +182,31 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         )))
     }
 
+    /// The body as a union of balls, when it is one (bodies made of
+    /// spheres): each ball's centre relative to the body's centre, in the
+    /// world frame, and its radius, for a body of size `size` and
+    /// orientation `orientation`. Packing files write it (key `spheres`) so
+    /// that any tool can recompute contacts without knowing the family's
+    /// orientation convention. Default `None`.
+    fn sphere_decomposition(
+        &self,
+        _size: f64,
+        _orientation: &Self::Orientation,
+    ) -> Option<Vec<(Vector<D>, f64)>> {
+        None
+    }
+
+    /// Whether the random start must be free of overlaps. Non-convex
+    /// bodies (bodies made of spheres) can interpenetrate into a *locked*
+    /// pair at a random start (two dimers crossed at their centres feel no
+    /// net force: a local minimum of the energy with a finite overlap), so
+    /// they are placed one by one, each redrawn until it overlaps none
+    /// placed before ([`Packing::random`](crate::Packing::random)). Default
+    /// false: convex bodies relax any start, and keep their random stream.
+    fn overlap_free_start(&self) -> bool {
+        false
+    }
+
     /// Fewest contacts a non-rattler keeps (rattlers are removed iteratively
     /// below this). Default `D + 1`, the paper's choice for disks and
     /// near-disks.

@@ -15,7 +15,7 @@ use std::f64::consts::PI;
 pub type Point = [f64; 2];
 
 /// The families [`Outline::from_family`] knows how to draw.
-pub const DRAWABLE_FAMILIES: &[&str] = &["sphere", "fourier", "fourier_sum"];
+pub const DRAWABLE_FAMILIES: &[&str] = &["sphere", "fourier", "fourier_sum", "nmer"];
 
 /// The outline law of a family, shared by all bodies of a packing.
 #[derive(Clone, Debug)]
@@ -24,6 +24,10 @@ pub enum Outline {
     Disk,
     /// A near-disk: `R(φ) = R⁰ [1 + Δ F(θ − φ)]`.
     NearDisk(NearDisk),
+    /// A body made of spheres (`nmer`), drawn from the packing file's
+    /// `spheres` rows as the union of its disks ([`union_outlines`]); a
+    /// body without rows (α = 1 runs as disks) is the disk of radius `R⁰`.
+    Spheres,
 }
 
 impl Outline {
@@ -37,6 +41,7 @@ impl Outline {
         };
         match family {
             "sphere" => Ok(Outline::Disk),
+            "nmer" => Ok(Outline::Spheres),
             "fourier" => {
                 let p: FourierParams =
                     serde_json::from_value(params.clone()).map_err(|e| bad(e.to_string()))?;
@@ -78,7 +83,7 @@ impl Outline {
     /// `R/R⁰` as a function of the body-frame angle `ψ`: `1 + Δ F(ψ)`.
     pub fn relative_radius(&self, psi: f64) -> f64 {
         match self {
-            Outline::Disk => 1.0,
+            Outline::Disk | Outline::Spheres => 1.0,
             Outline::NearDisk(s) => s.relative_radius(psi),
         }
     }
@@ -86,7 +91,7 @@ impl Outline {
     /// `Δ` (0 for disks).
     pub fn delta(&self) -> f64 {
         match self {
-            Outline::Disk => 0.0,
+            Outline::Disk | Outline::Spheres => 0.0,
             Outline::NearDisk(s) => s.delta(),
         }
     }
@@ -121,6 +126,47 @@ impl Outline {
             })
             .collect()
     }
+}
+
+/// The outline of a union of disks `(centre, radius)` around the body
+/// centre `center`, `m` points per disk. When `center` lies in every disk
+/// the union is star-shaped about it (a union of convex sets sharing a
+/// point), and its outline is one polygon: the points of each circle that
+/// lie in no other disk, sorted by angle about `center`. Otherwise (a
+/// dimer with α > 2, a bent chain) each disk is its own polygon, drawn
+/// over one another in the body's colour.
+pub fn union_outlines(center: Point, disks: &[(Point, f64)], m: usize) -> Vec<Vec<Point>> {
+    let dist = |p: Point, q: Point| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+    let circle = |(c, r): (Point, f64)| -> Vec<Point> {
+        (0..m)
+            .map(|k| {
+                let t = 2.0 * PI * k as f64 / m as f64;
+                [c[0] + r * t.cos(), c[1] + r * t.sin()]
+            })
+            .collect()
+    };
+    // NOTE: a relative slack of 1e-12 keeps the tangent point of an α = 2
+    // dimer (the body centre, on both circles) inside both disks.
+    let star = disks
+        .iter()
+        .all(|&(c, r)| dist(center, c) <= r * (1.0 + 1e-12));
+    if !star {
+        return disks.iter().map(|&d| circle(d)).collect();
+    }
+    let mut points: Vec<(f64, Point)> = Vec::new();
+    for (a, &d) in disks.iter().enumerate() {
+        for p in circle(d) {
+            let hidden = disks
+                .iter()
+                .enumerate()
+                .any(|(b, &(c, r))| b != a && dist(p, c) < r);
+            if !hidden {
+                points.push(((p[1] - center[1]).atan2(p[0] - center[0]), p));
+            }
+        }
+    }
+    points.sort_by(|x, y| x.0.total_cmp(&y.0));
+    vec![points.into_iter().map(|(_, p)| p).collect()]
 }
 
 fn param_error(family: &str, e: jamkit_fourier::ParamError) -> DrawError {

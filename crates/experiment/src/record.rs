@@ -106,6 +106,13 @@ pub struct PackingFile {
     pub orientations: Vec<Vec<f64>>,
     /// Rattler flags (empty when contacts were not measured).
     pub rattler: Vec<bool>,
+    /// For bodies made of spheres (`Shape::sphere_decomposition`), every
+    /// sphere as `[x, y(, z), radius, body]`: world-frame centre (the
+    /// body's wrapped centre plus the sphere's offset, so it may lie just
+    /// outside the box), radius and body index. Absent for other families
+    /// and when `output.packings` is false.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spheres: Vec<Vec<f64>>,
 }
 
 /// Write `contents` to `path` atomically (temporary file, then rename).

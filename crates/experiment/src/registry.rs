@@ -19,6 +19,7 @@ pub const FAMILIES: &[FamilyInfo] = &[
     jamkit_fourier::FOURIER_INFO,
     jamkit_fourier::FOURIER_SUM_INFO,
     jamkit_lobed::INFO,
+    jamkit_nmer::INFO,
 ];
 
 /// Dimensions the engine is compiled for (families with `Dims::Any`).
@@ -130,6 +131,24 @@ pub fn dispatch<V: SceneVisitor>(
             let shape = jamkit_lobed::Lobed::new(&p)
                 .map_err(|e| ExperimentError::invalid(e.field, e.value, e.allowed))?;
             Ok(visitor.visit::<2, _>(shape))
+        }
+        "nmer" => {
+            let p: jamkit_nmer::NmerParams = parse_params(family, params)?;
+            let invalid =
+                |e: jamkit_nmer::ParamError| ExperimentError::invalid(e.field, e.value, e.allowed);
+            // α = 1: two coincident spheres are one sphere (same random
+            // stream, hence the same packing as `sphere` for the same seed).
+            match (dim, p.is_single_sphere()) {
+                (2, true) => Ok(visitor.visit::<2, _>(jamkit_sphere::Sphere)),
+                (3, true) => Ok(visitor.visit::<3, _>(jamkit_sphere::Sphere)),
+                (2, false) => {
+                    Ok(visitor.visit::<2, _>(jamkit_nmer::Nmer::<2>::new(&p).map_err(invalid)?))
+                }
+                (3, false) => {
+                    Ok(visitor.visit::<3, _>(jamkit_nmer::Nmer::<3>::new(&p).map_err(invalid)?))
+                }
+                _ => unreachable!("checked by supports_dim"),
+            }
         }
         other => unreachable!("family `{other}` is in FAMILIES but has no dispatch arm"),
     }

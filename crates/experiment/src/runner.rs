@@ -354,6 +354,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                 Vec::new()
             },
             rattler: observed.rattler(),
+            spheres: if write { sphere_rows(p) } else { Vec::new() },
         };
         Ok((file, observed.eigenvalue_table))
     }
@@ -531,6 +532,29 @@ pub fn eigenvalue_table(s: &Spectrum) -> String {
         out.push('\n');
     }
     out
+}
+
+/// The `spheres` rows of a packing file: `[x, y(, z), radius, body]` for
+/// every sphere of every body, empty unless the family is made of spheres.
+fn sphere_rows<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> Vec<Vec<f64>> {
+    let mut rows = Vec::new();
+    for (i, (r, (&size, o))) in p
+        .positions
+        .iter()
+        .zip(p.sizes.iter().zip(&p.orientations))
+        .enumerate()
+    {
+        let Some(balls) = p.shape.sphere_decomposition(size, o) else {
+            return Vec::new();
+        };
+        let centre = p.bbox.wrap(*r);
+        for (offset, radius) in balls {
+            let mut row: Vec<f64> = (centre + offset).iter().copied().collect();
+            row.extend([radius, i as f64]);
+            rows.push(row);
+        }
+    }
+    rows
 }
 
 /// The default output directory of an experiment: `out/<name>`.

@@ -1,0 +1,503 @@
+//! Sphere–sphere contacts between two rigid bodies, and the `Shape` impls.
+//!
+//! Every sphere `a` of body `i` and sphere `b` of body `j` is a contact with
+//! the gap `h = |v| − R⁰_i ρ_a − R⁰_j ρ_b`, `v = r_ij + d_b − d_a`
+//! (`d` the world-frame offsets, `n = v/|v|`). A small rotation `ω` of body
+//! `i` moves `d_a` to `exp(ω) d_a = d_a + ω × d_a + ½ ω × (ω × d_a) + …`,
+//! so along a rotation axis `e_p`:
+//!
+//! ```text
+//! ∂v/∂q_{i,p} = t_{i,p} = −e_p × d_a,          ∂v/∂q_{j,p} = t_{j,p} = e_p × d_b,
+//! ∂h/∂q = n · t,    ∂h/∂r_j = n,
+//! ```
+//!
+//! and, with `P = (1 − n nᵀ)/|v|` the curvature of `|v|`, the second
+//! derivatives of `h(exp(Σ_p q_p e_p) ∘ o)` at `q = 0` (symmetric in `p, q`):
+//!
+//! ```text
+//! ∂²h/∂r_j∂r_j = P,     ∂²h/∂r_j∂q_{i,p} = P t_{i,p},     ∂²h/∂r_j∂q_{j,p} = P t_{j,p},
+//! ∂²h/∂q_{i,p}∂q_{j,q} = t_{i,p}ᵀ P t_{j,q},
+//! ∂²h/∂q_{i,p}∂q_{i,q} = t_{i,p}ᵀ P t_{i,q} − ½ n·[e_p × (e_q × d_a) + e_q × (e_p × d_a)],
+//! ∂²h/∂q_{j,p}∂q_{j,q} = t_{j,p}ᵀ P t_{j,q} + ½ n·[e_p × (e_q × d_b) + e_q × (e_p × d_b)],
+//! e_p × (e_q × d) = e_q (e_p·d) − d (e_p·e_q).
+//! ```
+//!
+//! In 2D `e = ẑ`, `t_i = −ẑ × d_a`, and the curvature terms are `+n·d_a`
+//! and `−n·d_b`. The axes `e_p` are the world axes for a 3D body with three
+//! rotational coordinates and `R(o) x̂, R(o) ŷ` for a linear one (see
+//! [`crate::orientation`]).
+//!
+//! A pair is skipped when `|r_ij|` exceeds the two bounding radii plus
+//! `max_gap`; otherwise every sphere pair with `h ≤ max_gap` is visited
+//! (its exact gap costs no more than a bound on it).
+
+use crate::orientation::{Angle, Quaternion};
+use crate::{MAX_SPHERES, Nmer};
+use jamkit_core::{Contact, GapHessian, MAX_ROT, Matrix, RotVec, Shape, Vector};
+use rand::{Rng, RngExt};
+use std::f64::consts::PI;
+
+/// World-frame offsets `d_a = R⁰ R(o) s_a` of one body's spheres.
+type Offsets<const D: usize> = [Vector<D>; MAX_SPHERES];
+
+/// Visit every sphere pair `(a, b)` with `h ≤ max_gap`, giving `a`, `b`, the
+/// gap, `n` and `|v|`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn sphere_pairs<const D: usize>(
+    radii: &[f64],
+    size_i: f64,
+    d_i: &[Vector<D>],
+    size_j: f64,
+    d_j: &[Vector<D>],
+    r_ij: &Vector<D>,
+    max_gap: f64,
+    mut f: impl FnMut(usize, usize, f64, Vector<D>, f64),
+) {
+    for (a, (da, ra)) in d_i.iter().zip(radii).enumerate() {
+        let base = r_ij - da;
+        let reach_a = size_i * ra;
+        for (b, (db, rb)) in d_j.iter().zip(radii).enumerate() {
+            let v = base + db;
+            let dist = v.norm();
+            let gap = dist - reach_a - size_j * rb;
+            if gap > max_gap {
+                continue;
+            }
+            // NOTE: coincident sphere centres have no direction; a fixed
+            // unit vector keeps the run deterministic (such a pair overlaps
+            // deeply and any direction pushes it apart).
+            let n = if dist > 0.0 {
+                v * (1.0 / dist)
+            } else {
+                Vector::<D>::from_fn(|c, _| if c == 0 { 1.0 } else { 0.0 })
+            };
+            f(a, b, gap, n, dist);
+        }
+    }
+}
+
+/// `a_x b_y − a_y b_x`.
+#[inline(always)]
+fn cross2(a: &Vector<2>, b: &Vector<2>) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// `(1 − n nᵀ)/|v|`, zero at coincident centres (infinite curvature; such a
+/// pair has no defined Hessian).
+fn curvature<const D: usize>(n: &Vector<D>, dist: f64) -> Matrix<D> {
+    if dist > 0.0 {
+        (Matrix::<D>::identity() - n * n.transpose()) / dist
+    } else {
+        Matrix::<D>::zeros()
+    }
+}
+
+/// Assemble a [`GapHessian`] from the contact, the tangents `t = ∂v/∂q`
+/// and the curvature terms `n · ∂²v/∂q∂q` of both bodies.
+fn assemble<const D: usize>(
+    contact: Contact<D>,
+    curv: &Matrix<D>,
+    t_i: &[Vector<D>],
+    t_j: &[Vector<D>],
+    second_i: &[RotVec; MAX_ROT],
+    second_j: &[RotVec; MAX_ROT],
+) -> GapHessian<D> {
+    let mut h = GapHessian::translational(contact.gap, contact.grad_r, *curv);
+    h.contact = contact;
+    for p in 0..t_i.len() {
+        h.r_qi[p] = curv * t_i[p];
+        h.r_qj[p] = curv * t_j[p];
+    }
+    for p in 0..t_i.len() {
+        for q in 0..t_i.len() {
+            h.qi_qj[p][q] = t_i[p].dot(&h.r_qj[q]);
+        }
+        // NOTE: the diagonal blocks are filled from one triangle so that
+        // they are symmetric bit for bit, not only to round-off.
+        for q in p..t_i.len() {
+            h.qi_qi[p][q] = t_i[p].dot(&h.r_qi[q]) + second_i[p][q];
+            h.qj_qj[p][q] = t_j[p].dot(&h.r_qj[q]) + second_j[p][q];
+            h.qi_qi[q][p] = h.qi_qi[p][q];
+            h.qj_qj[q][p] = h.qj_qj[p][q];
+        }
+    }
+    h
+}
+
+impl Nmer<2> {
+    fn world(&self, size: f64, o: &Angle) -> Offsets<2> {
+        let mut d = [Vector::<2>::zeros(); MAX_SPHERES];
+        for (out, s) in d.iter_mut().zip(&self.offsets) {
+            *out = o.apply(s) * size;
+        }
+        d
+    }
+}
+
+impl Shape<2> for Nmer<2> {
+    type Orientation = Angle;
+
+    fn family(&self) -> &'static str {
+        crate::INFO.name
+    }
+
+    fn rot_dof(&self) -> usize {
+        1
+    }
+
+    fn volume(&self, size: f64) -> f64 {
+        self.unit_volume * size * size
+    }
+
+    fn bounding_radius(&self, size: f64) -> f64 {
+        self.unit_reach * size
+    }
+
+    fn rot_inertia(&self, size: f64) -> RotVec {
+        [self.moment_of_inertia(size); 3]
+    }
+
+    fn reference_orientation(&self) -> Angle {
+        Angle::new(0.0)
+    }
+
+    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Angle {
+        Angle::new(2.0 * PI * rng.random::<f64>() - PI)
+    }
+
+    fn rotate(&self, o: &mut Angle, dq: &[f64]) {
+        *o = o.turned(dq[0]);
+    }
+
+    fn orientation_coords(&self, o: &Angle) -> Vec<f64> {
+        vec![o.theta()]
+    }
+
+    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Angle> {
+        match coords {
+            [theta] if theta.is_finite() => Some(Angle::new(*theta)),
+            _ => None,
+        }
+    }
+
+    /// `f + 1 = 4`: `f = 3` (two translations, one angle).
+    fn rattler_threshold(&self) -> usize {
+        4
+    }
+
+    /// Bodies made of spheres interlock from an overlapping start.
+    fn overlap_free_start(&self) -> bool {
+        true
+    }
+
+    fn sphere_decomposition(&self, size: f64, o: &Angle) -> Option<Vec<(Vector<2>, f64)>> {
+        let d = self.world(size, o);
+        Some(
+            (0..self.spheres())
+                .map(|a| (d[a], self.radii[a] * size))
+                .collect(),
+        )
+    }
+
+    #[inline(always)]
+    fn contacts<F: FnMut(Contact<2>)>(
+        &self,
+        size_i: f64,
+        o_i: &Angle,
+        size_j: f64,
+        o_j: &Angle,
+        r_ij: &Vector<2>,
+        max_gap: f64,
+        mut visit: F,
+    ) {
+        if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
+            return;
+        }
+        let k = self.spheres();
+        let (d_i, d_j) = (self.world(size_i, o_i), self.world(size_j, o_j));
+        sphere_pairs(
+            &self.radii,
+            size_i,
+            &d_i[..k],
+            size_j,
+            &d_j[..k],
+            r_ij,
+            max_gap,
+            |a, b, gap, n, _| {
+                visit(Contact {
+                    gap,
+                    grad_r: n,
+                    grad_rot_i: [-cross2(&d_i[a], &n), 0.0, 0.0],
+                    grad_rot_j: [cross2(&d_j[b], &n), 0.0, 0.0],
+                })
+            },
+        );
+    }
+
+    fn gap_hessians<F: FnMut(GapHessian<2>)>(
+        &self,
+        size_i: f64,
+        o_i: &Angle,
+        size_j: f64,
+        o_j: &Angle,
+        r_ij: &Vector<2>,
+        max_gap: f64,
+        mut visit: F,
+    ) -> jamkit_core::Result<()> {
+        if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
+            return Ok(());
+        }
+        let k = self.spheres();
+        let (d_i, d_j) = (self.world(size_i, o_i), self.world(size_j, o_j));
+        let perp = |d: &Vector<2>| Vector::<2>::new(-d[1], d[0]);
+        sphere_pairs(
+            &self.radii,
+            size_i,
+            &d_i[..k],
+            size_j,
+            &d_j[..k],
+            r_ij,
+            max_gap,
+            |a, b, gap, n, dist| {
+                let contact = Contact {
+                    gap,
+                    grad_r: n,
+                    grad_rot_i: [-cross2(&d_i[a], &n), 0.0, 0.0],
+                    grad_rot_j: [cross2(&d_j[b], &n), 0.0, 0.0],
+                };
+                let mut second_i = [[0.0; MAX_ROT]; MAX_ROT];
+                let mut second_j = [[0.0; MAX_ROT]; MAX_ROT];
+                second_i[0][0] = n.dot(&d_i[a]);
+                second_j[0][0] = -n.dot(&d_j[b]);
+                visit(assemble(
+                    contact,
+                    &curvature(&n, dist),
+                    &[-perp(&d_i[a])],
+                    &[perp(&d_j[b])],
+                    &second_i,
+                    &second_j,
+                ))
+            },
+        );
+        Ok(())
+    }
+}
+
+impl Nmer<3> {
+    fn world(&self, size: f64, o: &Quaternion) -> Offsets<3> {
+        let [c0, c1, c2] = o.columns();
+        let mut d = [Vector::<3>::zeros(); MAX_SPHERES];
+        for (out, s) in d.iter_mut().zip(&self.offsets) {
+            *out = (c0 * s[0] + c1 * s[1] + c2 * s[2]) * size;
+        }
+        d
+    }
+
+    /// The rotation axes `e_p` of the body's rotational coordinates: the
+    /// world axes, or `R(o) x̂, R(o) ŷ` for a linear body.
+    fn axes(&self, o: &Quaternion) -> [Vector<3>; 3] {
+        if self.linear {
+            o.columns()
+        } else {
+            [Vector::<3>::x(), Vector::<3>::y(), Vector::<3>::z()]
+        }
+    }
+
+    /// `∂h/∂q` from `∂h/∂ω`: the world components of `ω`, or its
+    /// projections on `e₁, e₂` for a linear body.
+    #[inline(always)]
+    fn project(&self, axes: &[Vector<3>; 3], torque: Vector<3>) -> RotVec {
+        if self.linear {
+            [axes[0].dot(&torque), axes[1].dot(&torque), 0.0]
+        } else {
+            [torque[0], torque[1], torque[2]]
+        }
+    }
+}
+
+impl Shape<3> for Nmer<3> {
+    type Orientation = Quaternion;
+
+    fn family(&self) -> &'static str {
+        crate::INFO.name
+    }
+
+    /// 2 for a linear body, 3 otherwise.
+    fn rot_dof(&self) -> usize {
+        if self.linear { 2 } else { 3 }
+    }
+
+    fn volume(&self, size: f64) -> f64 {
+        self.unit_volume * size.powi(3)
+    }
+
+    fn bounding_radius(&self, size: f64) -> f64 {
+        self.unit_reach * size
+    }
+
+    fn rot_inertia(&self, size: f64) -> RotVec {
+        [self.moment_of_inertia(size); 3]
+    }
+
+    fn reference_orientation(&self) -> Quaternion {
+        Quaternion::IDENTITY
+    }
+
+    /// Uniform on the rotation group (Shoemake 1992): from three uniform
+    /// numbers `u₁, u₂, u₃`, `q = (√(1−u₁) sin 2πu₂, √(1−u₁) cos 2πu₂,
+    /// √u₁ sin 2πu₃, √u₁ cos 2πu₃)`.
+    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Quaternion {
+        let (u1, u2, u3) = (
+            rng.random::<f64>(),
+            rng.random::<f64>(),
+            rng.random::<f64>(),
+        );
+        let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+        let (s2, c2) = (2.0 * PI * u2).sin_cos();
+        let (s3, c3) = (2.0 * PI * u3).sin_cos();
+        Quaternion::normalized(a * s2, a * c2, b * s3, b * c3).unwrap_or(Quaternion::IDENTITY)
+    }
+
+    /// `o → exp(ω) ∘ o` with `ω = (dq₀, dq₁, dq₂)` in the world frame, or
+    /// `o → o ∘ exp((dq₀, dq₁, 0))` (body frame) for a linear body; then
+    /// renormalised.
+    fn rotate(&self, o: &mut Quaternion, dq: &[f64]) {
+        *o = if self.linear {
+            o.mul(&Quaternion::exp(&Vector::<3>::new(dq[0], dq[1], 0.0)))
+        } else {
+            Quaternion::exp(&Vector::<3>::new(dq[0], dq[1], dq[2])).mul(o)
+        }
+        .renormalized();
+    }
+
+    /// `[w, x, y, z]`.
+    fn orientation_coords(&self, o: &Quaternion) -> Vec<f64> {
+        o.coords().to_vec()
+    }
+
+    /// Four numbers of norm 1 (to 10⁻⁶; renormalised).
+    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Quaternion> {
+        match coords {
+            [w, x, y, z] if ((w * w + x * x + y * y + z * z).sqrt() - 1.0).abs() < 1e-6 => {
+                Quaternion::normalized(*w, *x, *y, *z)
+            }
+            _ => None,
+        }
+    }
+
+    /// `f + 1` with `f = 3 + rot_dof`: 6 for a linear body, 7 otherwise.
+    fn rattler_threshold(&self) -> usize {
+        3 + self.rot_dof() + 1
+    }
+
+    /// Bodies made of spheres interlock from an overlapping start.
+    fn overlap_free_start(&self) -> bool {
+        true
+    }
+
+    fn sphere_decomposition(&self, size: f64, o: &Quaternion) -> Option<Vec<(Vector<3>, f64)>> {
+        let d = self.world(size, o);
+        Some(
+            (0..self.spheres())
+                .map(|a| (d[a], self.radii[a] * size))
+                .collect(),
+        )
+    }
+
+    #[inline(always)]
+    fn contacts<F: FnMut(Contact<3>)>(
+        &self,
+        size_i: f64,
+        o_i: &Quaternion,
+        size_j: f64,
+        o_j: &Quaternion,
+        r_ij: &Vector<3>,
+        max_gap: f64,
+        mut visit: F,
+    ) {
+        if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
+            return;
+        }
+        let k = self.spheres();
+        let (d_i, d_j) = (self.world(size_i, o_i), self.world(size_j, o_j));
+        let (e_i, e_j) = (self.axes(o_i), self.axes(o_j));
+        sphere_pairs(
+            &self.radii,
+            size_i,
+            &d_i[..k],
+            size_j,
+            &d_j[..k],
+            r_ij,
+            max_gap,
+            |a, b, gap, n, _| {
+                visit(Contact {
+                    gap,
+                    grad_r: n,
+                    grad_rot_i: self.project(&e_i, -d_i[a].cross(&n)),
+                    grad_rot_j: self.project(&e_j, d_j[b].cross(&n)),
+                })
+            },
+        );
+    }
+
+    fn gap_hessians<F: FnMut(GapHessian<3>)>(
+        &self,
+        size_i: f64,
+        o_i: &Quaternion,
+        size_j: f64,
+        o_j: &Quaternion,
+        r_ij: &Vector<3>,
+        max_gap: f64,
+        mut visit: F,
+    ) -> jamkit_core::Result<()> {
+        if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
+            return Ok(());
+        }
+        let k = self.spheres();
+        let m = Shape::<3>::rot_dof(self);
+        let (d_i, d_j) = (self.world(size_i, o_i), self.world(size_j, o_j));
+        let (e_i, e_j) = (self.axes(o_i), self.axes(o_j));
+        // n · ½[e_p × (e_q × d) + e_q × (e_p × d)]
+        //   = ½[(n·e_q)(e_p·d) + (n·e_p)(e_q·d)] − (n·d)(e_p·e_q).
+        let curvature_terms = |e: &[Vector<3>; 3], d: &Vector<3>, n: &Vector<3>, sign: f64| {
+            let mut out = [[0.0; MAX_ROT]; MAX_ROT];
+            for p in 0..m {
+                for q in 0..m {
+                    let sym = 0.5 * (n.dot(&e[q]) * e[p].dot(d) + n.dot(&e[p]) * e[q].dot(d))
+                        - n.dot(d) * e[p].dot(&e[q]);
+                    out[p][q] = sign * sym;
+                }
+            }
+            out
+        };
+        sphere_pairs(
+            &self.radii,
+            size_i,
+            &d_i[..k],
+            size_j,
+            &d_j[..k],
+            r_ij,
+            max_gap,
+            |a, b, gap, n, dist| {
+                let contact = Contact {
+                    gap,
+                    grad_r: n,
+                    grad_rot_i: self.project(&e_i, -d_i[a].cross(&n)),
+                    grad_rot_j: self.project(&e_j, d_j[b].cross(&n)),
+                };
+                let t_i: Vec<Vector<3>> = (0..m).map(|p| -e_i[p].cross(&d_i[a])).collect();
+                let t_j: Vec<Vector<3>> = (0..m).map(|p| e_j[p].cross(&d_j[b])).collect();
+                visit(assemble(
+                    contact,
+                    &curvature(&n, dist),
+                    &t_i,
+                    &t_j,
+                    &curvature_terms(&e_i, &d_i[a], &n, -1.0),
+                    &curvature_terms(&e_j, &d_j[b], &n, 1.0),
+                ))
+            },
+        );
+        Ok(())
+    }
+}

@@ -1,0 +1,608 @@
+//! The `nmer` family (rigid bodies made of spheres, issue 4) in the engine:
+//! finite-difference forces and torques in 2D and 3D (dense random
+//! packings and a crafted pair touching at several points), second
+//! derivatives of the gap, rotation invariance of the energy, and small
+//! jamming runs that must come out isostatic, `z_J = 4d − 2` for dimers.
+
+use jamkit_core::{Contact, GapHessian, Packing, Potential, Shape, SizeDistribution, Vector};
+use jamkit_engine::{Objective, Scene, check::gradient_error};
+use jamkit_experiment::runner::{RunOptions, run};
+use jamkit_experiment::{Experiment, overrides};
+use jamkit_nmer::{Angle, Nmer, NmerParams, Quaternion, SphereSpec};
+use rand::SeedableRng;
+use std::path::Path;
+
+fn dimer<const D: usize>(alpha: f64) -> Nmer<D> {
+    Nmer::<D>::new(&NmerParams {
+        alpha: Some(alpha),
+        spheres: None,
+        inertia: None,
+    })
+    .unwrap()
+}
+
+fn body<const D: usize>(spheres: &[(&[f64], f64)]) -> Nmer<D> {
+    Nmer::<D>::new(&NmerParams {
+        alpha: None,
+        spheres: Some(
+            spheres
+                .iter()
+                .map(|(o, r)| SphereSpec {
+                    offset: o.to_vec(),
+                    radius: *r,
+                })
+                .collect(),
+        ),
+        inertia: None,
+    })
+    .unwrap()
+}
+
+/// Dimers of three aspect ratios, a bent trimer with unequal spheres and a
+/// linear trimer, in 2D.
+fn shapes_2d() -> Vec<Nmer<2>> {
+    vec![
+        dimer(1.1),
+        dimer(1.5),
+        dimer(2.0),
+        body(&[(&[0.0, 0.0], 1.0), (&[1.2, 0.3], 0.7), (&[-0.4, 1.1], 0.8)]),
+        body(&[(&[-1.0, 0.0], 0.8), (&[0.0, 0.0], 1.0), (&[1.0, 0.0], 0.8)]),
+    ]
+}
+
+/// The same in 3D: dimers and a linear trimer (two rotational coordinates),
+/// a triangle and a tetrahedron-like cluster (three).
+fn shapes_3d() -> Vec<Nmer<3>> {
+    vec![
+        dimer(1.1),
+        dimer(2.0),
+        body(&[
+            (&[-1.0, 0.5, 0.2], 0.8),
+            (&[0.0, 0.0, 0.0], 1.0),
+            (&[1.0, -0.5, -0.2], 0.8),
+        ]),
+        body(&[
+            (&[0.0, 0.0, 0.0], 1.0),
+            (&[1.2, 0.3, 0.0], 0.7),
+            (&[-0.4, 1.1, 0.2], 0.8),
+        ]),
+        body(&[
+            (&[0.0, 0.0, 0.0], 0.8),
+            (&[1.0, 0.0, 0.0], 0.8),
+            (&[0.5, 0.9, 0.0], 0.8),
+            (&[0.5, 0.3, 0.8], 0.8),
+        ]),
+    ]
+}
+
+/// `n` binary bodies at packing fraction `phi`: most pairs overlap.
+fn dense<const D: usize>(shape: Nmer<D>, n: usize, phi: f64, seed: u64) -> Scene<D, Nmer<D>>
+where
+    Nmer<D>: Shape<D>,
+{
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let sizes = SizeDistribution::default().sample(n, &mut rng);
+    // Bodies made of spheres start overlap-free; an affine compression of
+    // that start makes the overlaps.
+    let mut packing = Packing::<D, Nmer<D>>::random(shape, sizes, 0.1, &mut rng).unwrap();
+    packing.set_phi(phi);
+    Scene::new(packing, Potential::Harmonic, 0.2)
+}
+
+/// Forces and torques against central differences of the energy in every
+/// generalised coordinate (ε = 1e-6; rotations applied through `rotate`,
+/// i.e. the exact quaternion exponential in 3D). The truncation error is
+/// ~ε²|V'''| ≲ 1e-11 for gaps of curvature 1/R ~ 1; round-off ~1e-16·V/ε
+/// ≲ 1e-9; the harmonic v'' jumps at h = 0, costing ~ε only for a sphere
+/// pair within ε of touching. A relative bound of 1e-6 on gradients of
+/// order 0.1–1 sits far above these and far below any wrong or missing
+/// term (a wrong sign of one torque is an O(1) relative error).
+fn check_gradients<const D: usize>(shapes: Vec<Nmer<D>>, n: usize)
+where
+    Nmer<D>: Shape<D>,
+{
+    for shape in shapes {
+        for seed in 1..=2 {
+            let scene = dense(shape.clone(), n, 0.85, seed);
+            let (err, scale) = gradient_error(&scene, 1e-6);
+            assert!(
+                scale > 1e-2,
+                "{shape:?}: gradient {scale:e} too small to test"
+            );
+            assert!(
+                err < 1e-6 * scale,
+                "{shape:?} seed {seed}: {err:e} vs {scale:e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn forces_and_torques_match_finite_differences_2d() {
+    check_gradients(shapes_2d(), 40);
+}
+
+#[test]
+fn forces_and_torques_match_finite_differences_3d() {
+    check_gradients(shapes_3d(), 40);
+}
+
+/// All contacts of one pair.
+fn pair_contacts<const D: usize>(
+    s: &Nmer<D>,
+    o_i: &<Nmer<D> as Shape<D>>::Orientation,
+    o_j: &<Nmer<D> as Shape<D>>::Orientation,
+    r: &Vector<D>,
+) -> Vec<Contact<D>>
+where
+    Nmer<D>: Shape<D>,
+{
+    let mut out = Vec::new();
+    s.contacts(0.6, o_i, 0.5, o_j, r, 0.0, |c| out.push(c));
+    out
+}
+
+/// A crafted pair: two parallel 2D dimers (α = 2) side by side, slightly
+/// pressed together and tilted, touch at two points, and a third sphere
+/// pair overlaps when the dimers cross. Each contact's gap derivatives
+/// against central differences of that contact's own gap (ε = 1e-6;
+/// truncation ~ε² ≈ 1e-12, tolerance 1e-8 absolute on O(1) derivatives).
+#[test]
+fn a_pair_touching_at_several_points_has_exact_derivatives_2d() {
+    let s = dimer::<2>(2.0);
+    // Dimer axes along x; separation along y a bit less than 0.6 + 0.5.
+    let (o_i, o_j) = (Angle::new(0.02), Angle::new(-0.03));
+    let r = Vector::<2>::new(0.05, 1.05);
+    let base = pair_contacts(&s, &o_i, &o_j, &r);
+    assert!(
+        base.len() >= 2,
+        "side-by-side dimers touch twice, got {}",
+        base.len()
+    );
+    let eps = 1e-6;
+    let gaps = |oi: Angle, oj: Angle, r: Vector<2>| -> Vec<f64> {
+        let mut out = Vec::new();
+        s.contacts(0.6, &oi, 0.5, &oj, &r, f64::INFINITY, |c| out.push(c.gap));
+        out
+    };
+    let mut all = Vec::new();
+    s.contacts(0.6, &o_i, 0.5, &o_j, &r, f64::INFINITY, |c| all.push(c));
+    assert_eq!(all.len(), 4);
+    for axis in 0..2 {
+        let e = Vector::<2>::from_fn(|a, _| if a == axis { eps } else { 0.0 });
+        let (p, m) = (gaps(o_i, o_j, r + e), gaps(o_i, o_j, r - e));
+        for (k, c) in all.iter().enumerate() {
+            assert!(((p[k] - m[k]) / (2.0 * eps) - c.grad_r[axis]).abs() < 1e-8);
+        }
+    }
+    let turn = |o: Angle, d: f64| o.turned(d);
+    let (p, m) = (gaps(turn(o_i, eps), o_j, r), gaps(turn(o_i, -eps), o_j, r));
+    for (k, c) in all.iter().enumerate() {
+        assert!(((p[k] - m[k]) / (2.0 * eps) - c.grad_rot_i[0]).abs() < 1e-8);
+    }
+    let (p, m) = (gaps(o_i, turn(o_j, eps), r), gaps(o_i, turn(o_j, -eps), r));
+    for (k, c) in all.iter().enumerate() {
+        assert!(((p[k] - m[k]) / (2.0 * eps) - c.grad_rot_j[0]).abs() < 1e-8);
+    }
+}
+
+/// The same in 3D, in a scene: two pressed, parallel dimers (two contacts)
+/// and a linear trimer crossing a triangle (several), through the engine's
+/// gradient check (tolerance as in `check_gradients`).
+#[test]
+fn pairs_touching_at_several_points_have_exact_forces_3d() {
+    let cases: Vec<(Nmer<3>, Vector<3>)> = vec![
+        (dimer(2.0), Vector::<3>::new(1.0, 0.05, 0.02)),
+        (
+            body(&[
+                (&[-1.0, 0.0, 0.0], 0.8),
+                (&[0.0, 0.0, 0.0], 1.0),
+                (&[1.0, 0.0, 0.0], 0.8),
+            ]),
+            Vector::<3>::new(0.1, 0.85, 0.05),
+        ),
+        (
+            body(&[
+                (&[0.0, 0.0, 0.0], 1.0),
+                (&[1.2, 0.3, 0.0], 0.7),
+                (&[-0.4, 1.1, 0.2], 0.8),
+            ]),
+            Vector::<3>::new(0.0, 0.0, 0.6),
+        ),
+    ];
+    for (shape, sep) in cases {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let mut p =
+            Packing::<3, Nmer<3>>::random(shape.clone(), vec![0.6, 0.5], 0.01, &mut rng).unwrap();
+        let centre = *p.bbox.edges() * 0.5;
+        p.positions = vec![centre, centre + sep];
+        let tilt = Quaternion::exp(&Vector::<3>::new(0.03, -0.02, 0.05));
+        p.orientations = vec![Quaternion::IDENTITY, tilt];
+        let mut count = 0;
+        shape.contacts(
+            0.6,
+            &p.orientations[0],
+            0.5,
+            &p.orientations[1],
+            &sep,
+            0.0,
+            |_| count += 1,
+        );
+        assert!(count >= 2, "{shape:?}: {count} contacts");
+        let scene = Scene::new(p, Potential::Harmonic, 0.2);
+        let (err, scale) = gradient_error(&scene, 1e-6);
+        assert!(
+            scale > 1e-2 && err < 1e-6 * scale,
+            "{shape:?}: {err:e} vs {scale:e}"
+        );
+    }
+}
+
+/// Rotating the whole configuration (centres about the box centre, every
+/// orientation by the same rotation) leaves V unchanged, to round-off
+/// (1e-12 relative). A compact cluster well inside a large box avoids the
+/// periodic images, which break the symmetry.
+#[test]
+fn energy_is_invariant_under_global_rotation_2d_and_3d() {
+    fn cluster<const D: usize>(shape: Nmer<D>) -> Packing<D, Nmer<D>>
+    where
+        Nmer<D>: Shape<D>,
+    {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let sizes = SizeDistribution::default().sample(30, &mut rng);
+        let mut p = Packing::<D, Nmer<D>>::random(shape, sizes, 0.01, &mut rng).unwrap();
+        let centre = *p.bbox.edges() * 0.5;
+        for (k, r) in p.positions.iter_mut().enumerate() {
+            let a = k as f64 * 2.399;
+            let z = if D == 3 { 0.3 * (k as f64 - 15.0) } else { 0.0 };
+            let radial = 0.9 * (k as f64).sqrt();
+            *r = centre
+                + Vector::<D>::from_fn(|c, _| match c {
+                    0 => radial * a.cos(),
+                    1 => radial * a.sin(),
+                    _ => z,
+                });
+        }
+        p
+    }
+    fn energy<const D: usize>(p: Packing<D, Nmer<D>>) -> f64
+    where
+        Nmer<D>: Shape<D>,
+    {
+        let mut s = Scene::new(p, Potential::Harmonic, 0.2);
+        let mut g = vec![0.0; s.dof()];
+        s.energy_gradient(&mut g)
+    }
+    for shape in shapes_2d() {
+        let p = cluster(shape.clone());
+        let centre = *p.bbox.edges() * 0.5;
+        let e0 = energy(p.clone());
+        assert!(e0 > 1e-3, "{shape:?}: the cluster must overlap ({e0})");
+        for alpha in [0.3, 1.7, std::f64::consts::PI, -2.9] {
+            let (sa, ca) = alpha.sin_cos();
+            let mut q = p.clone();
+            for (r, o) in q.positions.iter_mut().zip(q.orientations.iter_mut()) {
+                let d = *r - centre;
+                *r = centre + Vector::<2>::new(ca * d[0] - sa * d[1], sa * d[0] + ca * d[1]);
+                *o = o.turned(alpha);
+            }
+            let e1 = energy(q);
+            assert!(
+                (e1 - e0).abs() < 1e-12 * e0,
+                "{shape:?} {alpha}: {e0} vs {e1}"
+            );
+        }
+    }
+    for shape in shapes_3d() {
+        let p = cluster(shape.clone());
+        let centre = *p.bbox.edges() * 0.5;
+        let e0 = energy(p.clone());
+        assert!(e0 > 1e-3, "{shape:?}: the cluster must overlap ({e0})");
+        for omega in [
+            Vector::<3>::new(0.3, -1.1, 0.4),
+            Vector::<3>::new(2.0, 0.5, -2.2),
+        ] {
+            let g = Quaternion::exp(&omega);
+            let mut q = p.clone();
+            for (r, o) in q.positions.iter_mut().zip(q.orientations.iter_mut()) {
+                *r = centre + g.apply(&(*r - centre));
+                *o = g.mul(o).renormalized();
+            }
+            let e1 = energy(q);
+            assert!(
+                (e1 - e0).abs() < 1e-12 * e0,
+                "{shape:?} {omega:?}: {e0} vs {e1}"
+            );
+        }
+    }
+}
+
+/// Second derivatives of every contact's gap against central differences
+/// of its first derivatives: perturbing `r_ij`, and each rotational
+/// coordinate of either body through `rotate`. For 3D rotations the raw
+/// mixed difference holds an antisymmetric commutator part (`½ [e_p, e_q]`
+/// acting on the gradient), so the rotational blocks of each body are
+/// symmetrised before comparing; the cross blocks need no symmetrisation.
+/// ε = 1e-5: truncation ~ε²·|h'''| ≈ 1e-10, round-off ~1e-16/ε ≈ 1e-11;
+/// tolerance 1e-6 relative to the largest second derivative.
+fn check_hessians<const D: usize>(
+    shape: &Nmer<D>,
+    o_i: <Nmer<D> as Shape<D>>::Orientation,
+    o_j: <Nmer<D> as Shape<D>>::Orientation,
+    r: Vector<D>,
+) where
+    Nmer<D>: Shape<D>,
+{
+    let m = shape.rot_dof();
+    let eps = 1e-5;
+    let firsts = |oi: &<Nmer<D> as Shape<D>>::Orientation,
+                  oj: &<Nmer<D> as Shape<D>>::Orientation,
+                  r: &Vector<D>| {
+        let mut out = Vec::new();
+        shape.contacts(0.6, oi, 0.5, oj, r, f64::INFINITY, |c| out.push(c));
+        out
+    };
+    let mut hessians: Vec<GapHessian<D>> = Vec::new();
+    shape
+        .gap_hessians(0.6, &o_i, 0.5, &o_j, &r, f64::INFINITY, |h| {
+            hessians.push(h)
+        })
+        .unwrap();
+    let base = firsts(&o_i, &o_j, &r);
+    assert_eq!(hessians.len(), base.len());
+    assert!(hessians.len() >= 4);
+    for (h, c) in hessians.iter().zip(&base) {
+        assert_eq!(
+            h.contact, *c,
+            "gap_hessians reports the contacts' first derivatives"
+        );
+    }
+    let mut scale: f64 = 0.0;
+    for h in &hessians {
+        scale = scale.max(h.rr.abs().max());
+        for p in 0..m {
+            scale = scale.max(h.qi_qi[p].iter().fold(0.0, |a, x| a.max(x.abs())));
+        }
+    }
+    let tol = 1e-6 * scale;
+    let close = |a: f64, b: f64, what: &str| assert!((a - b).abs() < tol, "{what}: {a} vs {b}");
+    // Perturb r_ij.
+    for axis in 0..D {
+        let e = Vector::<D>::from_fn(|a, _| if a == axis { eps } else { 0.0 });
+        let (p, q) = (firsts(&o_i, &o_j, &(r + e)), firsts(&o_i, &o_j, &(r - e)));
+        for (k, h) in hessians.iter().enumerate() {
+            for b in 0..D {
+                let fd = (p[k].grad_r[b] - q[k].grad_r[b]) / (2.0 * eps);
+                close(fd, h.rr[(b, axis)], "rr");
+            }
+            for a in 0..m {
+                close(
+                    (p[k].grad_rot_i[a] - q[k].grad_rot_i[a]) / (2.0 * eps),
+                    h.r_qi[a][axis],
+                    "r_qi",
+                );
+                close(
+                    (p[k].grad_rot_j[a] - q[k].grad_rot_j[a]) / (2.0 * eps),
+                    h.r_qj[a][axis],
+                    "r_qj",
+                );
+            }
+        }
+    }
+    // Perturb each rotational coordinate of body i, then of body j.
+    for body in 0..2 {
+        let mut fd = vec![[[0.0; 3]; 3]; hessians.len()];
+        for a in 0..m {
+            let mut dq = vec![0.0; m];
+            let turned = |s: f64, dq: &mut Vec<f64>| {
+                dq[a] = s;
+                let (mut oi, mut oj) = (o_i, o_j);
+                if body == 0 {
+                    shape.rotate(&mut oi, dq);
+                } else {
+                    shape.rotate(&mut oj, dq);
+                }
+                firsts(&oi, &oj, &r)
+            };
+            let (p, q) = (turned(eps, &mut dq), turned(-eps, &mut dq));
+            for (k, h) in hessians.iter().enumerate() {
+                let d = |f: fn(&Contact<D>) -> RotPair<D>| {
+                    let (x, y) = (f(&p[k]), f(&q[k]));
+                    (
+                        x.0.iter()
+                            .zip(&y.0)
+                            .map(|(u, v)| (u - v) / (2.0 * eps))
+                            .collect::<Vec<_>>(),
+                        x.1.iter()
+                            .zip(&y.1)
+                            .map(|(u, v)| (u - v) / (2.0 * eps))
+                            .collect::<Vec<_>>(),
+                        (x.2 - y.2) / (2.0 * eps),
+                    )
+                };
+                let (own, other, dr) = d(|c| (c.grad_rot_i, c.grad_rot_j, c.grad_r));
+                let (own, other) = if body == 0 {
+                    (own, other)
+                } else {
+                    (other, own)
+                };
+                for b in 0..m {
+                    fd[k][b][a] = own[b];
+                    let cross = if body == 0 {
+                        h.qi_qj[a][b]
+                    } else {
+                        h.qi_qj[b][a]
+                    };
+                    close(other[b], cross, "qi_qj");
+                }
+                let r_q = if body == 0 { h.r_qi[a] } else { h.r_qj[a] };
+                for c in 0..D {
+                    close(dr[c], r_q[c], "r_q");
+                }
+            }
+        }
+        for (k, h) in hessians.iter().enumerate() {
+            let block = if body == 0 { &h.qi_qi } else { &h.qj_qj };
+            for a in 0..m {
+                for b in 0..m {
+                    let sym = 0.5 * (fd[k][a][b] + fd[k][b][a]);
+                    close(sym, block[a][b], "q_q");
+                    assert_eq!(block[a][b], block[b][a], "symmetric");
+                }
+            }
+        }
+    }
+}
+
+type RotPair<const D: usize> = ([f64; 3], [f64; 3], Vector<D>);
+
+#[test]
+fn gap_second_derivatives_match_finite_differences() {
+    for shape in shapes_2d() {
+        check_hessians(
+            &shape,
+            Angle::new(0.4),
+            Angle::new(-1.3),
+            Vector::<2>::new(0.9, 0.7),
+        );
+    }
+    for shape in shapes_3d() {
+        check_hessians(
+            &shape,
+            Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap(),
+            Quaternion::normalized(-0.7, 0.1, 0.4, 0.2).unwrap(),
+            Vector::<3>::new(0.9, 0.7, -0.4),
+        );
+    }
+}
+
+/// Run `file` (under `experiments/`) with overrides into a temporary
+/// directory; no sample may fail.
+fn run_small(file: &str, sets: &[&str]) -> Vec<jamkit_experiment::record::PackingFile> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+    let e = Experiment::from_file(&path).unwrap();
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let e = overrides::apply(&e, &sets).unwrap();
+    e.validate().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(
+        &e,
+        &RunOptions {
+            out: dir.path().to_path_buf(),
+            jobs: Some(2),
+            progress: false,
+        },
+    )
+    .unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    report.packings
+}
+
+/// Contacts among non-rattlers recomputed from the packing file's `spheres`
+/// rows alone (centres, radii, body index; minimum image in the box), with
+/// no knowledge of orientations.
+fn contacts_from_spheres(p: &jamkit_experiment::record::PackingFile) -> usize {
+    let d = p.dim;
+    let mut count = 0;
+    for (a, s) in p.spheres.iter().enumerate() {
+        for t in &p.spheres[a + 1..] {
+            let (bi, bj) = (s[d + 1] as usize, t[d + 1] as usize);
+            if bi == bj || p.rattler[bi] || p.rattler[bj] {
+                continue;
+            }
+            let dist2: f64 = (0..d)
+                .map(|k| {
+                    let l = p.box_edges[k];
+                    let x = t[k] - s[k];
+                    (x - l * (x / l).round()).powi(2)
+                })
+                .sum();
+            count += usize::from(dist2.sqrt() - s[d] - t[d] < 0.0);
+        }
+    }
+    count
+}
+
+/// The sanity experiment, shrunk: 2D dimers (α = 1.5, 2.0; N = 64, two
+/// seeds) and 3D dimers (α = 2.0, N = 128, one seed). Every packing lands in
+/// the jamming window, its `spheres` rows reproduce its contact count, and
+/// `z_J` is within 0.3 of `4d − 2`: at these N a handful of missing
+/// contacts moves z by ~0.1, and a wrong torque or a missed sphere pair
+/// (one contact of four) moves it by far more. The isostaticity margin is
+/// *not* asserted: dimers jam a few contacts short of `f N_nr − d + 1` with
+/// this protocol (docs/sanity.md records and discusses it).
+#[test]
+fn small_dimer_packings_jam_near_isostatic() {
+    let mut packings = run_small(
+        "experiments/sanity/dimers2d.ron",
+        &["particles=64", "samples=2", "params.alpha=[1.5, 2.0]"],
+    );
+    packings.extend(run_small(
+        "experiments/sanity/dimers3d.ron",
+        &["particles=128", "samples=1", "params.alpha=2.0"],
+    ));
+    assert_eq!(packings.len(), 5);
+    for p in &packings {
+        let z = p.measures.z_j.unwrap();
+        let expected = (4 * p.dim - 2) as f64;
+        assert!(
+            p.energy_per_particle > 1e-16 && p.energy_per_particle < 2e-16,
+            "{}: V/N = {}",
+            p.id,
+            p.energy_per_particle
+        );
+        assert!((z - expected).abs() < 0.3, "{}: z_J = {z}", p.id);
+        assert_eq!(
+            p.spheres.len(),
+            2 * p.particles,
+            "{}: two spheres per dimer",
+            p.id
+        );
+        assert_eq!(
+            contacts_from_spheres(p),
+            p.measures.n_contacts.unwrap(),
+            "{}",
+            p.id
+        );
+    }
+}
+
+/// α = 1 is one sphere: the `nmer` family runs it as the `sphere` family,
+/// and the packing is the sphere packing of the same seed, bit for bit.
+#[test]
+fn alpha_one_is_the_sphere_family() {
+    let dimers = run_small(
+        "experiments/sanity/dimers2d.ron",
+        &["particles=32", "samples=1", "params.alpha=1.0"],
+    );
+    let spheres = run_small(
+        "experiments/sanity/disks2d.ron",
+        &["particles=32", "samples=1"],
+    );
+    assert_eq!(dimers[0].positions, spheres[0].positions);
+    assert_eq!(dimers[0].phi.to_bits(), spheres[0].phi.to_bits());
+    assert!(dimers[0].spheres.is_empty() && dimers[0].orientations.is_empty());
+}
+
+/// Bodies made of spheres start without overlaps (V = 0 exactly at
+/// φ = 0.1 in 2D and 3D), and a start too dense for random sequential
+/// placement is refused with the field named, not a panic or a hang.
+#[test]
+fn random_start_is_overlap_free() {
+    fn start<const D: usize>(shape: Nmer<D>, phi: f64) -> Result<f64, String>
+    where
+        Nmer<D>: Shape<D>,
+    {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let sizes = SizeDistribution::default().sample(200, &mut rng);
+        let p = Packing::<D, Nmer<D>>::random(shape, sizes, phi, &mut rng)
+            .map_err(|e| e.to_string())?;
+        let mut s = Scene::new(p, Potential::Harmonic, 0.2);
+        let mut g = vec![0.0; s.dof()];
+        Ok(s.energy_gradient(&mut g))
+    }
+    assert_eq!(start(dimer::<2>(2.0), 0.1), Ok(0.0));
+    assert_eq!(start(dimer::<3>(2.0), 0.1), Ok(0.0));
+    let err = start(dimer::<2>(1.5), 0.85).unwrap_err();
+    assert!(err.contains("protocol.phi_start"), "{err}");
+}
