@@ -4,7 +4,7 @@
 use crate::ReportError;
 use jamkit_experiment::record::PackingFile;
 use jamkit_observe::gaps::GapCounts;
-use jamkit_observe::spectrum::DosHistogram;
+use jamkit_observe::spectrum::{DosHistogram, DosParams};
 use std::path::Path;
 
 /// One packing, reduced to what the figures need.
@@ -24,6 +24,8 @@ pub struct Sample {
     pub omega_star: Option<f64>,
     /// The binned spectrum.
     pub dos: Option<DosHistogram>,
+    /// Its bins and thresholds.
+    pub dos_params: Option<DosParams>,
     /// Gap counts.
     pub gaps: Option<GapCounts>,
 }
@@ -91,6 +93,7 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
                 omega_1: m.spectrum.as_ref().and_then(|s| s.omega_1()),
                 omega_star: m.spectrum.as_ref().and_then(|s| s.omega_star()),
                 dos: m.spectrum.as_ref().map(|s| s.histogram.clone()),
+                dos_params: m.spectrum.as_ref().map(|s| s.dos.clone()),
                 gaps: m.gaps.clone(),
             };
             let key = |p: &Point| {

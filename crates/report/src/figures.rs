@@ -10,16 +10,15 @@
 //!
 //! * `δz_J ∝ Δ^{1/2}`: points with `δz_J ≥ 8/N_nr` (well above the
 //!   finite-size floor `2/N_nr`, the paper's "δz_J ≫ 1/N") and `Δ ≤ 0.1`;
-//! * `ω₁ ∝ Δ`: points with `Δ ≤ 0.1` where ω₁ is defined;
-//! * `ω_* ∝ Δ^{1/2}`: points where ω_* is defined in at least half the
-//!   packings;
+//! * `ω₁ ∝ Δ`: points with `Δ ≤ 0.1`, ω₁ of each point's pooled `D(ω)`;
+//! * `ω_* ∝ Δ^{1/2}`: points where the pooled `D(ω)` defines ω_*;
 //! * `Z(h) ∼ h^{1−γ}` at the smallest Δ: `10 Δ^μ ≤ h ≤ 0.1`, and `Z ∼ h` at
 //!   the largest Δ: `h ≤ Δ^μ / 10`, both only where each sample point has at
 //!   least 20 gaps below it (`μ = 1/(2(1 − γ))`).
 
 use crate::ReportError;
 use crate::data::{Point, Sample, load, mean_sem};
-use crate::fit::{PowerLaw, line, power_law};
+use crate::fit::{PowerLaw, line, power_law, power_law_of};
 use crate::plot::{Figure, Guide, Series};
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::spectrum::DosHistogram;
@@ -173,18 +172,30 @@ impl Builder {
         ns
     }
 
-    /// The points of mode `n` at its largest N, by Δ.
-    fn largest(&self, n: u32) -> Vec<&Point> {
-        let big = self
-            .points
-            .iter()
-            .filter(|p| p.n == n)
-            .map(|p| p.particles)
-            .max()
-            .unwrap_or(0);
+    /// The points of mode `n` at "the largest N" for a quantity that
+    /// `has` tells is measured: the largest N at which every mode number
+    /// has it (so that the n are compared at one N; a finite-size study of
+    /// n = 2 alone does not set it), else the largest N of this `n`.
+    fn largest(&self, n: u32, has: fn(&Sample) -> bool) -> Vec<&Point> {
+        let measured = |p: &&Point| p.samples.iter().any(has);
+        let sizes = |n: u32| -> Vec<usize> {
+            self.points
+                .iter()
+                .filter(|p| p.n == n)
+                .filter(measured)
+                .map(|p| p.particles)
+                .collect()
+        };
+        let ns = self.mode_numbers();
+        let common = sizes(n)
+            .into_iter()
+            .filter(|&size| ns.iter().all(|&m| sizes(m).contains(&size)))
+            .max();
+        let big = common.or_else(|| sizes(n).into_iter().max()).unwrap_or(0);
         self.points
             .iter()
             .filter(|p| p.n == n && p.particles == big)
+            .filter(measured)
             .collect()
     }
 
@@ -212,7 +223,7 @@ impl Builder {
         let mut falls = Vec::new();
         let mut at_largest_delta = Vec::new();
         for &n in &ns {
-            let pts = self.largest(n);
+            let pts = self.largest(n, |s| s.phi.is_finite());
             let series = |f: &dyn Fn(&Sample) -> Option<f64>| -> Vec<(f64, f64, f64)> {
                 pts.iter()
                     .map(|p| {
@@ -277,7 +288,7 @@ impl Builder {
         // φ_J rises for every n; more slowly for larger n (compared at the
         // largest Δ common to all n).
         let rise_ok = self.mode_numbers().iter().all(|&n| {
-            let pts = self.largest(n);
+            let pts = self.largest(n, |s| s.phi.is_finite());
             let (a, b) = (pts.first(), pts.last());
             match (a, b) {
                 (Some(a), Some(b)) => {
@@ -331,7 +342,7 @@ impl Builder {
         let mut series = Vec::new();
         let mut guides = Vec::new();
         for n in self.mode_numbers() {
-            let pts = self.largest(n);
+            let pts = self.largest(n, |s| s.z_j.is_some());
             let dim = pts.first().map_or(2, |p| p.dim);
             let big = pts.first().map_or(0, |p| p.particles);
             let values: Vec<(f64, Vec<f64>, f64)> = pts
@@ -415,6 +426,48 @@ impl Builder {
         Some(guide)
     }
 
+    /// Like [`Builder::fit_and_record`], for a statistic of each point's
+    /// packings taken together.
+    fn fit_stat_and_record(
+        &mut self,
+        points: &[(f64, Vec<Sample>)],
+        stat: fn(&[&Sample]) -> Option<f64>,
+        mut row: FitRow,
+    ) -> Option<Guide> {
+        let defined = points
+            .iter()
+            .filter(|(_, v)| stat(&v.iter().collect::<Vec<_>>()).is_some())
+            .count();
+        if defined < 3 {
+            return None;
+        }
+        let f = power_law_of(points, stat, self.options.resamples, self.options.seed)?;
+        let guide = Guide::power_law(
+            format!("fit {}, n = {}: Δ^{:.2}", row.quantity, row.n, f.exponent),
+            f.prefactor,
+            f.exponent,
+            f.range.0,
+            f.range.1,
+        );
+        row.fit = f;
+        self.fits.push(row);
+        Some(guide)
+    }
+
+    /// Standard deviation of `stat` over bootstrap resamples of `samples`.
+    fn bootstrap_error(&self, samples: &[Sample], stat: fn(&[&Sample]) -> Option<f64>) -> f64 {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(self.options.seed);
+        let values: Vec<f64> = (0..self.options.resamples)
+            .filter_map(|_| {
+                let pick: Vec<&Sample> = (0..samples.len())
+                    .map(|_| &samples[rng.random_range(0..samples.len())])
+                    .collect();
+                stat(&pick)
+            })
+            .collect();
+        jamkit_experiment::record::mean_sem(&values).1 * (values.len() as f64).sqrt()
+    }
+
     /// Fig. 9: n = 2 at several N, and the collapse.
     fn finite_size(&mut self) -> Result<(), ReportError> {
         let pts: Vec<&Point> = self.points.iter().filter(|p| p.n == 2).collect();
@@ -462,6 +515,12 @@ impl Builder {
                 .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)))
         };
         let (d0, d1) = span(&raw);
+        let top_raw = raw
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.1 > 0.0)
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .map_or((1.0, 1.0), |p| (p.0, p.1));
         self.save(
             "fig09a_dz_finite_size",
             Figure {
@@ -471,11 +530,18 @@ impl Builder {
                 log_x: true,
                 log_y: true,
                 series: raw,
-                guides: vec![Guide::power_law("∝ Δ^{1/2}", 3.0, 0.5, d0, d1)],
+                guides: vec![Guide::power_law_through("∝ Δ^{1/2}", 0.5, top_raw, d0, d1)],
                 legend: SeriesLabelPosition::LowerRight,
             },
         )?;
         let (x0, x1) = span(&collapse);
+        // The Δ^{1/2} guide passes through the point of largest N_nr² Δ.
+        let top = collapse
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.1 > 0.0)
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .map_or((1.0, 1.0), |p| (p.0, p.1));
         self.save(
             "fig09b_dz_collapse",
             Figure {
@@ -487,7 +553,7 @@ impl Builder {
                 series: collapse,
                 guides: vec![
                     Guide::power_law("δz_J N_nr = 2", 2.0, 0.0, x0, x1),
-                    Guide::power_law("∝ (N_nr² Δ)^{1/2}", 3.0, 0.5, x0, x1),
+                    Guide::power_law_through("∝ (N_nr² Δ)^{1/2}", 0.5, top, x0, x1),
                 ],
                 legend: SeriesLabelPosition::UpperLeft,
             },
@@ -511,7 +577,11 @@ impl Builder {
         let mu = 1.0 / (2.0 * (1.0 - gamma));
         let mut any = false;
         for n in self.mode_numbers() {
-            let pts: Vec<Point> = self.largest(n).into_iter().cloned().collect();
+            let pts: Vec<Point> = self
+                .largest(n, |s| s.gaps.is_some())
+                .into_iter()
+                .cloned()
+                .collect();
             let with: Vec<(&Point, GapCounts)> = pts
                 .iter()
                 .filter_map(|p| Some((p, pooled_gaps(&p.samples)?)))
@@ -648,7 +718,11 @@ impl Builder {
         let mut guides = Vec::new();
         let mut any = false;
         for n in self.mode_numbers() {
-            let pts: Vec<Point> = self.largest(n).into_iter().cloned().collect();
+            let pts: Vec<Point> = self
+                .largest(n, |s| s.dos.is_some())
+                .into_iter()
+                .cloned()
+                .collect();
             let mut dos = Vec::new();
             for p in &pts {
                 let Some(h) = pooled_dos(&p.samples) else {
@@ -686,42 +760,37 @@ impl Builder {
                 },
             )?;
             let big = pts.first().map_or(0, |p| p.particles);
-            for (name, get, expected, keep) in [
-                (
-                    "ω₁",
-                    (|s: &Sample| s.omega_1) as fn(&Sample) -> Option<f64>,
-                    1.0,
-                    (|p: &Point, _: &[f64]| p.delta <= 0.1) as fn(&Point, &[f64]) -> bool,
-                ),
-                (
-                    "ω_*",
-                    |s: &Sample| s.omega_star,
-                    0.5,
-                    |p: &Point, v: &[f64]| 2 * v.len() >= p.samples.len(),
-                ),
+            // ω₁ and ω_* of each point's pooled D(ω) (the paper's are read
+            // off the ensemble's D), with bootstrap errors over packings.
+            type Stat = fn(&[&Sample]) -> Option<f64>;
+            let omega_1: Stat = |s| pooled_dos_of(s)?.omega_1();
+            let omega_star: Stat = |s| {
+                let params = s.iter().find_map(|x| x.dos_params.clone())?;
+                pooled_dos_of(s)?.omega_star(&params)
+            };
+            for (name, stat, expected, max_delta) in [
+                ("ω₁", omega_1, 1.0, 0.1),
+                ("ω_*", omega_star, 0.5, f64::INFINITY),
             ] {
-                let values: Vec<(f64, Vec<f64>)> = pts
+                let values: Vec<(f64, Vec<Sample>)> = pts
                     .iter()
-                    .map(|p| {
-                        let v: Vec<f64> = p.samples.iter().filter_map(get).collect();
-                        let v = if keep(p, &v) { v } else { Vec::new() };
-                        (p.delta, v)
-                    })
+                    .filter(|p| p.delta <= max_delta)
+                    .map(|p| (p.delta, p.samples.clone()))
                     .collect();
                 omega.push(Series {
                     label: format!("{name}, n = {n}"),
                     points: values
                         .iter()
-                        .filter(|(_, v)| !v.is_empty())
-                        .map(|(d, v)| {
-                            let (m, e) = jamkit_experiment::record::mean_sem(v);
-                            (*d, m, e)
+                        .filter_map(|(d, v)| {
+                            let all: Vec<&Sample> = v.iter().collect();
+                            let w = stat(&all)?;
+                            Some((*d, w, self.bootstrap_error(v, stat)))
                         })
                         .collect(),
                     line: false,
                 });
                 let row = FitRow::new(name, n, big, expected, 0.15);
-                if let Some(g) = self.fit_and_record(&values, row) {
+                if let Some(g) = self.fit_stat_and_record(&values, stat, row) {
                     guides.push(g);
                 }
             }
@@ -792,7 +861,7 @@ impl Builder {
         for c in &self.claims {
             let _ = writeln!(m, "| {} | {} | {} |", c.claim, c.measured, c.agrees);
         }
-        m += "\nExponents are least-squares slopes on log–log axes through the point means; ± is the standard deviation over bootstrap resamples of the packings of each point. Fit ranges: δz_J over points with δz_J ≥ 8/N_nr and Δ ≤ 0.1; ω₁ over Δ ≤ 0.1; ω_* where it is defined in at least half the packings; Z(h) over 10 Δ^μ ≤ h ≤ 0.1 at the smallest Δ and h ≤ Δ^μ/10 at the largest, where each sample point has at least 20 gaps below it. \"Agrees\" means within the stated tolerance of the mean-field exponent (0.1 for δz_J, 0.15 otherwise).\n\n## Fits\n\n| quantity | n | N | exponent | mean field | range of Δ or h | points |\n|---|---|---|---|---|---|---|\n";
+        m += "\nExponents are least-squares slopes on log–log axes through the point means; ± is the standard deviation over bootstrap resamples of the packings of each point. Fit ranges: δz_J over points with δz_J ≥ 8/N_nr and Δ ≤ 0.1; ω₁ and ω_* are read off each point's pooled D(ω) (the bootstrap resamples its packings), ω₁ over Δ ≤ 0.1 and ω_* where it is defined; Z(h) over 10 Δ^μ ≤ h ≤ 0.1 at the smallest Δ and h ≤ Δ^μ/10 at the largest, where each sample point has at least 20 gaps below it. \"Agrees\" means within the stated tolerance of the mean-field exponent (0.1 for δz_J, 0.15 otherwise).\n\n## Fits\n\n| quantity | n | N | exponent | mean field | range of Δ or h | points |\n|---|---|---|---|---|---|---|\n";
         for f in &self.fits {
             let _ = writeln!(
                 m,
@@ -862,6 +931,11 @@ fn pooled_gaps(samples: &[Sample]) -> Option<GapCounts> {
 
 /// The histograms of `samples` added up.
 fn pooled_dos(samples: &[Sample]) -> Option<DosHistogram> {
+    pooled_dos_of(&samples.iter().collect::<Vec<_>>())
+}
+
+/// The histograms of `samples` added up.
+fn pooled_dos_of(samples: &[&Sample]) -> Option<DosHistogram> {
     let mut it = samples.iter().filter_map(|s| s.dos.as_ref());
     let mut h = it.next()?.clone();
     for other in it {

@@ -50,27 +50,50 @@ pub fn line(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
     Some(((my - b * mx).exp(), b))
 }
 
-/// Fit `y = A x^b` to points `(x, values of its packings)`, with `resamples`
-/// bootstrap resamples. Points whose values are empty are left out.
+/// Fit `y = A x^b` to points `(x, values of its packings)`, `y` the mean of
+/// the values, with `resamples` bootstrap resamples. Points whose values
+/// are empty are left out.
 pub fn power_law(points: &[(f64, Vec<f64>)], resamples: usize, seed: u64) -> Option<PowerLaw> {
-    let points: Vec<&(f64, Vec<f64>)> = points.iter().filter(|(_, v)| !v.is_empty()).collect();
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-    let xy: Vec<(f64, f64)> = points.iter().map(|(x, v)| (*x, mean(v))).collect();
+    let mean = |v: &[&f64]| Some(v.iter().copied().sum::<f64>() / v.len() as f64);
+    power_law_of(points, mean, resamples, seed)
+}
+
+/// Fit `y = A x^b` where the `y` of a point is a statistic of its packings
+/// (`stat`, e.g. ω₁ of their pooled density of states), with the bootstrap
+/// resampling the packings of every point. Points with no packings, or
+/// whose statistic is undefined, are left out.
+pub fn power_law_of<T>(
+    points: &[(f64, Vec<T>)],
+    stat: impl Fn(&[&T]) -> Option<f64>,
+    resamples: usize,
+    seed: u64,
+) -> Option<PowerLaw> {
+    fn all<T>(v: &[T]) -> Vec<&T> {
+        v.iter().collect()
+    }
+    let points: Vec<(f64, &Vec<T>)> = points
+        .iter()
+        .filter(|(_, v)| !v.is_empty() && stat(&all(v)).is_some())
+        .map(|(x, v)| (*x, v))
+        .collect();
+    let xy: Vec<(f64, f64)> = points
+        .iter()
+        .filter_map(|(x, v)| Some((*x, stat(&all(v))?)))
+        .collect();
     let (prefactor, exponent) = line(&xy)?;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut slopes = Vec::with_capacity(resamples);
     for _ in 0..resamples {
-        let xy: Vec<(f64, f64)> = points
+        let xy: Option<Vec<(f64, f64)>> = points
             .iter()
             .map(|(x, v)| {
-                let m = (0..v.len())
-                    .map(|_| v[rng.random_range(0..v.len())])
-                    .sum::<f64>()
-                    / v.len() as f64;
-                (*x, m)
+                let pick: Vec<&T> = (0..v.len())
+                    .map(|_| &v[rng.random_range(0..v.len())])
+                    .collect();
+                Some((*x, stat(&pick)?))
             })
             .collect();
-        if let Some((_, b)) = line(&xy) {
+        if let Some((_, b)) = xy.and_then(|xy| line(&xy)) {
             slopes.push(b);
         }
     }

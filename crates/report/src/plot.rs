@@ -200,7 +200,6 @@ impl Figure {
             .y_label_formatter(&fy)
             .light_line_style(RGBColor(235, 235, 235))
             .draw()?;
-        let clip = |x: f64, y: f64| x >= x0 && x <= x1 && y >= y0 && y <= y1;
         for (k, s) in self.series.iter().enumerate() {
             let color = COLORS[k % COLORS.len()];
             let pts: Vec<(f64, f64)> = s
@@ -217,9 +216,13 @@ impl Figure {
                         _ => runs.push(Vec::new()),
                     }
                 }
+                // A run of one point (a bin between empty ones) is a dot.
+                let dots: Vec<(f64, f64)> =
+                    runs.iter().filter(|r| r.len() == 1).map(|r| r[0]).collect();
+                chart.draw_series(dots.into_iter().map(|p| Circle::new(p, 3, color.filled())))?;
                 chart.draw_series(
                     runs.into_iter()
-                        .filter(|r| !r.is_empty())
+                        .filter(|r| r.len() > 1)
                         .map(|r| PathElement::new(r, color.stroke_width(2))),
                 )?
             } else {
@@ -254,7 +257,8 @@ impl Figure {
                 .filter_map(|&(x, y)| Some((self.tx(x)?, self.ty(y)?)))
                 .collect();
             let pts = clip_line(&pts, (x0, x1), (y0, y1));
-            if pts.len() < 2 || !pts.iter().all(|&(x, y)| clip(x, y)) {
+            // Liang–Barsky leaves the ends on the box (up to round-off).
+            if pts.len() < 2 {
                 continue;
             }
             chart
