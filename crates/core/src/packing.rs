@@ -14,6 +14,9 @@ use crate::periodic::PeriodicBox;
 use crate::shape::Shape;
 use rand::{Rng, RngExt};
 
+/// Independent accumulators for the largest step in [`Packing::displace`].
+const MAX_LANES: usize = 4;
+
 /// Bodies of one family in a periodic box.
 #[derive(Clone, Debug)]
 pub struct Packing<const D: usize, S: Shape<D>> {
@@ -122,7 +125,12 @@ impl<const D: usize, S: Shape<D>> Packing<D, S> {
     pub fn displace(&mut self, dq: &[f64]) -> f64 {
         let stride = self.dof_per_body();
         debug_assert_eq!(dq.len(), self.dof());
-        let mut max_sq: f64 = 0.0;
+        // NOTE: the largest step is kept in independent lanes with a plain
+        // comparison: `f64::max` (NaN-aware) chained through one accumulator
+        // made this loop latency-bound, ~10 % of a disk FIRE step. The
+        // maximum does not depend on the order; a NaN step is ignored here
+        // as before (FIRE catches it in the energy).
+        let mut lanes = [0.0f64; MAX_LANES];
         for (i, chunk) in dq.chunks_exact(stride).enumerate() {
             let r = &mut self.positions[i];
             let mut sq = 0.0;
@@ -130,12 +138,15 @@ impl<const D: usize, S: Shape<D>> Packing<D, S> {
                 r[a] += chunk[a];
                 sq += chunk[a] * chunk[a];
             }
-            max_sq = max_sq.max(sq);
+            let lane = &mut lanes[i % MAX_LANES];
+            if sq > *lane {
+                *lane = sq;
+            }
             if stride > D {
                 self.shape.rotate(&mut self.orientations[i], &chunk[D..]);
             }
         }
-        max_sq
+        lanes.into_iter().fold(0.0, |m, x| if x > m { x } else { m })
     }
 
     /// Bring every centre back into the primary cell.
