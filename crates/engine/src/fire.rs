@@ -228,6 +228,24 @@ impl Fire {
 
     /// Minimise `obj` from its current state, starting at rest.
     pub fn minimize<O: Objective>(&mut self, obj: &mut O) -> Result<MinimizeOutcome> {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`);
+            // the AVX2 copy is the same code with the same results.
+            return unsafe { self.minimize_avx2(obj) };
+        }
+        self.minimize_portable(obj)
+    }
+
+    /// [`Fire::minimize_portable`] compiled with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn minimize_avx2<O: Objective>(&mut self, obj: &mut O) -> Result<MinimizeOutcome> {
+        self.minimize_portable(obj)
+    }
+
+    #[inline(always)]
+    fn minimize_portable<O: Objective>(&mut self, obj: &mut O) -> Result<MinimizeOutcome> {
         let p = self.params.clone();
         let n = obj.dof();
         let bodies = obj.bodies().max(1) as f64;
@@ -375,6 +393,7 @@ impl Fire {
 const LANES: usize = 4;
 
 /// `[Σ g², Σ g v, Σ m v², Σ g²/m]` in one pass.
+#[inline(always)]
 fn step_sums(g: &[f64], v: &[f64], inv_m: &[f64], mass: &[f64]) -> [f64; 4] {
     let (mut gg, mut gv, mut vv, mut ff) = ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
     let chunks = g

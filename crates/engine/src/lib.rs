@@ -20,6 +20,7 @@ pub mod fire;
 pub mod neighbors;
 pub mod protocol;
 pub mod scene;
+pub mod simd;
 
 pub use fire::{Fire, FireParams, FireVariant, MinimizeOutcome, Objective, StopReason};
 pub use neighbors::NeighborList;

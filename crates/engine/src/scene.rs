@@ -164,6 +164,27 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     pub fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
         self.refresh_neighbors();
         self.evaluations += 1;
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`).
+            // Why: the AVX2 copy of the same code gives the same bits and,
+            // with FIRE's, −10 % per disk step (docs/performance.md).
+            return unsafe { self.pair_sum_avx2(grad) };
+        }
+        self.pair_sum(grad)
+    }
+
+    /// [`Scene::pair_sum`] compiled with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn pair_sum_avx2(&self, grad: &mut [f64]) -> f64 {
+        self.pair_sum(grad)
+    }
+
+    /// The energy, with its gradient written into `grad`, over a fresh
+    /// neighbour list.
+    #[inline(always)]
+    fn pair_sum(&self, grad: &mut [f64]) -> f64 {
         grad.fill(0.0);
         let p = &self.packing;
         let (positions, sizes, orientations, reach) = (
