@@ -45,7 +45,9 @@ fn largest_step_sq<const D: usize>(dq: &[f64], stride: usize) -> f64 {
         let s = sq(c);
         lanes[0] = if s > lanes[0] { s } else { lanes[0] };
     }
-    lanes.into_iter().fold(0.0, |m, x| if x > m { x } else { m })
+    lanes
+        .into_iter()
+        .fold(0.0, |m, x| if x > m { x } else { m })
 }
 
 /// Bodies of one family in a periodic box.

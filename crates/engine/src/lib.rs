@@ -15,6 +15,7 @@
 //! Everything is generic over the dimension `D` and the family `S`, so the
 //! pair loop is compiled once per family with no dynamic dispatch.
 
+mod balls;
 pub mod check;
 pub mod fire;
 pub mod neighbors;

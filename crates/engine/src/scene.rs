@@ -164,6 +164,20 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     pub fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
         self.refresh_neighbors();
         self.evaluations += 1;
+        if S::BALL {
+            let p = &self.packing;
+            let (owners, partners) = self.neighbors.pairs();
+            return crate::balls::Balls {
+                bbox: &p.bbox,
+                positions: &p.positions,
+                sizes: &p.sizes,
+                reach: &self.reach,
+                owners,
+                partners,
+                potential: self.potential,
+            }
+            .energy_gradient(grad);
+        }
         #[cfg(target_arch = "x86_64")]
         if crate::simd::avx2() {
             // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`).
@@ -171,6 +185,14 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             // with FIRE's, −10 % per disk step (docs/performance.md).
             return unsafe { self.pair_sum_avx2(grad) };
         }
+        self.pair_sum(grad)
+    }
+
+    /// The energy and gradient by the generic pass even for balls (tests
+    /// compare it with the balls' kernel).
+    #[cfg(test)]
+    pub(crate) fn energy_gradient_generic(&mut self, grad: &mut [f64]) -> f64 {
+        self.refresh_neighbors();
         self.pair_sum(grad)
     }
 

@@ -220,10 +220,7 @@ fn cpow_pair(z_i: (f64, f64), z_j: (f64, f64), n: u32) -> ((f64, f64), (f64, f64
         3 => (cmul(csq(z_i), z_i), cmul(csq(z_j), z_j)),
         4 => (csq(csq(z_i)), csq(csq(z_j))),
         5 => (cmul(csq(csq(z_i)), z_i), cmul(csq(csq(z_j)), z_j)),
-        6 => (
-            cmul(csq(csq(z_i)), csq(z_i)),
-            cmul(csq(csq(z_j)), csq(z_j)),
-        ),
+        6 => (cmul(csq(csq(z_i)), csq(z_i)), cmul(csq(csq(z_j)), csq(z_j))),
         _ => (cpow(z_i, n), cpow(z_j, n)),
     }
 }

@@ -47,6 +47,8 @@ impl<const D: usize> Shape<D> for Sphere {
         size
     }
 
+    const BALL: bool = true;
+
     fn reference_orientation(&self) {}
 
     fn random_orientation<R: Rng + ?Sized>(&self, _rng: &mut R) {}
@@ -95,9 +97,7 @@ impl<const D: usize> Shape<D> for Sphere {
         mut visit: F,
     ) -> jamkit_core::Result<()> {
         let mut first = None;
-        self.contacts(size_i, &(), size_j, &(), r_ij, max_gap, |c| {
-            first = Some(c)
-        });
+        self.contacts(size_i, &(), size_j, &(), r_ij, max_gap, |c| first = Some(c));
         if let Some(c) = first {
             let r = r_ij.norm();
             // NOTE: at coincident centres the curvature 1/|r| is infinite;
