@@ -31,8 +31,9 @@ const CHUNK: usize = 64;
 pub(crate) struct Balls<'a, const D: usize> {
     pub bbox: &'a PeriodicBox<D>,
     pub positions: &'a [Vector<D>],
-    pub sizes: &'a [f64],
-    pub reach: &'a [f64],
+    /// `[b_i, b_j]` per pair, in list order: for balls the reach is the
+    /// radius, so these are also `R_i` and `R_j`.
+    pub pair_reach: &'a [[f64; 2]],
     pub owners: &'a [u32],
     pub partners: &'a [u32],
     pub potential: Potential,
@@ -117,10 +118,11 @@ impl<const D: usize> Balls<'_, D> {
     ) {
         let first = start + k;
         let n = self.positions.len();
-        let (positions, sizes, reach) = (&self.positions[..n], &self.sizes[..n], &self.reach[..n]);
-        let (owners, partners) = (
+        let positions = &self.positions[..n];
+        let (owners, partners, pair_reach) = (
             &self.owners[first..first + W],
             &self.partners[first..first + W],
+            &self.pair_reach[first..first + W],
         );
         let mut d = [[0.0; W]; D];
         let (mut r2, mut cut2, mut size_i, mut size_j) = ([0.0; W], [0.0; W], [0.0; W], [0.0; W]);
@@ -133,10 +135,11 @@ impl<const D: usize> Balls<'_, D> {
             for a in 0..D {
                 d[a][l] = dl[a];
             }
-            let cut = reach[i] + reach[j];
+            let [b_i, b_j] = pair_reach[l];
+            let cut = b_i + b_j;
             cut2[l] = cut * cut;
-            size_i[l] = sizes[i];
-            size_j[l] = sizes[j];
+            size_i[l] = b_i;
+            size_j[l] = b_j;
         }
         let mut r = [0.0; W];
         for l in 0..W {

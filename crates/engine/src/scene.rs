@@ -173,8 +173,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             return crate::balls::Balls {
                 bbox: &p.bbox,
                 positions: &p.positions,
-                sizes: &p.sizes,
-                reach: &self.reach,
+                pair_reach: self.neighbors.pair_reach(),
                 owners,
                 partners,
                 potential: self.potential,
