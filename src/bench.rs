@@ -52,6 +52,10 @@ pub enum BenchCommand {
         /// Moment of inertia of the near-disks (default: the paper's I = Δ).
         #[arg(long)]
         inertia: Option<f64>,
+        /// Verlet skin in units of the smallest bounding radius (as
+        /// `engine.skin` in an experiment file).
+        #[arg(long, default_value_t = 0.4)]
+        skin: f64,
     },
     /// Time one energy+gradient evaluation of binary disks at phi = 0.84.
     Eval {
@@ -71,20 +75,25 @@ pub fn run(what: BenchCommand) -> Result<()> {
             n,
             delta,
             inertia,
+            skin,
         } => {
             out!(
                 "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash"
             );
             for seed in seeds {
                 match (family, dim) {
-                    (BenchFamily::Sphere, 2) => bench_packing::<2, _>(Sphere, particles, seed)?,
-                    (BenchFamily::Sphere, 3) => bench_packing::<3, _>(Sphere, particles, seed)?,
+                    (BenchFamily::Sphere, 2) => {
+                        bench_packing::<2, _>(Sphere, particles, seed, skin)?
+                    }
+                    (BenchFamily::Sphere, 3) => {
+                        bench_packing::<3, _>(Sphere, particles, seed, skin)?
+                    }
                     (BenchFamily::Fourier, 2) => {
                         let shape = NearDisk::fourier(&FourierParams { n, delta, inertia })
                             .map_err(|e| {
                                 anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed)
                             })?;
-                        bench_packing::<2, _>(shape, particles, seed)?
+                        bench_packing::<2, _>(shape, particles, seed, skin)?
                     }
                     _ => anyhow::bail!("--dim {dim}: must be 2 or 3 (2 for near-disks)"),
                 }
@@ -94,7 +103,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
         BenchCommand::Eval { particles } => {
             out!("particles,pairs,us_per_eval,ns_per_particle");
             for n in particles {
-                let mut scene = random_scene::<2, _>(Sphere, n, 1, 0.84)?;
+                let mut scene = random_scene::<2, _>(Sphere, n, 1, 0.84, 0.4)?;
                 let mut g = vec![0.0; scene.dof()];
                 let reps = (20_000_000 / n).max(10);
                 scene.energy_gradient(&mut g);
@@ -117,12 +126,13 @@ pub fn run(what: BenchCommand) -> Result<()> {
 }
 
 /// A random scene as `jamkit run` builds it: sizes, then centres, then
-/// orientations from one stream, skin 0.4 × the smallest bounding radius.
+/// orientations from one stream, skin `skin` × the smallest bounding radius.
 fn random_scene<const D: usize, S: Shape<D>>(
     shape: S,
     n: usize,
     seed: u64,
     phi: f64,
+    skin: f64,
 ) -> Result<Scene<D, S>> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let sizes = SizeDistribution::default().sample(n, &mut rng);
@@ -131,7 +141,7 @@ fn random_scene<const D: usize, S: Shape<D>>(
         .map(|&s| shape.bounding_radius(s))
         .fold(f64::INFINITY, f64::min);
     let packing = Packing::<D, S>::random(shape, sizes, phi, &mut rng)?;
-    Ok(Scene::new(packing, Potential::Harmonic, 0.4 * min_reach))
+    Ok(Scene::new(packing, Potential::Harmonic, skin * min_reach))
 }
 
 /// FNV-1a over the bits of the box edges, centres and orientation coordinates.
@@ -150,9 +160,14 @@ fn packing_hash<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> u64 {
     h
 }
 
-fn bench_packing<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64) -> Result<()> {
+fn bench_packing<const D: usize, S: Shape<D>>(
+    shape: S,
+    n: usize,
+    seed: u64,
+    skin: f64,
+) -> Result<()> {
     let family = shape.family();
-    let mut scene = random_scene::<D, S>(shape, n, seed, 0.1)?;
+    let mut scene = random_scene::<D, S>(shape, n, seed, 0.1, skin)?;
     let mut fire = Fire::new(FireParams::default());
     let t = Instant::now();
     let out = jam(&mut scene, &mut fire, &JamParams::default())?;
