@@ -2,6 +2,8 @@
 //!
 //! * `energy_gradient/N`: one energy-and-gradient evaluation of binary disks
 //!   at φ = 0.84 (random, overlapping), N = 256 … 16384: must grow linearly.
+//! * `energy_gradient_near_disks/N`: the same for the paper's near-disks
+//!   (`fourier`, n = 2, Δ = 0.1, φ = 0.86), N = 256 and 1024.
 //! * `jam_disks/256`: one whole N = 256 packing with the paper's protocol.
 //!
 //! The N = 1024 packing benchmark is `jamkit bench packing` (one packing is
@@ -10,6 +12,7 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use jamkit_core::{Packing, Potential, SizeDistribution};
 use jamkit_engine::{Fire, FireParams, JamParams, Objective, Scene, jam};
+use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_sphere::Sphere;
 use rand::SeedableRng;
 use std::hint::black_box;
@@ -34,6 +37,28 @@ fn energy_gradient(c: &mut Criterion) {
     group.finish();
 }
 
+fn energy_gradient_near_disks(c: &mut Criterion) {
+    let mut group = c.benchmark_group("energy_gradient_near_disks");
+    let shape = NearDisk::fourier(&FourierParams {
+        n: 2,
+        delta: 0.1,
+        inertia: None,
+    })
+    .unwrap();
+    for n in [256, 1024] {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let sizes = SizeDistribution::default().sample(n, &mut rng);
+        let packing = Packing::<2, NearDisk>::random(shape.clone(), sizes, 0.86, &mut rng).unwrap();
+        let mut scene = Scene::new(packing, Potential::Harmonic, 0.21);
+        let mut grad = vec![0.0; scene.dof()];
+        group.throughput(Throughput::Elements(n as u64));
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| black_box(scene.energy_gradient(&mut grad)))
+        });
+    }
+    group.finish();
+}
+
 fn jam_disks(c: &mut Criterion) {
     let mut group = c.benchmark_group("jam_disks");
     group.sample_size(10);
@@ -47,5 +72,10 @@ fn jam_disks(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, energy_gradient, jam_disks);
+criterion_group!(
+    benches,
+    energy_gradient,
+    energy_gradient_near_disks,
+    jam_disks
+);
 criterion_main!(benches);

@@ -1,31 +1,62 @@
 //! `jamkit bench`: timings of the engine, for docs/performance.md.
 //!
-//! * `packing`: one binary-disk packing with the paper's protocol, one thread;
+//! * `packing`: one packing with the paper's protocol per seed, one thread:
+//!   binary disks (default) or near-disks (`--family fourier --n 2 --delta 0.1`);
 //! * `eval`: time per energy-and-gradient evaluation against N;
 //! * `spectrum`: Hessian assembly and eigensolvers (`bench_spectrum.rs`).
+//!
+//! Each packing line ends with a hash of the final state (box, centres,
+//! orientations, bit for bit), so that two builds can be checked to give
+//! identical packings.
 
 use anyhow::Result;
-use clap::Subcommand;
-use jamkit_core::{Packing, Potential, SizeDistribution};
+use clap::{Subcommand, ValueEnum};
+use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::{Fire, FireParams, JamParams, Objective, Scene, jam};
+use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_observe::summarize;
 use jamkit_sphere::Sphere;
 use rand::SeedableRng;
 use std::time::Instant;
 
+/// Which bodies `bench packing` jams.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BenchFamily {
+    /// Binary disks (spheres in `--dim 3`).
+    Sphere,
+    /// The paper's near-disks `R0 [1 + Δ sin(nθ)/n]` (2D only).
+    Fourier,
+}
+
 #[derive(Subcommand)]
 pub enum BenchCommand {
-    /// Time whole jammed packings (paper's protocol, binary disks, one thread).
+    /// Time whole jammed packings (paper's protocol, one thread).
     Packing {
-        /// Number of disks.
+        /// Number of bodies.
         #[arg(long, default_value_t = 1024)]
         particles: usize,
         /// Seeds to run (one packing each).
         #[arg(long, value_delimiter = ',', default_value = "1")]
         seeds: Vec<u64>,
-        /// Dimension (2 or 3).
+        /// Dimension (2 or 3; near-disks are 2D only).
         #[arg(long, default_value_t = 2)]
         dim: usize,
+        /// Shape family.
+        #[arg(long, value_enum, default_value_t = BenchFamily::Sphere)]
+        family: BenchFamily,
+        /// Mode number of the near-disks.
+        #[arg(long, default_value_t = 2)]
+        n: u32,
+        /// Δ of the near-disks.
+        #[arg(long, default_value_t = 0.1)]
+        delta: f64,
+        /// Moment of inertia of the near-disks (default: the paper's I = Δ).
+        #[arg(long)]
+        inertia: Option<f64>,
+        /// Verlet skin in units of the smallest bounding radius (as
+        /// `engine.skin` in an experiment file).
+        #[arg(long, default_value_t = 0.4)]
+        skin: f64,
     },
     /// Time one energy+gradient evaluation of binary disks at phi = 0.84.
     Eval {
@@ -54,13 +85,31 @@ pub fn run(what: BenchCommand) -> Result<()> {
             particles,
             seeds,
             dim,
+            family,
+            n,
+            delta,
+            inertia,
+            skin,
         } => {
-            out!("dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step");
+            out!(
+                "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash"
+            );
             for seed in seeds {
-                match dim {
-                    2 => bench_packing::<2>(particles, seed)?,
-                    3 => bench_packing::<3>(particles, seed)?,
-                    _ => anyhow::bail!("--dim {dim}: must be 2 or 3"),
+                match (family, dim) {
+                    (BenchFamily::Sphere, 2) => {
+                        bench_packing::<2, _>(Sphere, particles, seed, skin)?
+                    }
+                    (BenchFamily::Sphere, 3) => {
+                        bench_packing::<3, _>(Sphere, particles, seed, skin)?
+                    }
+                    (BenchFamily::Fourier, 2) => {
+                        let shape = NearDisk::fourier(&FourierParams { n, delta, inertia })
+                            .map_err(|e| {
+                                anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed)
+                            })?;
+                        bench_packing::<2, _>(shape, particles, seed, skin)?
+                    }
+                    _ => anyhow::bail!("--dim {dim}: must be 2 or 3 (2 for near-disks)"),
                 }
             }
             Ok(())
@@ -68,7 +117,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
         BenchCommand::Eval { particles } => {
             out!("particles,pairs,us_per_eval,ns_per_particle");
             for n in particles {
-                let mut scene = random_scene::<2>(n, 1, 0.84)?;
+                let mut scene = random_scene::<2, _>(Sphere, n, 1, 0.84, 0.4)?;
                 let mut g = vec![0.0; scene.dof()];
                 let reps = (20_000_000 / n).max(10);
                 scene.energy_gradient(&mut g);
@@ -90,27 +139,63 @@ pub fn run(what: BenchCommand) -> Result<()> {
     }
 }
 
-fn random_scene<const D: usize>(n: usize, seed: u64, phi: f64) -> Result<Scene<D, Sphere>> {
+/// A random scene as `jamkit run` builds it: sizes, then centres, then
+/// orientations from one stream, skin `skin` × the smallest bounding radius.
+fn random_scene<const D: usize, S: Shape<D>>(
+    shape: S,
+    n: usize,
+    seed: u64,
+    phi: f64,
+    skin: f64,
+) -> Result<Scene<D, S>> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let sizes = SizeDistribution::default().sample(n, &mut rng);
-    let packing = Packing::<D, Sphere>::random(Sphere, sizes, phi, &mut rng)?;
-    Ok(Scene::new(packing, Potential::Harmonic, 0.4 * 0.5))
+    let min_reach = sizes
+        .iter()
+        .map(|&s| shape.bounding_radius(s))
+        .fold(f64::INFINITY, f64::min);
+    let packing = Packing::<D, S>::random(shape, sizes, phi, &mut rng)?;
+    Ok(Scene::new(packing, Potential::Harmonic, skin * min_reach))
 }
 
-fn bench_packing<const D: usize>(n: usize, seed: u64) -> Result<()> {
-    let mut scene = random_scene::<D>(n, seed, 0.1)?;
+/// FNV-1a over the bits of the box edges, centres and orientation coordinates.
+fn packing_hash<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: f64| {
+        for b in x.to_bits().to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    p.bbox.edges().iter().for_each(|&x| eat(x));
+    for (r, o) in p.positions.iter().zip(&p.orientations) {
+        r.iter().for_each(|&x| eat(x));
+        p.shape.orientation_coords(o).into_iter().for_each(&mut eat);
+    }
+    h
+}
+
+fn bench_packing<const D: usize, S: Shape<D>>(
+    shape: S,
+    n: usize,
+    seed: u64,
+    skin: f64,
+) -> Result<()> {
+    let family = shape.family();
+    let mut scene = random_scene::<D, S>(shape, n, seed, 0.1, skin)?;
     let mut fire = Fire::new(FireParams::default());
     let t = Instant::now();
     let out = jam(&mut scene, &mut fire, &JamParams::default())?;
     let wall = t.elapsed().as_secs_f64();
-    let s = summarize(&mut scene, D + 1);
+    let threshold = scene.packing().shape.rattler_threshold();
+    let s = summarize(&mut scene, threshold);
     out!(
-        "{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2}",
+        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x}",
         out.phi,
         s.z_j,
         s.iso_margin,
         out.fire_steps,
-        wall * 1e6 / out.fire_steps as f64
+        wall * 1e6 / out.fire_steps as f64,
+        packing_hash(scene.packing())
     );
     Ok(())
 }

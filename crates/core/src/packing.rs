@@ -18,6 +18,42 @@ use rand::{Rng, RngExt};
 /// ([`Shape::overlap_free_start`]).
 pub const MAX_PLACEMENT_TRIES: usize = 100_000;
 
+/// Independent accumulators for [`largest_step_sq`].
+const MAX_LANES: usize = 4;
+
+/// `max_i Σ_{a < D} dq[i stride + a]²`, the largest squared translation.
+///
+/// NOTE: a pass of its own, with four bodies at a time in independent lanes
+/// and a plain comparison (a `maxpd`): `f64::max` (NaN-aware) chained
+/// through one accumulator made `displace` latency-bound, ~10 % of a disk
+/// FIRE step. The maximum does not depend on the order; a NaN step is
+/// ignored here as before (FIRE catches it in the energy).
+#[inline]
+fn largest_step_sq<const D: usize>(dq: &[f64], stride: usize) -> f64 {
+    let sq = |c: &[f64]| {
+        let mut s = 0.0;
+        for a in 0..D {
+            s += c[a] * c[a];
+        }
+        s
+    };
+    let mut lanes = [0.0f64; MAX_LANES];
+    let mut blocks = dq.chunks_exact(MAX_LANES * stride);
+    for block in &mut blocks {
+        for (l, lane) in lanes.iter_mut().enumerate() {
+            let s = sq(&block[l * stride..]);
+            *lane = if s > *lane { s } else { *lane };
+        }
+    }
+    for c in blocks.remainder().chunks_exact(stride) {
+        let s = sq(c);
+        lanes[0] = if s > lanes[0] { s } else { lanes[0] };
+    }
+    lanes
+        .into_iter()
+        .fold(0.0, |m, x| if x > m { x } else { m })
+}
+
 /// Bodies of one family in a periodic box.
 #[derive(Clone, Debug)]
 pub struct Packing<const D: usize, S: Shape<D>> {
@@ -184,20 +220,16 @@ impl<const D: usize, S: Shape<D>> Packing<D, S> {
     pub fn displace(&mut self, dq: &[f64]) -> f64 {
         let stride = self.dof_per_body();
         debug_assert_eq!(dq.len(), self.dof());
-        let mut max_sq: f64 = 0.0;
         for (i, chunk) in dq.chunks_exact(stride).enumerate() {
             let r = &mut self.positions[i];
-            let mut sq = 0.0;
             for a in 0..D {
                 r[a] += chunk[a];
-                sq += chunk[a] * chunk[a];
             }
-            max_sq = max_sq.max(sq);
             if stride > D {
                 self.shape.rotate(&mut self.orientations[i], &chunk[D..]);
             }
         }
-        max_sq
+        largest_step_sq::<D>(dq, stride)
     }
 
     /// Bring every centre back into the primary cell.

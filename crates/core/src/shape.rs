@@ -120,6 +120,15 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     /// whose centres are farther apart than the sum have no contact.
     fn bounding_radius(&self, size: f64) -> f64;
 
+    /// True only for a family of balls: no rotational coordinates, bounding
+    /// radius = size, and one contact per pair, exactly
+    /// `Contact::translational(|r| − R_i − R_j, r/|r|)` as computed by the
+    /// `sphere` family (`(1/|r|) r`, and the first axis at `r = 0`). The
+    /// engine then evaluates the energy with a kernel of its own that
+    /// handles several pairs per instruction; `tests` check that it gives
+    /// the same bits as [`Shape::contacts`].
+    const BALL: bool = false;
+
     /// Inertia of each rotational coordinate (the mass FIRE gives it).
     fn rot_inertia(&self, _size: f64) -> RotVec {
         [1.0; 3]

@@ -17,6 +17,7 @@
 //! `draw-shape`, whose panels have titles, axes and legends, writes SVG only.
 
 pub mod colors;
+pub mod fonts;
 pub mod geometry;
 pub mod packing;
 pub mod render;

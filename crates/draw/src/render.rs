@@ -318,6 +318,8 @@ fn paint_legend<DB: DrawingBackend>(
 /// four to a row, with one legend (the curve labels of the first panel)
 /// underneath.
 pub fn shapes_svg(panels: &[ShapePanel], panel_size: u32) -> Result<String, DrawError> {
+    // Titles and legends are measured with the registered font.
+    crate::fonts::register();
     check_size(panel_size)?;
     let cols = panels.len().clamp(1, 4);
     let rows = panels.len().div_ceil(cols).max(1);

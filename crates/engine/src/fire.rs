@@ -228,6 +228,24 @@ impl Fire {
 
     /// Minimise `obj` from its current state, starting at rest.
     pub fn minimize<O: Objective>(&mut self, obj: &mut O) -> Result<MinimizeOutcome> {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`);
+            // the AVX2 copy is the same code with the same results.
+            return unsafe { self.minimize_avx2(obj) };
+        }
+        self.minimize_portable(obj)
+    }
+
+    /// [`Fire::minimize_portable`] compiled with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn minimize_avx2<O: Objective>(&mut self, obj: &mut O) -> Result<MinimizeOutcome> {
+        self.minimize_portable(obj)
+    }
+
+    #[inline(always)]
+    fn minimize_portable<O: Objective>(&mut self, obj: &mut O) -> Result<MinimizeOutcome> {
         let p = self.params.clone();
         let n = obj.dof();
         let bodies = obj.bodies().max(1) as f64;
@@ -241,6 +259,7 @@ impl Fire {
         self.mass.extend(self.inv_mass.iter().map(|m| 1.0 / m));
         let (v, g, dq) = (&mut self.velocity, &mut self.grad, &mut self.step);
         let (inv_m, mass) = (&self.inv_mass, &self.mass);
+        let unit = inv_m.iter().all(|&m| m == 1.0);
 
         let mut dt = p.dt_init;
         let (alpha_start, n_min) = (p.alpha_start(), p.n_min());
@@ -249,7 +268,7 @@ impl Fire {
         let mut energy = obj.energy_gradient(g);
         let mut steps: u64 = 0;
         loop {
-            let [force_sq, minus_power, v_norm_sq, f_norm_sq] = step_sums(g, v, inv_m, mass);
+            let [force_sq, minus_power, v_norm_sq, f_norm_sq] = step_sums(g, v, inv_m, mass, unit);
             if !(energy.is_finite() && force_sq.is_finite()) {
                 return Err(Error::NonFinite {
                     phi: obj.phi(),
@@ -311,11 +330,19 @@ impl Fire {
                         (0.0, 0.0)
                     };
                     let kick = steer + dt;
-                    for (((va, da), ga), ma) in
-                        v.iter_mut().zip(dq.iter_mut()).zip(g.iter()).zip(inv_m)
-                    {
-                        *va = keep * *va - kick * ga * ma;
-                        *da = dt * *va;
+                    if unit {
+                        // Bit for bit the general loop: `x · 1 = x`.
+                        for ((va, da), ga) in v.iter_mut().zip(dq.iter_mut()).zip(g.iter()) {
+                            *va = keep * *va - kick * ga;
+                            *da = dt * *va;
+                        }
+                    } else {
+                        for (((va, da), ga), ma) in
+                            v.iter_mut().zip(dq.iter_mut()).zip(g.iter()).zip(inv_m)
+                        {
+                            *va = keep * *va - kick * ga * ma;
+                            *da = dt * *va;
+                        }
                     }
                 }
                 FireVariant::Fire2 => {
@@ -374,28 +401,90 @@ impl Fire {
 /// deterministic.
 const LANES: usize = 4;
 
-/// `[Σ g², Σ g v, Σ m v², Σ g²/m]` in one pass.
-fn step_sums(g: &[f64], v: &[f64], inv_m: &[f64], mass: &[f64]) -> [f64; 4] {
+/// `[Σ g², Σ g v, Σ m v², Σ g²/m]` in one pass; `unit`: every mass is 1.
+#[inline(never)]
+fn step_sums(g: &[f64], v: &[f64], inv_m: &[f64], mass: &[f64], unit: bool) -> [f64; 4] {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2() {
+        // SAFETY: the CPU has AVX2 (checked at run time); same code, same bits.
+        return unsafe {
+            if unit {
+                step_sums_avx2::<true>(g, v, inv_m, mass)
+            } else {
+                step_sums_avx2::<false>(g, v, inv_m, mass)
+            }
+        };
+    }
+    if unit {
+        step_sums_portable::<true>(g, v, inv_m, mass)
+    } else {
+        step_sums_portable::<false>(g, v, inv_m, mass)
+    }
+}
+
+/// [`step_sums_portable`] compiled with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline(never)]
+unsafe fn step_sums_avx2<const UNIT: bool>(
+    g: &[f64],
+    v: &[f64],
+    inv_m: &[f64],
+    mass: &[f64],
+) -> [f64; 4] {
+    step_sums_portable::<UNIT>(g, v, inv_m, mass)
+}
+
+/// NOTE: kept out of FIRE's loop (`step_sums` is never inlined), so that the
+/// sixteen partial sums stay in registers: inlined, they spilled to the
+/// stack. One lane loop per sum, so that each sum is one vector register.
+/// With unit masses (`UNIT`, spheres) the mass streams are not read:
+/// `x · 1 = x` exactly, so the sums are bit for bit the general ones, and
+/// `Σ g²/m` is `Σ g²`.
+#[inline(always)]
+fn step_sums_portable<const UNIT: bool>(
+    g: &[f64],
+    v: &[f64],
+    inv_m: &[f64],
+    mass: &[f64],
+) -> [f64; 4] {
     let (mut gg, mut gv, mut vv, mut ff) = ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
-    let chunks = g
-        .chunks_exact(LANES)
-        .zip(v.chunks_exact(LANES))
-        .zip(inv_m.chunks_exact(LANES))
-        .zip(mass.chunks_exact(LANES));
-    for (((g4, v4), im4), m4) in chunks {
+    let blocks = g.len() / LANES;
+    for k in 0..blocks {
+        let r = k * LANES..(k + 1) * LANES;
+        let (g4, v4) = (&g[r.clone()], &v[r.clone()]);
         for l in 0..LANES {
             gg[l] += g4[l] * g4[l];
+        }
+        for l in 0..LANES {
             gv[l] += g4[l] * v4[l];
-            vv[l] += v4[l] * v4[l] * m4[l];
-            ff[l] += g4[l] * g4[l] * im4[l];
+        }
+        if UNIT {
+            for l in 0..LANES {
+                vv[l] += v4[l] * v4[l];
+            }
+        } else {
+            let (im4, m4) = (&inv_m[r.clone()], &mass[r]);
+            for l in 0..LANES {
+                vv[l] += v4[l] * v4[l] * m4[l];
+            }
+            for l in 0..LANES {
+                ff[l] += g4[l] * g4[l] * im4[l];
+            }
         }
     }
-    let body = g.len() - g.len() % LANES;
-    for a in body..g.len() {
+    for a in blocks * LANES..g.len() {
         gg[0] += g[a] * g[a];
         gv[0] += g[a] * v[a];
-        vv[0] += v[a] * v[a] * mass[a];
-        ff[0] += g[a] * g[a] * inv_m[a];
+        if UNIT {
+            vv[0] += v[a] * v[a];
+        } else {
+            vv[0] += v[a] * v[a] * mass[a];
+            ff[0] += g[a] * g[a] * inv_m[a];
+        }
+    }
+    if UNIT {
+        ff = gg;
     }
     [gg, gv, vv, ff].map(|l| (l[0] + l[1]) + (l[2] + l[3]))
 }

@@ -15,11 +15,13 @@
 //! Everything is generic over the dimension `D` and the family `S`, so the
 //! pair loop is compiled once per family with no dynamic dispatch.
 
+mod balls;
 pub mod check;
 pub mod fire;
 pub mod neighbors;
 pub mod protocol;
 pub mod scene;
+pub mod simd;
 
 pub use fire::{Fire, FireParams, FireVariant, MinimizeOutcome, Objective, StopReason};
 pub use neighbors::NeighborList;

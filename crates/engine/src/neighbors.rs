@@ -18,6 +18,10 @@ pub struct NeighborList<const D: usize> {
     skin: f64,
     start: Vec<u32>,
     partners: Vec<u32>,
+    /// `owners[k]`: the body `i` whose partner is `partners[k]`.
+    owners: Vec<u32>,
+    /// `[b_i, b_j]` of each pair (read in list order instead of gathered).
+    pair_reach: Vec<[f64; 2]>,
     reference: Vec<Vector<D>>,
     drift: f64,
     builds: u64,
@@ -34,6 +38,8 @@ impl<const D: usize> NeighborList<D> {
             skin,
             start: vec![0],
             partners: Vec::new(),
+            owners: Vec::new(),
+            pair_reach: Vec::new(),
             reference: Vec::new(),
             drift: 0.0,
             builds: 0,
@@ -62,6 +68,19 @@ impl<const D: usize> NeighborList<D> {
     #[inline(always)]
     pub fn partners(&self, i: usize) -> &[u32] {
         &self.partners[self.start[i] as usize..self.start[i + 1] as usize]
+    }
+
+    /// Every pair `(owners[k], partners[k])` in list order: `i` ascending,
+    /// and the partners of each `i` ascending, as [`NeighborList::partners`]
+    /// visits them.
+    pub fn pairs(&self) -> (&[u32], &[u32]) {
+        (&self.owners, &self.partners)
+    }
+
+    /// The reaches `[b_i, b_j]` of every pair, in the order of
+    /// [`NeighborList::pairs`].
+    pub fn pair_reach(&self) -> &[[f64; 2]] {
+        &self.pair_reach
     }
 
     /// Record a move in which no body was displaced by more than `max_step`.
@@ -111,6 +130,8 @@ impl<const D: usize> NeighborList<D> {
         self.start.clear();
         self.start.push(0);
         self.partners.clear();
+        self.owners.clear();
+        self.pair_reach.clear();
         let max_reach = reach.iter().copied().fold(0.0, f64::max);
         let width = 2.0 * max_reach + self.skin;
         let mut cells = [0usize; D];
@@ -139,6 +160,8 @@ impl<const D: usize> NeighborList<D> {
                     reach[i] + reach[j] + self.skin,
                 ) {
                     self.partners.push(j as u32);
+                    self.owners.push(i as u32);
+                    self.pair_reach.push([reach[i], reach[j]]);
                 }
             }
             self.start.push(self.partners.len() as u32);
@@ -219,6 +242,10 @@ impl<const D: usize> NeighborList<D> {
             // Ascending partners: memory order, and the same list whatever the cell layout.
             found.sort_unstable();
             self.partners.extend_from_slice(&found);
+            self.owners
+                .extend(std::iter::repeat_n(i as u32, found.len()));
+            self.pair_reach
+                .extend(found.iter().map(|&j| [reach[i], reach[j as usize]]));
             self.start.push(self.partners.len() as u32);
         }
     }

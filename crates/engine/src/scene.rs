@@ -23,6 +23,8 @@ pub struct Scene<const D: usize, S: Shape<D>> {
     reach: Vec<f64>,
     inverse_masses: Vec<f64>,
     evaluations: u64,
+    /// Scratch: the contacts of one chunk of the list, `(pair, contact)`.
+    found: Vec<(u32, Contact<D>)>,
 }
 
 impl<const D: usize, S: Shape<D>> Scene<D, S> {
@@ -42,6 +44,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             reach,
             inverse_masses,
             evaluations: 0,
+            found: Vec::new(),
         };
         scene.rebuild_neighbors();
         scene
@@ -201,6 +204,68 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     pub fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
         self.refresh_neighbors();
         self.evaluations += 1;
+        if S::BALL {
+            let p = &self.packing;
+            let (owners, partners) = self.neighbors.pairs();
+            return crate::balls::Balls {
+                bbox: &p.bbox,
+                positions: &p.positions,
+                pair_reach: self.neighbors.pair_reach(),
+                owners,
+                partners,
+                potential: self.potential,
+            }
+            .energy_gradient(grad);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`).
+            // Why: the AVX2 copy of the same code gives the same bits and,
+            // with FIRE's, −10 % per disk step (docs/performance.md).
+            return unsafe { self.pair_sum_avx2(grad) };
+        }
+        let mut found = std::mem::take(&mut self.found);
+        let e = self.pair_sum(grad, &mut found);
+        self.found = found;
+        e
+    }
+
+    /// The energy and gradient by the generic pass even for balls (tests
+    /// compare it with the balls' kernel).
+    #[cfg(test)]
+    pub(crate) fn energy_gradient_generic(&mut self, grad: &mut [f64]) -> f64 {
+        self.refresh_neighbors();
+        let mut found = Vec::new();
+        self.pair_sum(grad, &mut found)
+    }
+
+    /// [`Scene::pair_sum`] compiled with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn pair_sum_avx2(&mut self, grad: &mut [f64]) -> f64 {
+        let mut found = std::mem::take(&mut self.found);
+        let e = self.pair_sum(grad, &mut found);
+        self.found = found;
+        e
+    }
+
+    /// The energy, with its gradient written into `grad`, over a fresh
+    /// neighbour list.
+    ///
+    /// Two phases per chunk of the list: the family's contacts of every pair
+    /// whose bounding balls overlap, into a buffer; then the sums in list
+    /// order, `V += v(h)`, `g_j += v' ∂h/∂q_j`, and `g_i += v' ∂h/∂q_i` in
+    /// registers until `i`'s partners end (added to `g_i` then).
+    ///
+    /// NOTE: one pass that summed inside the family's callback kept `V` and
+    /// `g_i` on the stack (a store-to-load latency per pair) and made the
+    /// pairs wait for each other; apart, the contacts of many pairs are
+    /// computed side by side. Every sum has the same terms in the same order
+    /// as in that one pass, so the results are the same bits (bodies with no
+    /// contact add nothing, where the one pass added exact zeros).
+    #[inline(always)]
+    fn pair_sum(&self, grad: &mut [f64], found: &mut Vec<(u32, Contact<D>)>) -> f64 {
+        const CHUNK: usize = 64;
         grad.fill(0.0);
         let p = &self.packing;
         let (positions, sizes, orientations, reach) = (
@@ -212,47 +277,42 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         let k = p.shape.rot_dof();
         let stride = D + k;
         let potential = self.potential;
+        let (owners, partners) = self.neighbors.pairs();
         let mut energy = 0.0;
-        for i in 0..positions.len() {
-            let ri = positions[i];
-            let (si, oi, bi) = (sizes[i], &orientations[i], reach[i]);
-            // Body i's own gradient stays in registers until its partners are done.
-            let mut gi_r = Vector::<D>::zeros();
-            let mut gi_q = [0.0; jamkit_core::MAX_ROT];
-            for &j in self.neighbors.partners(i) {
-                let j = j as usize;
-                let d = p.bbox.minimum_image(positions[j] - ri);
+        let mut owner = usize::MAX;
+        let mut gi_r = Vector::<D>::zeros();
+        let mut gi_q = [0.0; jamkit_core::MAX_ROT];
+        for start in (0..partners.len()).step_by(CHUNK) {
+            let end = (start + CHUNK).min(partners.len());
+            found.clear();
+            for pair in start..end {
+                let (i, j) = (owners[pair] as usize, partners[pair] as usize);
+                let d = p.bbox.minimum_image(positions[j] - positions[i]);
                 // Bounding balls apart: no contact, and no square root.
-                let cut = bi + reach[j];
+                let cut = reach[i] + reach[j];
                 if d.norm_squared() >= cut * cut {
                     continue;
                 }
-                let gj = &mut grad[j * stride..(j + 1) * stride];
-                // NOTE: no test on the sign of the gap here: a pair out of
-                // contact adds exact zeros (v' = 0), which is cheaper than a
-                // mispredicted branch, and the sums are the same.
-                p.shape
-                    .contacts(si, oi, sizes[j], &orientations[j], &d, 0.0, |c| {
-                        let (v, dv) = potential.energy_and_derivative(c.gap);
-                        energy += v;
-                        let f = c.grad_r * dv;
-                        gi_r -= f;
-                        for a in 0..D {
-                            gj[a] += f[a];
-                        }
-                        for a in 0..k {
-                            gi_q[a] += dv * c.grad_rot_i[a];
-                            gj[D + a] += dv * c.grad_rot_j[a];
-                        }
-                    });
+                p.shape.contacts(
+                    sizes[i],
+                    &orientations[i],
+                    sizes[j],
+                    &orientations[j],
+                    &d,
+                    0.0,
+                    |c| found.push((pair as u32, c)),
+                );
             }
-            let gi = &mut grad[i * stride..(i + 1) * stride];
-            for a in 0..D {
-                gi[a] += gi_r[a];
-            }
-            for a in 0..k {
-                gi[D + a] += gi_q[a];
-            }
+            (energy, owner, gi_r, gi_q) = sum_contacts(
+                found,
+                (owners, partners),
+                potential,
+                (k, grad),
+                (energy, owner, gi_r, gi_q),
+            );
+        }
+        if owner != usize::MAX {
+            add_body(grad, owner, stride, &gi_r, &gi_q);
         }
         energy
     }
@@ -274,6 +334,73 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             virial += potential.derivative(c.gap) * d.dot(&c.grad_r);
         });
         -virial / (D as f64 * self.packing.bbox.volume())
+    }
+}
+
+/// What [`sum_contacts`] carries from one chunk to the next: `V`, the body
+/// whose partners are under way, and its gradient so far.
+type PairSums<const D: usize> = (f64, usize, Vector<D>, jamkit_core::RotVec);
+
+/// The second phase of [`Scene::pair_sum`] over one chunk's contacts.
+///
+/// NOTE: never inlined: inside the first phase's code, `V` and `g_i` went
+/// through the stack again.
+#[inline(never)]
+fn sum_contacts<const D: usize>(
+    found: &[(u32, Contact<D>)],
+    (owners, partners): (&[u32], &[u32]),
+    potential: Potential,
+    (k, grad): (usize, &mut [f64]),
+    (mut energy, mut owner, mut gi_r, mut gi_q): PairSums<D>,
+) -> PairSums<D> {
+    let stride = D + k;
+    for &(pair, ref c) in found {
+        let (i, j) = (
+            owners[pair as usize] as usize,
+            partners[pair as usize] as usize,
+        );
+        if i != owner {
+            if owner != usize::MAX {
+                add_body(grad, owner, stride, &gi_r, &gi_q);
+            }
+            owner = i;
+            gi_r = Vector::<D>::zeros();
+            gi_q = [0.0; jamkit_core::MAX_ROT];
+        }
+        // NOTE: no test on the sign of the gap here: a pair out of
+        // contact adds exact zeros (v' = 0), which is cheaper than a
+        // mispredicted branch, and the sums are the same.
+        let (v, dv) = potential.energy_and_derivative(c.gap);
+        energy += v;
+        let f = c.grad_r * dv;
+        gi_r -= f;
+        let gj = &mut grad[j * stride..(j + 1) * stride];
+        for a in 0..D {
+            gj[a] += f[a];
+        }
+        for a in 0..k {
+            gi_q[a] += dv * c.grad_rot_i[a];
+            gj[D + a] += dv * c.grad_rot_j[a];
+        }
+    }
+    (energy, owner, gi_r, gi_q)
+}
+
+/// `grad[body] += (g_r, g_q)`, the body's own share of the pair sums.
+#[inline(always)]
+fn add_body<const D: usize>(
+    grad: &mut [f64],
+    body: usize,
+    stride: usize,
+    g_r: &Vector<D>,
+    g_q: &jamkit_core::RotVec,
+) {
+    let g = &mut grad[body * stride..(body + 1) * stride];
+    for a in 0..D {
+        g[a] += g_r[a];
+    }
+    for a in D..stride {
+        g[a] += g_q[a - D];
     }
 }
 

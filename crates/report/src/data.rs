@@ -59,10 +59,14 @@ pub struct Point {
 
 /// The points found in `dirs` (each a run's output directory), and the
 /// number of packing files skipped (not a `fourier` near-disk with `n` and
-/// `delta`, or unreadable).
+/// `delta`, or unreadable). A packing present in several runs (same id and
+/// settings) is taken once, with the observables of its first file.
 pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportError> {
-    let mut points: Vec<Point> = Vec::new();
     let mut skipped = 0;
+    // Runs that share a grid point and seeds hold the same packing more
+    // than once (same id, same settings): it counts once, from the file
+    // with the most observables.
+    let mut files: Vec<PackingFile> = Vec::new();
     for dir in dirs {
         let dir = dir.as_ref().join("packings");
         let entries = std::fs::read_dir(&dir).map_err(|e| ReportError::Io {
@@ -79,41 +83,50 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
                 skipped += 1;
                 continue;
             };
-            let param = |k: &str| file.params.get(k).and_then(|v| v.as_f64());
-            let (Some(n), Some(delta)) = (param("n"), param("delta")) else {
-                skipped += 1;
-                continue;
-            };
-            let m = &file.measures;
-            let sample = Sample {
-                phi: m.phi,
-                z_j: m.z_j,
-                n_nr: m.n_rattlers.map(|r| file.particles - r),
-                rattler_fraction: m.n_rattlers.map(|r| r as f64 / file.particles as f64),
-                omega_1: m.spectrum.as_ref().and_then(|s| s.omega_1()),
-                omega_star: m.spectrum.as_ref().and_then(|s| s.omega_star()),
-                dos: m.spectrum.as_ref().map(|s| s.histogram.clone()),
-                dos_params: m.spectrum.as_ref().map(|s| s.dos.clone()),
-                gaps: m.gaps.clone(),
-            };
-            let key = |p: &Point| {
-                p.family == file.family
-                    && p.dim == file.dim
-                    && p.n == n as u32
-                    && p.delta == delta
-                    && p.particles == file.particles
-            };
-            match points.iter_mut().find(|p| key(p)) {
-                Some(p) => p.samples.push(sample),
-                None => points.push(Point {
-                    family: file.family.clone(),
-                    dim: file.dim,
-                    n: n as u32,
-                    delta,
-                    particles: file.particles,
-                    samples: vec![sample],
-                }),
+            let same = |f: &PackingFile| f.id == file.id && f.settings == file.settings;
+            match files.iter_mut().find(|f| same(f)) {
+                Some(f) if richness(&file) > richness(f) => *f = file,
+                Some(_) => {}
+                None => files.push(file),
             }
+        }
+    }
+    let mut points: Vec<Point> = Vec::new();
+    for file in &files {
+        let param = |k: &str| file.params.get(k).and_then(|v| v.as_f64());
+        let (Some(n), Some(delta)) = (param("n"), param("delta")) else {
+            skipped += 1;
+            continue;
+        };
+        let m = &file.measures;
+        let sample = Sample {
+            phi: m.phi,
+            z_j: m.z_j,
+            n_nr: m.n_rattlers.map(|r| file.particles - r),
+            rattler_fraction: m.n_rattlers.map(|r| r as f64 / file.particles as f64),
+            omega_1: m.spectrum.as_ref().and_then(|s| s.omega_1()),
+            omega_star: m.spectrum.as_ref().and_then(|s| s.omega_star()),
+            dos: m.spectrum.as_ref().map(|s| s.histogram.clone()),
+            dos_params: m.spectrum.as_ref().map(|s| s.dos.clone()),
+            gaps: m.gaps.clone(),
+        };
+        let key = |p: &Point| {
+            p.family == file.family
+                && p.dim == file.dim
+                && p.n == n as u32
+                && p.delta == delta
+                && p.particles == file.particles
+        };
+        match points.iter_mut().find(|p| key(p)) {
+            Some(p) => p.samples.push(sample),
+            None => points.push(Point {
+                family: file.family.clone(),
+                dim: file.dim,
+                n: n as u32,
+                delta,
+                particles: file.particles,
+                samples: vec![sample],
+            }),
         }
     }
     points.sort_by(|a, b| {
@@ -122,6 +135,20 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
             .then(a.delta.total_cmp(&b.delta))
     });
     Ok((points, skipped))
+}
+
+/// How many observables a packing file holds.
+fn richness(f: &PackingFile) -> usize {
+    let m = &f.measures;
+    [
+        m.z_j.is_some(),
+        m.pressure.is_some(),
+        m.spectrum.is_some(),
+        m.gaps.is_some(),
+    ]
+    .iter()
+    .filter(|&&b| b)
+    .count()
 }
 
 /// Mean and standard error of the mean of the values `f` gives (NaN when

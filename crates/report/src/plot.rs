@@ -4,9 +4,7 @@
 //! Logarithmic axes are drawn in `log₁₀` coordinates with ticks labelled
 //! as powers of ten, which keeps one code path for every combination of
 //! axes. Text needs a font (to draw it in PNG, to measure it in both):
-//! DejaVu Sans ships inside the binary
-//! (`fonts/`, Bitstream Vera licence), so the pictures look the same on
-//! every machine and need no system font.
+//! `jamkit_draw::fonts` registers the bundled DejaVu Sans.
 
 use crate::ReportError;
 use plotters::coord::Shift;
@@ -93,16 +91,6 @@ const COLORS: [RGBColor; 8] = [
     RGBColor(23, 190, 207),
 ];
 
-fn register_font() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let bytes: &'static [u8] = include_bytes!("../fonts/DejaVuSans.ttf");
-        // NOTE: cannot fail for this font; if it did, PNG text would be
-        // missing and SVG unaffected, so the error is not fatal.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, bytes);
-    });
-}
-
 impl Figure {
     /// Write `<stem>.svg` and `<stem>.png`. A figure with no finite point
     /// is an error (nothing to show).
@@ -111,7 +99,7 @@ impl Figure {
             .ranges()
             .ok_or_else(|| ReportError::Empty(self.title.clone()))?;
         // Both backends measure text with the registered font.
-        register_font();
+        jamkit_draw::fonts::register();
         let svg = stem.with_extension("svg");
         self.draw(
             SVGBackend::new(&svg, (WIDTH, HEIGHT)).into_drawing_area(),

@@ -178,6 +178,7 @@ impl Angle {
     /// is exact in double precision (next terms < 3·10⁻²⁴); the product is
     /// renormalised by one Newton step for `1/|z|`, so `|e^{iθ}| = 1` to
     /// round-off however many turns accumulate.
+    #[inline]
     pub fn turned(self, dtheta: f64) -> Self {
         if dtheta.abs() >= 1e-2 {
             return Self::new(self.theta() + dtheta);
@@ -198,6 +199,31 @@ impl Angle {
 #[inline(always)]
 fn cmul(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
     (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0)
+}
+
+/// `z²`, bit for bit `cmul(z, z)` (`ab + ba = 2ab` exactly).
+#[inline(always)]
+fn csq(z: (f64, f64)) -> (f64, f64) {
+    (z.0 * z.0 - z.1 * z.1, 2.0 * (z.0 * z.1))
+}
+
+/// `z_i^n` and `z_j^n` for one mode number.
+///
+/// NOTE: the paper's modes (n ≤ 6) get straight-line code: `cpow`'s loop on
+/// the bits of a run-time `n` kept the pair loop from overlapping pairs. Each
+/// arm multiplies the same factors as `cpow` (products commute), so the
+/// powers are bit for bit those of `cpow`.
+#[inline(always)]
+fn cpow_pair(z_i: (f64, f64), z_j: (f64, f64), n: u32) -> ((f64, f64), (f64, f64)) {
+    match n {
+        1 => (z_i, z_j),
+        2 => (csq(z_i), csq(z_j)),
+        3 => (cmul(csq(z_i), z_i), cmul(csq(z_j), z_j)),
+        4 => (csq(csq(z_i)), csq(csq(z_j))),
+        5 => (cmul(csq(csq(z_i)), z_i), cmul(csq(csq(z_j)), z_j)),
+        6 => (cmul(csq(csq(z_i)), csq(z_i)), cmul(csq(csq(z_j)), csq(z_j))),
+        _ => (cpow(z_i, n), cpow(z_j, n)),
+    }
 }
 
 /// `z^n` by binary exponentiation.
@@ -437,9 +463,17 @@ impl NearDisk {
     fn f_pair(&self, z_i: (f64, f64), z_j: (f64, f64), w_conj: (f64, f64)) -> [(f64, f64); 2] {
         let e_i = cmul(z_i, w_conj);
         let e_j = cmul((-z_j.0, -z_j.1), w_conj);
+        // The paper's family, one mode with no phase: no loop, no branch.
+        if let [m] = self.modes[..]
+            && m.b == 0.0
+        {
+            let (p_i, p_j) = cpow_pair(e_i, e_j, m.n);
+            let (a, an) = (m.a, m.a * m.n as f64);
+            return [(a * p_i.1, an * p_i.0), (a * p_j.1, an * p_j.0)];
+        }
         let mut out = [(0.0, 0.0); 2];
         for (m, &phase) in self.modes.iter().zip(&self.phases) {
-            let (mut p_i, mut p_j) = (cpow(e_i, m.n), cpow(e_j, m.n));
+            let (mut p_i, mut p_j) = cpow_pair(e_i, e_j, m.n);
             if m.b != 0.0 {
                 p_i = cmul(p_i, phase);
                 p_j = cmul(p_j, phase);
@@ -485,6 +519,7 @@ impl Shape<2> for NearDisk {
         Angle::new(2.0 * PI * rng.random::<f64>() - PI)
     }
 
+    #[inline]
     fn rotate(&self, o: &mut Angle, dq: &[f64]) {
         *o = o.turned(dq[0]);
     }

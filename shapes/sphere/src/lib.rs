@@ -47,6 +47,8 @@ impl<const D: usize> Shape<D> for Sphere {
         size
     }
 
+    const BALL: bool = true;
+
     fn reference_orientation(&self) {}
 
     fn random_orientation<R: Rng + ?Sized>(&self, _rng: &mut R) {}
