@@ -508,19 +508,8 @@ impl Builder {
                 line: false,
             });
         }
-        let span = |s: &[Series]| {
-            s.iter()
-                .flat_map(|s| s.points.iter().map(|p| p.0))
-                .filter(|x| *x > 0.0)
-                .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)))
-        };
-        let (d0, d1) = span(&raw);
-        let top_raw = raw
-            .iter()
-            .flat_map(|s| s.points.iter())
-            .filter(|p| p.1 > 0.0)
-            .max_by(|a, b| a.0.total_cmp(&b.0))
-            .map_or((1.0, 1.0), |p| (p.0, p.1));
+        let (d0, d1) = x_span(&raw);
+        let top_raw = rightmost(&raw);
         self.save(
             "fig09a_dz_finite_size",
             Figure {
@@ -534,14 +523,9 @@ impl Builder {
                 legend: SeriesLabelPosition::LowerRight,
             },
         )?;
-        let (x0, x1) = span(&collapse);
-        // The Δ^{1/2} guide passes through the point of largest N_nr² Δ.
-        let top = collapse
-            .iter()
-            .flat_map(|s| s.points.iter())
-            .filter(|p| p.1 > 0.0)
-            .max_by(|a, b| a.0.total_cmp(&b.0))
-            .map_or((1.0, 1.0), |p| (p.0, p.1));
+        let (x0, x1) = x_span(&collapse);
+        // The Δ^{1/2} guides pass through the point of largest x.
+        let top = rightmost(&collapse);
         self.save(
             "fig09b_dz_collapse",
             Figure {
@@ -614,10 +598,7 @@ impl Builder {
                     line: true,
                 });
             }
-            let (h0, h1) = raw
-                .iter()
-                .flat_map(|s| s.points.iter().map(|p| p.0))
-                .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+            let (h0, h1) = x_span(&raw);
             self.save(
                 &format!("fig11_gaps_n{n}"),
                 Figure {
@@ -893,6 +874,25 @@ impl Builder {
         }
         m
     }
+}
+
+/// Smallest and largest positive `x` of the series.
+fn x_span(series: &[Series]) -> (f64, f64) {
+    series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.0))
+        .filter(|x| *x > 0.0)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)))
+}
+
+/// The point of largest `x` with a positive `y` (where a guide is anchored).
+fn rightmost(series: &[Series]) -> (f64, f64) {
+    series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .filter(|p| p.1 > 0.0)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map_or((1.0, 1.0), |p| (p.0, p.1))
 }
 
 fn fit_text(f: &FitRow) -> String {
