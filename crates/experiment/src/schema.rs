@@ -132,6 +132,13 @@ pub enum Protocol {
         /// Give up after this many changes of φ.
         #[serde(default = "default_max_density_steps")]
         max_density_steps: u64,
+        /// After the bisection, push the packing off saddles of the full
+        /// Hessian and re-jam (`jamkit_observe::saddle`). `None` (the
+        /// default, not written out): on for families with rotational
+        /// coordinates that expect isostaticity, off otherwise (spheres
+        /// keep their packings bit for bit).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        escape_saddles: Option<bool>,
     },
     /// Compress in steps of `eps` to packing fraction `phi`.
     Phi {
@@ -190,6 +197,7 @@ impl Default for Protocol {
             energy_low: default_energy_low(),
             energy_high: default_energy_high(),
             max_density_steps: default_max_density_steps(),
+            escape_saddles: None,
         }
     }
 }

@@ -17,6 +17,7 @@ pub mod contacts;
 pub mod gaps;
 pub mod hessian;
 pub mod spectrum;
+pub mod saddle;
 pub mod summary;
 
 pub use contacts::{ContactNetwork, find_rattlers};

@@ -1,0 +1,165 @@
+//! Saddle escape after the jamming bisection.
+//!
+//! **Why.** For rigid non-spherical bodies (dimers) the paper's protocol can
+//! end on a *saddle*: the full Hessian `K + T` of the non-rattlers has a few
+//! eigenvalues `≈ −10⁻⁸` (the stress part `T` is of the order of the
+//! overlaps, `~10⁻⁸` at `V/N ~ 10⁻¹⁶`), so the gradient is already below
+//! FIRE's stopping rule while the state is unstable, and the packing comes
+//! out hypostatic (see `docs/sanity.md`, dimers). Tightening FIRE is too
+//! slow because the descent direction is that flat.
+//!
+//! **What.** While the lowest eigenvalue of `K + T` (rattlers removed) is
+//! below `−threshold · λ_max`, push the configuration along its eigenvector
+//! (the sign that lowers the energy; the step is small, see
+//! [`SaddleParams::step`]) and re-run the jamming bisection from the
+//! current φ with a small initial `ε`, so that the packing ends again in the
+//! same window `E_low < V/N < E_high` with the same FIRE tolerances. Stop
+//! after `max_rounds` rounds.
+//!
+//! It lives here rather than in the engine because the engine cannot see
+//! the Hessian. Everything is sequential and seeded by the configuration
+//! only, so the result is the same for any number of threads.
+
+use crate::hessian::{Hessian, HessianOptions};
+use crate::summary::summarize;
+use jamkit_core::{Error, Result, Shape};
+use jamkit_engine::{Fire, JamParams, Objective, Scene, jam};
+
+/// Parameters of the saddle escape.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SaddleParams {
+    /// A mode is unstable when `λ < −threshold · λ_max`. The default
+    /// `10⁻¹⁰` lies far above the eigensolver's noise (`~10⁻¹⁵ λ_max`) and
+    /// well below the stress scale of the saddles seen (`~10⁻⁸`, with
+    /// `λ_max = O(1)`).
+    pub threshold: f64,
+    /// Largest coordinate change of the push, in units of the smallest body
+    /// size (`10⁻⁴`: beyond the overlaps, `~10⁻⁸`, so that the push leaves
+    /// the saddle's basin, yet far below the gaps' scale so that the contact
+    /// network is barely perturbed).
+    pub step: f64,
+    /// Initial `ε` of the bisection after each push.
+    pub eps: f64,
+    /// At most this many pushes.
+    pub max_rounds: u32,
+}
+
+impl Default for SaddleParams {
+    fn default() -> Self {
+        Self {
+            threshold: 1e-10,
+            step: 1e-4,
+            eps: 1e-6,
+            max_rounds: 20,
+        }
+    }
+}
+
+/// What the escape did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SaddleOutcome {
+    /// Pushes made (0: the end state of the bisection was stable).
+    pub rounds: u32,
+    /// Whether the last state checked is still a saddle (the cap was hit).
+    pub still_saddle: bool,
+    /// Lowest relative eigenvalue `λ_min/λ_max` of the final state.
+    pub lambda_min_rel: f64,
+    /// FIRE steps of the re-run bisections.
+    pub fire_steps: u64,
+    /// Minimisations of the re-run bisections.
+    pub minimizations: u64,
+    /// Final packing fraction.
+    pub phi: f64,
+    /// Final `V/N`.
+    pub energy_per_particle: f64,
+}
+
+/// Lowest eigenpair and `λ_max` of `K + T` of the non-rattlers, with the
+/// eigenvector spread back to the scene's flat coordinates (zero on
+/// rattlers).
+fn lowest_mode<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    threshold: usize,
+) -> Result<(f64, f64, Vec<f64>)> {
+    let rattler = summarize(scene, threshold).rattler;
+    let h = Hessian::of_scene(
+        scene,
+        &rattler,
+        HessianOptions {
+            stiffness_only: false,
+            remove_rattlers: true,
+        },
+    )?;
+    let mut flat = vec![0.0; scene.dof()];
+    if h.size == 0 {
+        return Ok((0.0, 0.0, flat));
+    }
+    let evd = h
+        .dense()
+        .self_adjoint_eigen(faer::Side::Lower)
+        .map_err(|e| Error::Unsupported(format!("eigensolver failed: {e:?}")))?;
+    let (u, s) = (evd.U(), evd.S());
+    let stride = scene.dof() / scene.bodies();
+    // Rows come body by body, `stride` coordinates each, in FIRE's order.
+    for row in 0..h.size {
+        let within = row % stride;
+        flat[h.body[row] as usize * stride + within] = u[(row, 0)];
+    }
+    Ok((s[0], s[h.size - 1], flat))
+}
+
+/// Push `scene` off saddles of `K + T` and re-jam, as described in the
+/// module documentation; `rattler_threshold` is the family's contact count
+/// below which a body rattles.
+pub fn escape_saddles<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    fire: &mut Fire,
+    jam_params: &JamParams,
+    params: &SaddleParams,
+    rattler_threshold: usize,
+) -> Result<SaddleOutcome> {
+    let mut out = SaddleOutcome {
+        phi: scene.phi(),
+        energy_per_particle: scene.energy() / scene.bodies() as f64,
+        ..SaddleOutcome::default()
+    };
+    let size = scene
+        .packing()
+        .sizes
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let rejam = JamParams {
+        eps: params.eps,
+        ..jam_params.clone()
+    };
+    loop {
+        let (lmin, lmax, mode) = lowest_mode(scene, rattler_threshold)?;
+        out.lambda_min_rel = if lmax > 0.0 { lmin / lmax } else { 0.0 };
+        let saddle = lmin < -params.threshold * lmax;
+        out.still_saddle = saddle;
+        if !saddle || out.rounds >= params.max_rounds {
+            return Ok(out);
+        }
+        let biggest = mode.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let scale = params.step * size / biggest;
+        // Both signs: keep the one with the lower energy (the cubic term
+        // decides; a tie keeps +).
+        let plus: Vec<f64> = mode.iter().map(|x| x * scale).collect();
+        let twice: Vec<f64> = plus.iter().map(|x| -2.0 * x).collect();
+        scene.displace(&plus);
+        let e_plus = scene.energy();
+        scene.displace(&twice);
+        let e_minus = scene.energy();
+        if e_plus <= e_minus {
+            let back: Vec<f64> = plus.iter().map(|x| 2.0 * x).collect();
+            scene.displace(&back);
+        }
+        let o = jam(scene, fire, &rejam)?;
+        out.rounds += 1;
+        out.fire_steps += o.fire_steps;
+        out.minimizations += o.minimizations;
+        out.phi = o.phi;
+        out.energy_per_particle = o.energy_per_particle;
+    }
+}
