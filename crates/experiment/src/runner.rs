@@ -286,14 +286,11 @@ impl SceneVisitor for SampleVisitor<'_> {
                     max_density_steps,
                 };
                 let mut outcome = jam(&mut scene, &mut fire, &params).map_err(sample_err)?;
-                let shape = &scene.packing().shape;
-                let escape =
-                    escape_saddles.unwrap_or(shape.rot_dof() > 0 && shape.expects_isostatic());
-                if escape {
+                if escape_saddles {
                     let threshold = e
                         .rattlers
                         .min_contacts
-                        .unwrap_or_else(|| shape.rattler_threshold());
+                        .unwrap_or_else(|| scene.packing().shape.rattler_threshold());
                     let s = saddle::escape_saddles(
                         &mut scene,
                         &mut fire,

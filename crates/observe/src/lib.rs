@@ -16,8 +16,8 @@
 pub mod contacts;
 pub mod gaps;
 pub mod hessian;
-pub mod spectrum;
 pub mod saddle;
+pub mod spectrum;
 pub mod summary;
 
 pub use contacts::{ContactNetwork, find_rattlers};

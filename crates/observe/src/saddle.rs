@@ -38,8 +38,16 @@ pub struct SaddleParams {
     /// the saddle's basin, yet far below the gaps' scale so that the contact
     /// network is barely perturbed).
     pub step: f64,
+    /// Largest amplitude tried by the line search, in the same units.
+    pub max_push: f64,
     /// Initial `ε` of the bisection after each push.
     pub eps: f64,
+    /// Use the true Hessian `∂²V/∂q∂q` (every contact, rattlers kept: their
+    /// rows add zero modes, never negative ones) rather than `K + T` of the
+    /// non-rattlers. Measured (docs/sanity.md): the negative modes of the
+    /// latter are an artefact of dropping the contacts of bodies below the
+    /// rattler threshold that still carry force; the true Hessian has none.
+    pub full_hessian: bool,
     /// At most this many pushes.
     pub max_rounds: u32,
 }
@@ -48,9 +56,11 @@ impl Default for SaddleParams {
     fn default() -> Self {
         Self {
             threshold: 1e-10,
-            step: 1e-4,
+            step: 1e-6,
+            max_push: 0.1,
             eps: 1e-6,
             max_rounds: 20,
+            full_hessian: true,
         }
     }
 }
@@ -80,8 +90,13 @@ pub struct SaddleOutcome {
 fn lowest_mode<const D: usize, S: Shape<D>>(
     scene: &mut Scene<D, S>,
     threshold: usize,
+    full: bool,
 ) -> Result<(f64, f64, Vec<f64>)> {
-    let rattler = summarize(scene, threshold).rattler;
+    let rattler = if full {
+        Vec::new()
+    } else {
+        summarize(scene, threshold).rattler
+    };
     let h = Hessian::of_scene(
         scene,
         &rattler,
@@ -134,7 +149,7 @@ pub fn escape_saddles<const D: usize, S: Shape<D>>(
         ..jam_params.clone()
     };
     loop {
-        let (lmin, lmax, mode) = lowest_mode(scene, rattler_threshold)?;
+        let (lmin, lmax, mode) = lowest_mode(scene, rattler_threshold, params.full_hessian)?;
         out.lambda_min_rel = if lmax > 0.0 { lmin / lmax } else { 0.0 };
         let saddle = lmin < -params.threshold * lmax;
         out.still_saddle = saddle;
@@ -142,19 +157,8 @@ pub fn escape_saddles<const D: usize, S: Shape<D>>(
             return Ok(out);
         }
         let biggest = mode.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let scale = params.step * size / biggest;
-        // Both signs: keep the one with the lower energy (the cubic term
-        // decides; a tie keeps +).
-        let plus: Vec<f64> = mode.iter().map(|x| x * scale).collect();
-        let twice: Vec<f64> = plus.iter().map(|x| -2.0 * x).collect();
-        scene.displace(&plus);
-        let e_plus = scene.energy();
-        scene.displace(&twice);
-        let e_minus = scene.energy();
-        if e_plus <= e_minus {
-            let back: Vec<f64> = plus.iter().map(|x| 2.0 * x).collect();
-            scene.displace(&back);
-        }
+        let unit: Vec<f64> = mode.iter().map(|x| x * size / biggest).collect();
+        push(scene, &unit, params);
         let o = jam(scene, fire, &rejam)?;
         out.rounds += 1;
         out.fire_steps += o.fire_steps;
@@ -162,4 +166,37 @@ pub fn escape_saddles<const D: usize, S: Shape<D>>(
         out.phi = o.phi;
         out.energy_per_particle = o.energy_per_particle;
     }
+}
+
+/// Line search along `±unit` (largest component = the smallest body size):
+/// amplitudes `step · 2^k`, `k = 0, 1, …` up to `max_push`, for each sign
+/// while the energy keeps falling; the configuration is left at the lowest
+/// energy seen (at the start if nothing was lower). Deterministic: the
+/// amplitudes and the order of trials are fixed.
+fn push<const D: usize, S: Shape<D>>(scene: &mut Scene<D, S>, unit: &[f64], params: &SaddleParams) {
+    let e0 = scene.energy();
+    let mut best = (e0, 0.0);
+    let mut moved = 0.0;
+    let go_to = |scene: &mut Scene<D, S>, amp: f64, moved: &mut f64| {
+        let dq: Vec<f64> = unit.iter().map(|x| x * (amp - *moved)).collect();
+        scene.displace(&dq);
+        *moved = amp;
+        scene.energy()
+    };
+    for sign in [1.0, -1.0] {
+        let mut last = e0;
+        let mut amp = params.step;
+        while amp <= params.max_push {
+            let e = go_to(scene, sign * amp, &mut moved);
+            if e < best.0 {
+                best = (e, sign * amp);
+            }
+            if e > last {
+                break;
+            }
+            last = e;
+            amp *= 2.0;
+        }
+    }
+    go_to(scene, best.1, &mut moved);
 }
