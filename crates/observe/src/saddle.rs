@@ -1,14 +1,19 @@
 //! Saddle escape after the jamming bisection.
 //!
-//! **Why.** For rigid non-spherical bodies (dimers) the paper's protocol can
-//! end on a *saddle*: the full Hessian `K + T` of the non-rattlers has a few
-//! eigenvalues `≈ −10⁻⁸` (the stress part `T` is of the order of the
-//! overlaps, `~10⁻⁸` at `V/N ~ 10⁻¹⁶`), so the gradient is already below
-//! FIRE's stopping rule while the state is unstable, and the packing comes
-//! out hypostatic (see `docs/sanity.md`, dimers). Tightening FIRE is too
-//! slow because the descent direction is that flat.
+//! **Why.** For rigid dimers the Hessian `K + T` of the *non-rattlers*
+//! (contacts of rattlers dropped) has a few eigenvalues `≈ −10⁻⁸` at the
+//! end of the paper's protocol, which suggested that the bisection stops on
+//! saddles (the gradient there is already below FIRE's stopping rule). This
+//! module pushes the packing off such saddles. **Measured** (2D dimers
+//! N = 64–128, 3D N = 64, `docs/sanity.md`): the *true* Hessian
+//! `∂²V/∂q∂q` (every contact) has no negative eigenvalue on any of those
+//! packings; the negative modes of the other one came from dropping the
+//! contacts of bodies that touch on one sphere only (three contacts in 2D),
+//! which carry force. So with the default [`SaddleParams::full_hessian`]
+//! the escape makes no push on them, and it is off by default
+//! (`Protocol::Jam { escape_saddles }`); it stays as a check.
 //!
-//! **What.** While the lowest eigenvalue of `K + T` (rattlers removed) is
+//! **What.** While the lowest eigenvalue of the Hessian (see [`SaddleParams::full_hessian`]) is
 //! below `−threshold · λ_max`, push the configuration along its eigenvector
 //! (the sign that lowers the energy; the step is small, see
 //! [`SaddleParams::step`]) and re-run the jamming bisection from the
@@ -17,8 +22,10 @@
 //! after `max_rounds` rounds.
 //!
 //! It lives here rather than in the engine because the engine cannot see
-//! the Hessian. Everything is sequential and seeded by the configuration
-//! only, so the result is the same for any number of threads.
+//! the Hessian. The push and the re-jam are sequential and depend on the
+//! configuration only; the eigenvector comes from faer's dense solver,
+//! whose thread-count independence was not checked (with no push made, as
+//! measured, the packing is the bisection's, bit for bit).
 
 use crate::hessian::{Hessian, HessianOptions};
 use crate::summary::summarize;
@@ -33,10 +40,11 @@ pub struct SaddleParams {
     /// well below the stress scale of the saddles seen (`~10⁻⁸`, with
     /// `λ_max = O(1)`).
     pub threshold: f64,
-    /// Largest coordinate change of the push, in units of the smallest body
-    /// size (`10⁻⁴`: beyond the overlaps, `~10⁻⁸`, so that the push leaves
-    /// the saddle's basin, yet far below the gaps' scale so that the contact
-    /// network is barely perturbed).
+    /// First amplitude of the line search along the mode: the largest
+    /// coordinate change, in units of the smallest body size (`10⁻⁶`: at
+    /// `10⁻⁴` the quartic stiffening of floppy directions, `~s⁴`, already
+    /// beats a curvature of `−10⁻⁸`, so the search must start below
+    /// `√(10⁻⁸)`); it doubles while the energy falls.
     pub step: f64,
     /// Largest amplitude tried by the line search, in the same units.
     pub max_push: f64,
@@ -84,9 +92,9 @@ pub struct SaddleOutcome {
     pub energy_per_particle: f64,
 }
 
-/// Lowest eigenpair and `λ_max` of `K + T` of the non-rattlers, with the
-/// eigenvector spread back to the scene's flat coordinates (zero on
-/// rattlers).
+/// Lowest eigenpair and `λ_max` of the true Hessian (`full`) or of `K + T`
+/// of the non-rattlers, with the eigenvector spread back to the scene's
+/// flat coordinates (zero on removed rattlers).
 fn lowest_mode<const D: usize, S: Shape<D>>(
     scene: &mut Scene<D, S>,
     threshold: usize,
