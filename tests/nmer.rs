@@ -606,3 +606,28 @@ fn random_start_is_overlap_free() {
     let err = start(dimer::<2>(1.5), 0.85).unwrap_err();
     assert!(err.contains("protocol.phi_start"), "{err}");
 }
+
+/// The saddle escape (`protocol.escape_saddles`, `jamkit_observe::saddle`)
+/// on 2D dimers, N = 64, α = 1.5, seeds 1–2 (seed 1 has iso_margin −2 and
+/// two negative modes of `K + T` of the non-rattlers): the true Hessian has
+/// no eigenvalue below −10⁻¹⁰ λ_max, so no push is made (0 rounds
+/// recorded), and the packing is the one without the escape, bit for bit.
+/// Off, nothing is recorded (`saddle_escapes` is `None`). A wrong mapping
+/// of Hessian rows to coordinates, or a sign error in the stress part,
+/// would show up here as pushes.
+#[test]
+fn saddle_escape_finds_no_saddle_on_small_dimer_packings() {
+    let sets = ["particles=64", "samples=2", "params.alpha=1.5"];
+    let off = run_small("experiments/sanity/dimers2d.ron", &sets);
+    let mut with = sets.to_vec();
+    with.push("protocol.escape_saddles=true");
+    let on = run_small("experiments/sanity/dimers2d.ron", &with);
+    assert_eq!(off.len(), 2);
+    for (a, b) in off.iter().zip(&on) {
+        assert_eq!(a.measures.saddle_escapes, None, "{}", a.id);
+        assert_eq!(b.measures.saddle_escapes, Some(0), "{}", b.id);
+        assert_eq!(a.positions, b.positions, "{}", a.id);
+        assert_eq!(a.orientations, b.orientations, "{}", a.id);
+        assert_eq!(a.phi.to_bits(), b.phi.to_bits(), "{}", a.id);
+    }
+}

@@ -35,6 +35,10 @@ pub struct Measures {
     pub wall_s: f64,
     /// Empty, or why this packing deserves a second look.
     pub flag: String,
+    /// Saddle escapes made after the jamming bisection (`None`: the escape
+    /// was off), see `jamkit_observe::saddle`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub saddle_escapes: Option<u32>,
     /// The Hessian's spectrum, when asked for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spectrum: Option<SpectrumMeasures>,
@@ -226,6 +230,12 @@ pub fn results_csv(files: &[PackingFile]) -> String {
     );
     let with_spectrum = files.iter().any(|f| f.measures.spectrum.is_some());
     let with_gaps = files.iter().any(|f| f.measures.gaps.is_some());
+    // Only when some packing escaped saddles, so that tables of runs
+    // without the escape keep their columns.
+    let with_escapes = files.iter().any(|f| f.measures.saddle_escapes.is_some());
+    if with_escapes {
+        head.push("saddle_escapes".into());
+    }
     if with_spectrum {
         head.extend(SPECTRUM_COLUMNS.map(String::from));
     }
@@ -257,6 +267,9 @@ pub fn results_csv(files: &[PackingFile]) -> String {
             format!("{:.3}", m.wall_s),
             csv_field(&m.flag),
         ]);
+        if with_escapes {
+            row.push(opt(&m.saddle_escapes));
+        }
         if with_spectrum {
             row.extend(spectrum_cells(m.spectrum.as_ref()));
         }

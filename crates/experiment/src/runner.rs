@@ -17,6 +17,7 @@ use jamkit_engine::{
     Fire, JamParams, PressureParams, Scene, compress_to_phi, compress_to_pressure, jam,
 };
 use jamkit_observe::gaps::GapCounts;
+use jamkit_observe::saddle::{self, SaddleParams};
 use jamkit_observe::spectrum::{self, Spectrum};
 use jamkit_observe::{JammingSummary, summarize};
 use rand::SeedableRng;
@@ -268,23 +269,44 @@ impl SceneVisitor for SampleVisitor<'_> {
             .map_err(sample_err)?;
         let mut scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
         let mut fire = Fire::new(e.minimizer.clone());
+        let mut saddle_escapes = None;
         let outcome = match e.protocol {
             Protocol::Jam {
                 eps,
                 energy_low,
                 energy_high,
                 max_density_steps,
+                escape_saddles,
                 ..
-            } => jam(
-                &mut scene,
-                &mut fire,
-                &JamParams {
+            } => {
+                let params = JamParams {
                     eps,
                     energy_low,
                     energy_high,
                     max_density_steps,
-                },
-            ),
+                };
+                let mut outcome = jam(&mut scene, &mut fire, &params).map_err(sample_err)?;
+                if escape_saddles {
+                    let threshold = e
+                        .rattlers
+                        .min_contacts
+                        .unwrap_or_else(|| scene.packing().shape.rattler_threshold());
+                    let s = saddle::escape_saddles(
+                        &mut scene,
+                        &mut fire,
+                        &params,
+                        &SaddleParams::default(),
+                        threshold,
+                    )
+                    .map_err(sample_err)?;
+                    outcome.phi = s.phi;
+                    outcome.energy_per_particle = s.energy_per_particle;
+                    outcome.fire_steps += s.fire_steps;
+                    outcome.minimizations += s.minimizations;
+                    saddle_escapes = Some(s.rounds);
+                }
+                Ok(outcome)
+            }
             Protocol::Phi { phi, eps, .. } => compress_to_phi(&mut scene, &mut fire, phi, eps),
             Protocol::Pressure {
                 pressure,
@@ -314,6 +336,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                 fire_steps: outcome.fire_steps,
                 minimizations: outcome.minimizations,
                 wall_s: start.elapsed().as_secs_f64(),
+                saddle_escapes,
             },
             &scene.packing().shape,
         );
@@ -367,6 +390,7 @@ struct Protocolled {
     fire_steps: u64,
     minimizations: u64,
     wall_s: f64,
+    saddle_escapes: Option<u32>,
 }
 
 /// The observables of one packing.
@@ -439,6 +463,7 @@ impl Observed {
             minimizations: run.minimizations,
             wall_s: run.wall_s,
             flag: flags.join("; "),
+            saddle_escapes: run.saddle_escapes,
             spectrum: self.spectrum.clone(),
             gaps: self.gaps.clone(),
         }
@@ -479,6 +504,7 @@ fn remeasure(
                 fire_steps: old.fire_steps,
                 minimizations: old.minimizations,
                 wall_s: old.wall_s + start.elapsed().as_secs_f64(),
+                saddle_escapes: old.saddle_escapes,
             };
             file.measures = observed.measures(e, run, &scene.packing().shape);
             file.rattler = observed.rattler();

@@ -132,6 +132,14 @@ pub enum Protocol {
         /// Give up after this many changes of φ.
         #[serde(default = "default_max_density_steps")]
         max_density_steps: u64,
+        /// After the bisection, push the packing off saddles of the true
+        /// Hessian and re-jam (`jamkit_observe::saddle`). Off by default,
+        /// and not written out when off, so that settings (and the resume
+        /// check) of earlier runs are unchanged: on 2D dimers the end
+        /// states of the bisection turned out to be true minima
+        /// (docs/sanity.md), so the escape is a diagnostic, not a fix.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        escape_saddles: bool,
     },
     /// Compress in steps of `eps` to packing fraction `phi`.
     Phi {
@@ -190,6 +198,7 @@ impl Default for Protocol {
             energy_low: default_energy_low(),
             energy_high: default_energy_high(),
             max_density_steps: default_max_density_steps(),
+            escape_saddles: false,
         }
     }
 }

@@ -16,6 +16,7 @@
 pub mod contacts;
 pub mod gaps;
 pub mod hessian;
+pub mod saddle;
 pub mod spectrum;
 pub mod summary;
 
