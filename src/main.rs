@@ -7,7 +7,7 @@
 //! * `jamkit spectrum PACKING.json [--stiffness-only] [--remove-rattlers] [--modes] -o FILE.csv`
 //! * `jamkit report DIR… -o OUT`
 //! * `jamkit draw PACKING.json -o FILE.svg|FILE.png [--size PIXELS]`
-//! * `jamkit draw-shape [fourier|fourier_sum] [--n 2,3] [--delta 0,0.1] [--modes RON …] -o FILE.svg`
+//! * `jamkit draw-shape [fourier|fourier_sum] [--n 2,3] [--delta 0,0.1] [--modes RON …] -o FILE.svg|FILE.png`
 
 /// `println!` that ignores a closed pipe (`jamkit validate … | head`)
 /// instead of panicking.
@@ -119,7 +119,7 @@ enum Command {
         #[arg(long, value_name = "PIXELS", default_value_t = jamkit_draw::render::DEFAULT_SIZE)]
         size: u32,
     },
-    /// Polar plots R(θ)/R0 = 1 + Δ F(θ) of near-disk shapes (SVG): one
+    /// Polar plots R(θ)/R0 = 1 + Δ F(θ) of near-disk shapes (SVG or PNG): one
     /// panel per n (or mode set), one curve per Δ.
     DrawShape {
         /// `fourier` (one panel per --n) or `fourier_sum` (one per --modes).
@@ -135,7 +135,7 @@ enum Command {
         /// --modes '[(n: 2, a: 0.5), (n: 3, a: 0.1, b: 1.0)]'.
         #[arg(long, value_name = "RON")]
         modes: Vec<String>,
-        /// The picture to write: FILE.svg.
+        /// The picture to write: FILE.svg or FILE.png.
         #[arg(short, long, value_name = "FILE")]
         out: PathBuf,
         /// Side in pixels of one panel.

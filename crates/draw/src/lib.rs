@@ -13,8 +13,9 @@
 //!   shape plot) and [`colors`] (fill colours by size);
 //! * plotting with `plotters`: [`render`] (SVG and PNG output).
 //!
-//! PNG pictures carry no text (the bitmap backend would need a font), so
-//! `draw-shape`, whose panels have titles, axes and legends, writes SVG only.
+//! Packing pictures carry no text; shape panels have titles, axes and
+//! legends, drawn (in PNG) and measured (in SVG) with the bundled DejaVu
+//! Sans ([`fonts`]).
 
 pub mod colors;
 pub mod fonts;

@@ -5,7 +5,7 @@
 //! black outline, rattlers in light grey with a dashed grey outline, and the
 //! box outline on top. Pictures have `y` pointing up and carry no text, so
 //! PNG needs no font. [`draw_shapes`] paints shape panels (titles, axes,
-//! legends) and therefore writes SVG only.
+//! legends), as SVG or PNG; their text uses the bundled font.
 
 use crate::DrawError;
 use crate::colors::{EDGE, RATTLER_EDGE, RATTLER_FILL, Rgb};
@@ -314,52 +314,67 @@ fn paint_legend<DB: DrawingBackend>(
     Ok(())
 }
 
+/// The size in pixels of a picture of `panels`: at most four panels to a
+/// row, `panel_size` square each, and a legend strip underneath.
+fn shapes_size(panels: &[ShapePanel], panel_size: u32) -> (u32, u32, usize, usize) {
+    let cols = panels.len().clamp(1, 4);
+    let rows = panels.len().div_ceil(cols).max(1);
+    let width = cols as u32 * panel_size;
+    let height = rows as u32 * panel_size + panel_size / 8;
+    (width, height, rows, cols)
+}
+
+/// Paint shape panels and their legend (the curve labels of the first
+/// panel) on `root`.
+fn paint_shapes<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    panels: &[ShapePanel],
+    panel_size: u32,
+    path: &Path,
+) -> Result<(), DrawError> {
+    let (_, _, rows, cols) = shapes_size(panels, panel_size);
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| render_error(path, e);
+    root.fill(&WHITE).map_err(err)?;
+    let (grid, legend) = root.split_vertically(rows as u32 * panel_size);
+    for (area, panel) in grid.split_evenly((rows, cols)).iter().zip(panels) {
+        paint_panel(area, panel, panel_size).map_err(err)?;
+    }
+    if let Some(first) = panels.first() {
+        let labels: Vec<&str> = first.curves.iter().map(|c| c.label.as_str()).collect();
+        paint_legend(&legend, &labels, panel_size).map_err(err)?;
+    }
+    root.present().map_err(err)
+}
+
 /// The SVG text of shape panels, `panel_size` pixels square each, at most
 /// four to a row, with one legend (the curve labels of the first panel)
 /// underneath.
 pub fn shapes_svg(panels: &[ShapePanel], panel_size: u32) -> Result<String, DrawError> {
-    // Titles and legends are measured with the registered font.
+    // Titles and legends are measured (and, in PNG, drawn) with the
+    // bundled font.
     crate::fonts::register();
     check_size(panel_size)?;
-    let cols = panels.len().clamp(1, 4);
-    let rows = panels.len().div_ceil(cols).max(1);
+    let (width, height, _, _) = shapes_size(panels, panel_size);
     let mut text = String::new();
     {
-        let legend_height = panel_size / 8;
-        let root = SVGBackend::with_string(
-            &mut text,
-            (
-                cols as u32 * panel_size,
-                rows as u32 * panel_size + legend_height,
-            ),
-        )
-        .into_drawing_area();
-        let err = |e: DrawingAreaErrorKind<_>| render_error(Path::new(""), e);
-        root.fill(&WHITE).map_err(err)?;
-        let (grid, legend) = root.split_vertically(rows as u32 * panel_size);
-        for (area, panel) in grid.split_evenly((rows, cols)).iter().zip(panels) {
-            paint_panel(area, panel, panel_size).map_err(err)?;
-        }
-        if let Some(first) = panels.first() {
-            let labels: Vec<&str> = first.curves.iter().map(|c| c.label.as_str()).collect();
-            paint_legend(&legend, &labels, panel_size).map_err(err)?;
-        }
-        root.present().map_err(err)?;
+        let root = SVGBackend::with_string(&mut text, (width, height)).into_drawing_area();
+        paint_shapes(&root, panels, panel_size, Path::new(""))?;
     }
     Ok(text)
 }
 
-/// Draw shape panels to `path`, which must end in `.svg` (the panels carry
-/// text, which PNG output cannot render without a font).
+/// Draw shape panels to `path` (`.svg` or `.png`; text in PNG uses the
+/// bundled DejaVu Sans).
 pub fn draw_shapes(panels: &[ShapePanel], path: &Path, panel_size: u32) -> Result<(), DrawError> {
     match Format::from_path(path)? {
         Format::Svg => write_file(path, shapes_svg(panels, panel_size)?.as_bytes()),
-        Format::Png => Err(DrawError::Format {
-            path: path.to_path_buf(),
-            message: "draw-shape writes SVG only (its titles, axes and legend need text, \
-                      which the PNG backend cannot render without a font); use a .svg name"
-                .into(),
-        }),
+        Format::Png => {
+            crate::fonts::register();
+            check_size(panel_size)?;
+            let (width, height, _, _) = shapes_size(panels, panel_size);
+            let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
+            paint_shapes(&root, panels, panel_size, path)
+        }
     }
 }
 
@@ -413,8 +428,9 @@ mod tests {
         // The red dotted curve is drawn as many short dashes.
         assert!(svg.matches("#DC1E1E").count() > 50);
         let dir = tempfile::tempdir().unwrap();
-        let e = draw_shapes(&panels, &dir.path().join("s.png"), 300).unwrap_err();
-        assert!(e.to_string().contains("SVG only"), "{e}");
+        draw_shapes(&panels, &dir.path().join("s.png"), 300).unwrap();
+        let png = std::fs::read(dir.path().join("s.png")).unwrap();
+        assert_eq!(&png[..4], b"\x89PNG");
         draw_shapes(&panels, &dir.path().join("s.svg"), 300).unwrap();
     }
 }
