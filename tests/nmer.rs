@@ -526,11 +526,12 @@ fn contacts_from_spheres(p: &jamkit_experiment::record::PackingFile) -> usize {
 /// The sanity experiment, shrunk: 2D dimers (α = 1.5, 2.0; N = 64, two
 /// seeds) and 3D dimers (α = 2.0, N = 128, one seed). Every packing lands in
 /// the jamming window, its `spheres` rows reproduce its contact count, and
-/// `z_J` is within 0.3 of `4d − 2`: at these N a handful of missing
-/// contacts moves z by ~0.1, and a wrong torque or a missed sphere pair
-/// (one contact of four) moves it by far more. The isostaticity margin is
-/// *not* asserted: dimers jam a few contacts short of `f N_nr − d + 1` with
-/// this protocol (docs/sanity.md records and discusses it).
+/// `z_J` is within 0.5 of `4d − 2`: bodies held on one sphere count D of
+/// their f coordinates, so z_J ≈ 2f − 2(f − D)p with p ≈ 0.05–0.1 of them
+/// (up to 0.4 below 4d − 2 in 3D), while a wrong torque or a missed sphere
+/// pair (one contact of four) moves z by ~1 or more. The isostaticity margin,
+/// with rattlers by rank (a body held on one sphere counts D coordinates,
+/// docs/sanity.md), is at least 1: the network is rigid.
 #[test]
 fn small_dimer_packings_jam_near_isostatic() {
     let mut packings = run_small(
@@ -551,7 +552,9 @@ fn small_dimer_packings_jam_near_isostatic() {
             p.id,
             p.energy_per_particle
         );
-        assert!((z - expected).abs() < 0.3, "{}: z_J = {z}", p.id);
+        assert!((z - expected).abs() < 0.5, "{}: z_J = {z}", p.id);
+        let margin = p.measures.iso_margin.unwrap();
+        assert!(margin >= 1, "{}: iso_margin = {margin}", p.id);
         assert_eq!(
             p.spheres.len(),
             2 * p.particles,

@@ -19,7 +19,7 @@ use jamkit_engine::{
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::saddle::{self, SaddleParams};
 use jamkit_observe::spectrum::{self, Spectrum};
-use jamkit_observe::{JammingSummary, summarize};
+use jamkit_observe::{JammingSummary, RattlerRule, summarize_with};
 use rand::SeedableRng;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -402,16 +402,32 @@ struct Observed {
     gaps: Option<GapCounts>,
 }
 
+/// The rattler rule of `e` for this packing: an explicit
+/// `rattlers.min_contacts` counts contacts; otherwise rotating bodies made
+/// of spheres go by rank (a body held on one sphere keeps its contacts,
+/// see `jamkit_observe::find_rattlers_by_rank`), and every other family by
+/// its own count (`d + 1` for disks and near-disks).
+fn rattler_rule<const D: usize, S: Shape<D>>(e: &Experiment, p: &Packing<D, S>) -> RattlerRule {
+    let made_of_spheres = p.shape.rot_dof() > 0
+        && p.sizes
+            .first()
+            .zip(p.orientations.first())
+            .is_some_and(|(&s, o)| p.shape.sphere_decomposition(s, o).is_some());
+    match e.rattlers.min_contacts {
+        Some(t) => RattlerRule::Count(t),
+        None if made_of_spheres => RattlerRule::Rank,
+        None => RattlerRule::Count(p.shape.rattler_threshold()),
+    }
+}
+
 /// Measure what `e` asks for on a relaxed scene.
 fn observe<const D: usize, S: Shape<D>>(
     e: &Experiment,
     scene: &mut Scene<D, S>,
 ) -> jamkit_core::Result<Observed> {
-    let threshold = e
-        .rattlers
-        .min_contacts
-        .unwrap_or_else(|| scene.packing().shape.rattler_threshold());
-    let contacts = e.needs_contacts().then(|| summarize(scene, threshold));
+    let contacts = e
+        .needs_contacts()
+        .then(|| summarize_with(scene, rattler_rule(e, scene.packing())));
     let pressure = e.wants(&Observable::Pressure).then(|| scene.pressure());
     let rattler = contacts.as_ref().map_or(&[][..], |s| &s.rattler[..]);
     let (spectrum, eigenvalue_table) = match e.spectrum() {

@@ -20,5 +20,5 @@ pub mod saddle;
 pub mod spectrum;
 pub mod summary;
 
-pub use contacts::{ContactNetwork, find_rattlers};
-pub use summary::{JammingSummary, summarize};
+pub use contacts::{ContactNetwork, find_rattlers, find_rattlers_by_rank};
+pub use summary::{JammingSummary, RattlerRule, summarize, summarize_with};

@@ -11,7 +11,7 @@
 //!   bodies made of spheres is at least 1. For spheres it reads
 //!   `N_c − D (N_nr − 1)`.
 
-use crate::contacts::{ContactNetwork, find_rattlers};
+use crate::contacts::{ContactNetwork, contact_rows, find_rattlers, find_rattlers_by_rank};
 use jamkit_core::Shape;
 use jamkit_engine::Scene;
 use serde::{Deserialize, Serialize};
@@ -35,13 +35,52 @@ pub struct JammingSummary {
     pub rattler: Vec<bool>,
 }
 
+/// Which bodies are rattlers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RattlerRule {
+    /// Fewer than this many contacts (iterated): `d + 1` for disks and
+    /// near-disks, `f + 1` as set by a family or the experiment.
+    Count(usize),
+    /// Fewer than `r_b + 1` contacts, `r_b` the rank of the body's contact
+    /// gradients in its own coordinates ([`find_rattlers_by_rank`]): for
+    /// bodies made of spheres, where a body held on one sphere keeps its
+    /// contacts but not its rotation. Its margin counts `r_b` coordinates.
+    Rank,
+}
+
 /// Contacts, rattlers (below `threshold` contacts) and isostaticity of a scene.
 pub fn summarize<const D: usize, S: Shape<D>>(
     scene: &mut Scene<D, S>,
     threshold: usize,
 ) -> JammingSummary {
+    summarize_with(scene, RattlerRule::Count(threshold))
+}
+
+/// Contacts, rattlers by `rule` and isostaticity of a scene. With
+/// [`RattlerRule::Rank`] the margin is `N_c − (Σ_b r_b − D)` over the
+/// non-rattlers (`r_b = f` for a body pinned on several spheres).
+pub fn summarize_with<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    rule: RattlerRule,
+) -> JammingSummary {
     let network = ContactNetwork::of_scene(scene);
-    let rattler = find_rattlers(&network, threshold);
+    let f = (D + scene.packing().shape.rot_dof()) as i64;
+    let (rattler, coordinates) = match rule {
+        RattlerRule::Count(threshold) => {
+            let rattler = find_rattlers(&network, threshold);
+            let kept = rattler.iter().filter(|&&r| !r).count() as i64;
+            (rattler, f * kept)
+        }
+        RattlerRule::Rank => {
+            let rows = contact_rows(scene);
+            let (rattler, rank) = find_rattlers_by_rank(&network, &rows);
+            let sum = (0..network.bodies)
+                .filter(|&b| !rattler[b])
+                .map(|b| rank[b] as i64)
+                .sum();
+            (rattler, sum)
+        }
+    };
     let n_contacts = network
         .contacts
         .iter()
@@ -49,13 +88,12 @@ pub fn summarize<const D: usize, S: Shape<D>>(
         .count();
     let n_rattlers = rattler.iter().filter(|&&r| r).count();
     let n_nr = network.bodies - n_rattlers;
-    let f = (D + scene.packing().shape.rot_dof()) as i64;
     let z_j = if n_nr > 0 {
         2.0 * n_contacts as f64 / n_nr as f64
     } else {
         0.0
     };
-    let iso_margin = n_contacts as i64 - (f * n_nr as i64 - D as i64);
+    let iso_margin = n_contacts as i64 - (coordinates - D as i64);
     JammingSummary {
         n_contacts,
         n_contacts_all: network.contacts.len(),
