@@ -142,7 +142,12 @@ impl RonText<'_> {
                 if self.peek() != Some(b'(') {
                     return Some(Value::String(name));
                 }
-                let inner = self.parenthesised()?;
+                // `Name()` is a struct variant with every field defaulted
+                // (`Spectrum()`, `Gaps()`), not an empty tuple.
+                let inner = match self.parenthesised()? {
+                    Value::Array(items) if items.is_empty() => Value::Object(Default::default()),
+                    inner => inner,
+                };
                 if name == "Some" {
                     return Some(inner);
                 }
@@ -300,6 +305,14 @@ mod tests {
         assert_eq!(e.rattlers.min_contacts, Some(2));
         assert_eq!(e.potential, jamkit_core::Potential::Hertzian);
         assert_eq!(e.observables, vec![crate::schema::Observable::Contacts]);
+        // `Gaps()`: a struct variant with its defaults, as in a file.
+        let g = apply(
+            &base(),
+            &["observables=[Contacts, Gaps(), Spectrum(modes: true)]".into()],
+        )
+        .unwrap();
+        assert_eq!(g.gaps(), Some(jamkit_observe::gaps::GapParams::default()));
+        assert!(g.spectrum().is_some_and(|s| s.modes));
         assert_eq!(e.name, "trial");
         match e.protocol {
             crate::schema::Protocol::Jam { eps, .. } => assert_eq!(eps, 1e-4),
