@@ -18,7 +18,7 @@
 
 use crate::ReportError;
 use crate::data::{Point, Sample, load, mean_sem};
-use crate::fit::{PowerLaw, line, power_law, power_law_of};
+use crate::fit::{PowerLaw, line, power_law_of};
 use crate::plot::{Figure, Guide, Series};
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::spectrum::DosHistogram;
@@ -373,7 +373,7 @@ impl Builder {
                 .map(|(d, v, _)| (*d, v.clone()))
                 .collect();
             let row = FitRow::new("δz_J", n, big, 0.5, 0.1);
-            if let Some(g) = self.fit_and_record(&fit_points, row) {
+            if let Some(g) = self.fit_and_record(&fit_points, mean, row) {
                 guides.push(g);
             }
         }
@@ -407,36 +407,18 @@ impl Builder {
         Ok(())
     }
 
-    /// Fit a power law with bootstrap errors to `points` (at least three
-    /// with values), record it as `row`, and return its guide line.
-    fn fit_and_record(&mut self, points: &[(f64, Vec<f64>)], mut row: FitRow) -> Option<Guide> {
-        if points.iter().filter(|(_, v)| !v.is_empty()).count() < 3 {
-            return None;
-        }
-        let f = power_law(points, self.options.resamples, self.options.seed)?;
-        let guide = Guide::power_law(
-            format!("fit {}, n = {}: Δ^{:.2}", row.quantity, row.n, f.exponent),
-            f.prefactor,
-            f.exponent,
-            f.range.0,
-            f.range.1,
-        );
-        row.fit = f;
-        self.fits.push(row);
-        Some(guide)
-    }
-
-    /// Like [`Builder::fit_and_record`], for a statistic of each point's
-    /// packings taken together.
-    fn fit_stat_and_record(
+    /// Fit a power law with bootstrap errors to `points`, the `y` of a point
+    /// being `stat` of its packings (at least three points where it is
+    /// defined), record it as `row`, and return its guide line.
+    fn fit_and_record<T>(
         &mut self,
-        points: &[(f64, Vec<Sample>)],
-        stat: fn(&[&Sample]) -> Option<f64>,
+        points: &[(f64, Vec<T>)],
+        stat: impl Fn(&[&T]) -> Option<f64>,
         mut row: FitRow,
     ) -> Option<Guide> {
         let defined = points
             .iter()
-            .filter(|(_, v)| stat(&v.iter().collect::<Vec<_>>()).is_some())
+            .filter(|(_, v)| !v.is_empty() && stat(&v.iter().collect::<Vec<_>>()).is_some())
             .count();
         if defined < 3 {
             return None;
@@ -771,7 +753,7 @@ impl Builder {
                     line: false,
                 });
                 let row = FitRow::new(name, n, big, expected, 0.15);
-                if let Some(g) = self.fit_stat_and_record(&values, stat, row) {
+                if let Some(g) = self.fit_and_record(&values, stat, row) {
                     guides.push(g);
                 }
             }
@@ -874,6 +856,11 @@ impl Builder {
         }
         m
     }
+}
+
+/// The mean of a point's values.
+fn mean(v: &[&f64]) -> Option<f64> {
+    Some(v.iter().copied().sum::<f64>() / v.len() as f64)
 }
 
 /// Smallest and largest positive `x` of the series.
