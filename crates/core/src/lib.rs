@@ -10,6 +10,8 @@
 //!   bodies, each a gap `h` with its first derivatives);
 //! * [`first_order`]: the paper's first-order near-disk gap with its second
 //!   derivatives, for any profile (shared by the near-disk families);
+//! * [`gap2d`]: the second-order near-disk gap and the exact gap of convex
+//!   outlines (support functions), with second derivatives;
 //! * [`potential`]: scalar contact potentials `v(h)` (harmonic, Hertzian);
 //! * [`sizes`]: size distributions (binary, monodisperse, uniform);
 //! * [`packing`]: a configuration of bodies in a box, in flat generalised
@@ -22,6 +24,7 @@
 pub mod error;
 pub mod family;
 pub mod first_order;
+pub mod gap2d;
 pub mod math;
 pub mod packing;
 pub mod periodic;

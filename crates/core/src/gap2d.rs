@@ -1,0 +1,503 @@
+//! Gap models for two-dimensional bodies beyond the paper's first order:
+//! the **second-order** near-disk gap and the **exact** gap of convex
+//! outlines (see `docs/physics.md`, "The ladder of gap models").
+//!
+//! ## A gap as a function of `(r, A_i, A_j)`
+//!
+//! Near-disk gaps depend on the separation only through `r = |r_ij|` and
+//! the two angles `A_i = θ_i − θ_ij`, `A_j = θ_j − θ_ij − π` between each
+//! body's orientation and the line of centres. [`Partials`] holds such a
+//! gap with its partial derivatives in these three variables, and
+//! [`Partials::chain`] turns them into derivatives with respect to the
+//! generalised coordinates: with `u = r_ij/r`, `t = (−u_y, u_x)`,
+//! `∂r/∂r_j = u`, `∂²r/∂r_j² = t tᵀ/r`, `∂A/∂r_j = −t/r`,
+//! `∂²A/∂r_j² = (u tᵀ + t uᵀ)/r²` and `∂A_i/∂θ_i = 1`,
+//!
+//! ```text
+//! ∂h/∂r_j   = h_r u − (h_i + h_j) t/r,        ∂h/∂θ_i = h_i,
+//! ∂²h/∂r_j² = h_rr u uᵀ + h_r t tᵀ/r + (h_i + h_j)(u tᵀ + t uᵀ)/r²
+//!             − (h_ri + h_rj)(u tᵀ + t uᵀ)/r + (h_ii + 2h_ij + h_jj) t tᵀ/r²,
+//! ∂²h/∂r_j∂θ_i = h_ri u − (h_ii + h_ij) t/r,   ∂²h/∂θ_i∂θ_j = h_ij.
+//! ```
+//!
+//! ## Second order
+//!
+//! For outlines `R(φ) = R⁰[1 + Δ F(θ − φ)]`, with `F, F', F'', F'''` taken
+//! at `A_i` (body `i`) and `A_j` (body `j`) and `G = R_i⁰ F_i' + R_j⁰ F_j'`,
+//!
+//! ```text
+//! h₂ = r − R_i⁰ − R_j⁰ − Δ (R_i⁰ F_i + R_j⁰ F_j)
+//!        + (Δ²/2) [G²/r − R_i⁰ F_i'² − R_j⁰ F_j'²]  + O(Δ³):
+//! ```
+//!
+//! the first line is the paper's gap; the second is what the closest points
+//! gain by leaving the line of centres (each body's support function
+//! `H(ψ) = R⁰[1 + ΔF + Δ²F'²/2] + O(Δ³)` exceeds its radius, and the
+//! common normal turns by `δψ = −ΔG/r`). [`second_order`] gives its
+//! partials.
+//!
+//! ## Exact gap of convex outlines
+//!
+//! A convex body is described by its support function `H(β)` (the largest
+//! projection of the outline on the direction `e(β)`, body frame). The
+//! separating-axis theorem makes the signed distance of two convex bodies
+//!
+//! ```text
+//! h = max_ψ g(ψ),    g(ψ) = r_ij·e(ψ) − H_i(ψ − θ_i) − H_j(ψ + π − θ_j)
+//! ```
+//!
+//! (positive: the distance; negative: minus the depth of penetration along
+//! the common normal). At the maximum `ψ*` the normal `n = e(ψ*)` is the
+//! common normal of the two outlines. By the envelope theorem
+//!
+//! ```text
+//! ∂h/∂r_j = n,   ∂h/∂θ_i = H_i'(ψ* − θ_i),   ∂h/∂θ_j = H_j'(ψ* + π − θ_j),
+//! ```
+//!
+//! and with `k = −g''(ψ*) = h + ρ_i + ρ_j` (`ρ = H + H''`, the radius of
+//! curvature at the contact point) and `n⊥ = e'(ψ*)`,
+//!
+//! ```text
+//! ∂²h/∂r_j² = n⊥ n⊥ᵀ / k,        ∂²h/∂r_j∂θ_i = H_i'' n⊥ / k,
+//! ∂²h/∂θ_i² = −H_i'' + H_i''²/k,  ∂²h/∂θ_i∂θ_j = H_i'' H_j'' / k.
+//! ```
+//!
+//! [`exact`] finds `ψ*` by a safeguarded Newton iteration from the line of
+//! centres; [`polar_support`] gives `H, H', H''` of any star-shaped convex
+//! outline `R(φ)` from the boundary point whose normal points along `β`.
+
+use crate::math::{Matrix, Vector};
+use crate::shape::{Contact, GapHessian};
+
+/// Which gap a near-disk family uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+pub enum GapModel {
+    /// The paper's first-order gap, exact to `O(Δ)`.
+    #[default]
+    FirstOrder,
+    /// The first-order gap with its `O(Δ²)` correction.
+    SecondOrder,
+    /// The true signed distance along the common normal (convex outlines).
+    Exact,
+}
+
+impl GapModel {
+    /// The name used in experiment files.
+    pub fn name(self) -> &'static str {
+        match self {
+            GapModel::FirstOrder => "FirstOrder",
+            GapModel::SecondOrder => "SecondOrder",
+            GapModel::Exact => "Exact",
+        }
+    }
+}
+
+/// A gap `h(r, A_i, A_j)` with its partial derivatives (index 0: body `i`,
+/// 1: body `j`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Partials {
+    /// `h`.
+    pub h: f64,
+    /// `∂h/∂r`.
+    pub h_r: f64,
+    /// `∂h/∂A_i`, `∂h/∂A_j`.
+    pub h_a: [f64; 2],
+    /// `∂²h/∂r²`.
+    pub h_rr: f64,
+    /// `∂²h/∂r∂A_i`, `∂²h/∂r∂A_j`.
+    pub h_ra: [f64; 2],
+    /// `∂²h/∂A_a∂A_b`.
+    pub h_aa: [[f64; 2]; 2],
+}
+
+/// `u = r_ij/r` and `1/r`; coincident centres take `θ_ij = 0` and drop the
+/// terms that diverge as `1/r` (such a pair overlaps deeply and any
+/// direction pushes it apart), as the first-order gap does.
+#[inline(always)]
+fn direction(r_ij: &Vector<2>) -> (f64, Vector<2>, f64) {
+    let r = r_ij.norm();
+    if r > 0.0 {
+        (r, r_ij * (1.0 / r), 1.0 / r)
+    } else {
+        (r, Vector::<2>::new(1.0, 0.0), 0.0)
+    }
+}
+
+impl Partials {
+    /// The contact (gap and first derivatives) at separation `r_ij`.
+    #[inline(always)]
+    pub fn contact(&self, r_ij: &Vector<2>) -> Contact<2> {
+        let (_, u, inv_r) = direction(r_ij);
+        let t = Vector::<2>::new(-u[1], u[0]);
+        Contact {
+            gap: self.h,
+            grad_r: u * self.h_r - t * ((self.h_a[0] + self.h_a[1]) * inv_r),
+            grad_rot_i: [self.h_a[0], 0.0, 0.0],
+            grad_rot_j: [self.h_a[1], 0.0, 0.0],
+        }
+    }
+
+    /// The gap with first and second derivatives in the generalised
+    /// coordinates (chain rule of the module documentation).
+    pub fn chain(&self, r_ij: &Vector<2>) -> GapHessian<2> {
+        let (_, u, inv_r) = direction(r_ij);
+        let t = Vector::<2>::new(-u[1], u[0]);
+        let sym = u * t.transpose() + t * u.transpose();
+        let (sa, sra) = (self.h_a[0] + self.h_a[1], self.h_ra[0] + self.h_ra[1]);
+        let saa = self.h_aa[0][0] + 2.0 * self.h_aa[0][1] + self.h_aa[1][1];
+        let rr = u * u.transpose() * self.h_rr
+            + t * t.transpose() * (self.h_r * inv_r + saa * inv_r * inv_r)
+            + sym * (sa * inv_r * inv_r - sra * inv_r);
+        let rr: Matrix<2> = if inv_r > 0.0 {
+            rr
+        } else {
+            Matrix::<2>::zeros()
+        };
+        let mut g = GapHessian::translational(self.h, Vector::<2>::zeros(), rr);
+        g.contact = self.contact(r_ij);
+        g.r_qi[0] = u * self.h_ra[0] - t * ((self.h_aa[0][0] + self.h_aa[0][1]) * inv_r);
+        g.r_qj[0] = u * self.h_ra[1] - t * ((self.h_aa[1][1] + self.h_aa[0][1]) * inv_r);
+        g.qi_qi[0][0] = self.h_aa[0][0];
+        g.qj_qj[0][0] = self.h_aa[1][1];
+        g.qi_qj[0][0] = self.h_aa[0][1];
+        g
+    }
+}
+
+/// A profile and its first three derivatives at one angle:
+/// `[F, F', F'', F''']`.
+pub type Jet3 = [f64; 4];
+
+/// The second-order near-disk gap (module documentation) with its partials,
+/// for bodies of sizes `size_i`, `size_j`, amplitude `delta`, profiles `p_i`
+/// at `A_i` and `p_j` at `A_j`, at distance `r`. At `r = 0` the `G²/r` term
+/// is dropped.
+#[inline(always)]
+pub fn second_order(
+    r: f64,
+    size_i: f64,
+    size_j: f64,
+    delta: f64,
+    p_i: Jet3,
+    p_j: Jet3,
+) -> Partials {
+    let inv_r = if r > 0.0 { 1.0 / r } else { 0.0 };
+    let (ri, rj) = (size_i, size_j);
+    let [f_i, s_i, c_i, d_i] = p_i;
+    let [f_j, s_j, c_j, d_j] = p_j;
+    let g = ri * s_i + rj * s_j;
+    let d2 = delta * delta;
+    let h = r - ri - rj - delta * (ri * f_i + rj * f_j)
+        + 0.5 * d2 * (g * g * inv_r - ri * s_i * s_i - rj * s_j * s_j);
+    let ha = |rk: f64, s: f64, c: f64| -delta * rk * s + d2 * (g * rk * c * inv_r - rk * s * c);
+    let haa = |rk: f64, s: f64, c: f64, d: f64| {
+        -delta * rk * c
+            + d2 * (rk * rk * c * c * inv_r + g * rk * d * inv_r - rk * c * c - rk * s * d)
+    };
+    let hij = d2 * ri * c_i * rj * c_j * inv_r;
+    Partials {
+        h,
+        h_r: 1.0 - 0.5 * d2 * g * g * inv_r * inv_r,
+        h_a: [ha(ri, s_i, c_i), ha(rj, s_j, c_j)],
+        h_rr: d2 * g * g * inv_r * inv_r * inv_r,
+        h_ra: [
+            -d2 * g * ri * c_i * inv_r * inv_r,
+            -d2 * g * rj * c_j * inv_r * inv_r,
+        ],
+        h_aa: [[haa(ri, s_i, c_i, d_i), hij], [hij, haa(rj, s_j, c_j, d_j)]],
+    }
+}
+
+/// A support function and its first two derivatives at one direction.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SupportJet {
+    /// `H(β)`.
+    pub h: f64,
+    /// `H'(β)`.
+    pub d1: f64,
+    /// `H''(β)`; `H + H''` is the radius of curvature at the support point.
+    pub d2: f64,
+}
+
+/// The support function of a star-shaped **convex** outline given in polar
+/// form by `outline(φ) = (R, R', R'')` (body frame), in the direction `β`.
+///
+/// The support point is the boundary point whose outward normal points
+/// along `β`: its polar angle `φ` solves `ν(φ) = φ − atan2(R', R) = β`,
+/// found by Newton's method from `φ = β` (`ν' = (R² + 2R'² − R R'')/(R² + R'²)`
+/// is positive on a convex outline). Then with `δ = φ − β`:
+/// `H = R cos δ`, `H' = R sin δ`, `H'' = ρ − H`,
+/// `ρ = (R² + R'²)^{3/2} / (R² + 2R'² − R R'')`.
+///
+/// NOTE: on a non-convex outline `ν` is not monotonic, the support point
+/// jumps and `ρ` changes sign; callers refuse such outlines.
+pub fn polar_support<F: Fn(f64) -> (f64, f64, f64)>(beta: f64, outline: F) -> SupportJet {
+    let mut phi = beta;
+    let (mut r, mut r1, mut r2) = outline(phi);
+    for _ in 0..30 {
+        let nu = phi - r1.atan2(r);
+        // The mismatch, wrapped to (−π, π].
+        let mut m = nu - beta;
+        m -= std::f64::consts::TAU * (m / std::f64::consts::TAU).round();
+        let dnu = (r * r + 2.0 * r1 * r1 - r * r2) / (r * r + r1 * r1);
+        let step = (m / dnu).clamp(-0.5, 0.5);
+        phi -= step;
+        (r, r1, r2) = outline(phi);
+        if step.abs() < 1e-15 {
+            break;
+        }
+    }
+    let (sd, cd) = (phi - beta).sin_cos();
+    let q = r * r + r1 * r1;
+    let rho = q * q.sqrt() / (r * r + 2.0 * r1 * r1 - r * r2);
+    let h = r * cd;
+    SupportJet {
+        h,
+        d1: r * sd,
+        d2: rho - h,
+    }
+}
+
+/// The exact gap of two convex bodies at the optimum normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExactGap {
+    /// The direction `ψ*` of the common normal (from `i` towards `j`).
+    pub psi: f64,
+    /// The signed distance `h = g(ψ*)`.
+    pub gap: f64,
+    /// Body `i`'s support function at `ψ* − θ_i`.
+    pub jet_i: SupportJet,
+    /// Body `j`'s support function at `ψ* + π − θ_j`.
+    pub jet_j: SupportJet,
+    /// Newton iterations taken.
+    pub iterations: u32,
+    /// False when the iteration stopped at its cap (the last iterate is
+    /// returned; never observed on convex outlines).
+    pub converged: bool,
+}
+
+/// The exact signed distance `h = max_ψ g(ψ)` of two convex bodies with
+/// orientations `theta_i`, `theta_j` and body-frame support functions
+/// `sup_i`, `sup_j` (module documentation).
+///
+/// Safeguarded Newton on `g'(ψ) = 0` from the line of centres: a step is
+/// taken only where `g'' < 0` (else a gradient step), is capped at 0.3 rad,
+/// and is halved until `g` does not decrease. Converged when the step is
+/// below 10⁻¹⁴ rad (the gap is then exact to round-off: `g` is stationary).
+pub fn exact<S: Fn(f64) -> SupportJet, T: Fn(f64) -> SupportJet>(
+    r_ij: &Vector<2>,
+    theta_i: f64,
+    sup_i: S,
+    theta_j: f64,
+    sup_j: T,
+) -> ExactGap {
+    use std::f64::consts::PI;
+    let eval = |psi: f64| {
+        let (s, c) = psi.sin_cos();
+        let ji = sup_i(psi - theta_i);
+        let jj = sup_j(psi + PI - theta_j);
+        let g = r_ij[0] * c + r_ij[1] * s - ji.h - jj.h;
+        let g1 = -r_ij[0] * s + r_ij[1] * c - ji.d1 - jj.d1;
+        let g2 = -(r_ij[0] * c + r_ij[1] * s) - ji.d2 - jj.d2;
+        (g, g1, g2, ji, jj)
+    };
+    let mut psi = if r_ij.norm() > 0.0 {
+        r_ij[1].atan2(r_ij[0])
+    } else {
+        0.0
+    };
+    let mut cur = eval(psi);
+    let mut converged = false;
+    let mut iterations = 0;
+    while iterations < 60 {
+        iterations += 1;
+        let (g, g1, g2, _, _) = cur;
+        let mut step = if g2 < 0.0 {
+            -g1 / g2
+        } else {
+            0.1 * g1.signum()
+        };
+        step = step.clamp(-0.3, 0.3);
+        if step.abs() < 1e-14 {
+            // Take the tiny last step without a test: it cannot hurt.
+            psi += step;
+            cur = eval(psi);
+            converged = true;
+            break;
+        }
+        let mut next = eval(psi + step);
+        let mut halvings = 0;
+        while next.0 < g && halvings < 40 {
+            step *= 0.5;
+            next = eval(psi + step);
+            halvings += 1;
+        }
+        if next.0 < g {
+            // No ascent along this direction at round-off level: ψ is the
+            // maximum to machine precision.
+            converged = true;
+            break;
+        }
+        psi += step;
+        cur = next;
+    }
+    let (g, _, _, jet_i, jet_j) = cur;
+    ExactGap {
+        psi,
+        gap: g,
+        jet_i,
+        jet_j,
+        iterations,
+        converged,
+    }
+}
+
+impl ExactGap {
+    /// The contact: `∂h/∂r_j = n`, `∂h/∂θ = H'`.
+    pub fn contact(&self) -> Contact<2> {
+        let (s, c) = self.psi.sin_cos();
+        Contact {
+            gap: self.gap,
+            grad_r: Vector::<2>::new(c, s),
+            grad_rot_i: [self.jet_i.d1, 0.0, 0.0],
+            grad_rot_j: [self.jet_j.d1, 0.0, 0.0],
+        }
+    }
+
+    /// The gap with its second derivatives (module documentation).
+    pub fn hessian(&self) -> GapHessian<2> {
+        let (s, c) = self.psi.sin_cos();
+        let nt = Vector::<2>::new(-s, c);
+        let (hi, hj) = (self.jet_i.d2, self.jet_j.d2);
+        let k = self.gap + self.jet_i.h + hi + self.jet_j.h + hj;
+        // NOTE: k = h + ρ_i + ρ_j > 0 unless the bodies overlap by more
+        // than the sum of their curvature radii; guard the division.
+        let inv_k = if k > 0.0 { 1.0 / k } else { 0.0 };
+        let contact = self.contact();
+        let mut g =
+            GapHessian::translational(self.gap, contact.grad_r, nt * nt.transpose() * inv_k);
+        g.contact = contact;
+        g.r_qi[0] = nt * (hi * inv_k);
+        g.r_qj[0] = nt * (hj * inv_k);
+        g.qi_qi[0][0] = -hi + hi * hi * inv_k;
+        g.qj_qj[0][0] = -hj + hj * hj * inv_k;
+        g.qi_qj[0][0] = hi * hj * inv_k;
+        g
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn ellipse(a: f64, b: f64) -> impl Fn(f64) -> SupportJet {
+        move |beta: f64| {
+            let (s, c) = beta.sin_cos();
+            let q = a * a * c * c + b * b * s * s;
+            let h = q.sqrt();
+            let dq = 2.0 * (b * b - a * a) * s * c;
+            let ddq = 2.0 * (b * b - a * a) * (c * c - s * s);
+            SupportJet {
+                h,
+                d1: dq / (2.0 * h),
+                d2: ddq / (2.0 * h) - dq * dq / (4.0 * h * q),
+            }
+        }
+    }
+
+    /// Two disks: h = r − R_i − R_j exactly, normal along the line of centres.
+    #[test]
+    fn disks_give_the_disk_gap() {
+        let disk = |r: f64| {
+            move |_b: f64| SupportJet {
+                h: r,
+                d1: 0.0,
+                d2: 0.0,
+            }
+        };
+        let d = Vector::<2>::new(0.9, -0.7);
+        let e = exact(&d, 0.3, disk(0.5), -1.0, disk(0.7));
+        assert!(e.converged);
+        assert_relative_eq!(e.gap, d.norm() - 1.2, epsilon = 1e-15);
+    }
+
+    /// Two ellipses side by side, long axes parallel to the line of
+    /// centres: h = r − 2a; perpendicular: r − 2b; one of each: r − a − b.
+    #[test]
+    fn aligned_ellipses() {
+        let (a, b) = (0.8, 0.4);
+        let d = Vector::<2>::new(1.7, 0.0);
+        let g = |ti: f64, tj: f64| exact(&d, ti, ellipse(a, b), tj, ellipse(a, b)).gap;
+        let half = std::f64::consts::FRAC_PI_2;
+        assert_relative_eq!(g(0.0, 0.0), 1.7 - 2.0 * a, epsilon = 1e-14);
+        assert_relative_eq!(g(half, half), 1.7 - 2.0 * b, epsilon = 1e-14);
+        assert_relative_eq!(g(0.0, half), 1.7 - a - b, epsilon = 1e-14);
+    }
+
+    /// The polar support of an ellipse `R(φ) = ab/√(b²cos²φ + a²sin²φ)`
+    /// equals its closed-form support function (the inner Newton converges
+    /// to round-off; 1e-12 on values of order 1).
+    #[test]
+    fn polar_support_of_an_ellipse() {
+        let (a, b) = (0.9, 0.6);
+        let outline = |phi: f64| {
+            // R = ab q^{-1/2}, q = b²cos² + a²sin²; derivatives by hand.
+            let (s, c) = phi.sin_cos();
+            let q = b * b * c * c + a * a * s * s;
+            let q1 = 2.0 * (a * a - b * b) * s * c;
+            let q2 = 2.0 * (a * a - b * b) * (c * c - s * s);
+            let r = a * b / q.sqrt();
+            let r1 = -0.5 * r * q1 / q;
+            let r2 = -0.5 * (r1 * q1 + r * q2) / q + 0.5 * r * q1 * q1 / (q * q);
+            (r, r1, r2)
+        };
+        let exact_support = ellipse(a, b);
+        for k in 0..24 {
+            let beta = -3.1 + 0.27 * k as f64;
+            let p = polar_support(beta, outline);
+            let e = exact_support(beta);
+            assert_relative_eq!(p.h, e.h, epsilon = 1e-12);
+            assert_relative_eq!(p.d1, e.d1, epsilon = 1e-12);
+            assert_relative_eq!(p.d2, e.d2, epsilon = 1e-10);
+        }
+    }
+
+    /// The chain rule reproduces the first-order gap's own derivatives.
+    #[test]
+    fn chain_rule_matches_first_order() {
+        use crate::first_order::{Profile, gap_hessian};
+        let (delta, ri, rj) = (0.2, 0.5, 0.7);
+        let (n, ai, aj) = (3.0f64, 0.4f64, -1.3f64);
+        let f = |a: f64| {
+            [
+                (n * a).sin() / n,
+                (n * a).cos(),
+                -n * (n * a).sin(),
+                -n * n * (n * a).cos(),
+            ]
+        };
+        let d = Vector::<2>::new(1.1, 0.4);
+        let r = d.norm();
+        let (pi, pj) = (f(ai), f(aj));
+        let p = Partials {
+            h: r - ri - rj - delta * (ri * pi[0] + rj * pj[0]),
+            h_r: 1.0,
+            h_a: [-delta * ri * pi[1], -delta * rj * pj[1]],
+            h_rr: 0.0,
+            h_ra: [0.0, 0.0],
+            h_aa: [[-delta * ri * pi[2], 0.0], [0.0, -delta * rj * pj[2]]],
+        };
+        let prof = |x: [f64; 4]| Profile {
+            value: x[0],
+            slope: x[1],
+            curvature: x[2],
+        };
+        let a = p.chain(&d);
+        let b = gap_hessian(&d, ri, rj, delta, prof(pi), prof(pj));
+        assert_relative_eq!(a.rr, b.rr, epsilon = 1e-14);
+        assert_relative_eq!(a.contact.grad_r, b.contact.grad_r, epsilon = 1e-14);
+        assert_relative_eq!(a.r_qi[0], b.r_qi[0], epsilon = 1e-14);
+        assert_relative_eq!(a.r_qj[0], b.r_qj[0], epsilon = 1e-14);
+    }
+}
