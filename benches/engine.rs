@@ -43,6 +43,7 @@ fn energy_gradient_near_disks(c: &mut Criterion) {
         n: 2,
         delta: 0.1,
         inertia: None,
+        gap: Default::default(),
     })
     .unwrap();
     for n in [256, 1024] {

@@ -103,10 +103,13 @@ pub fn run(what: BenchCommand) -> Result<()> {
                         bench_packing::<3, _>(Sphere, particles, seed, skin)?
                     }
                     (BenchFamily::Fourier, 2) => {
-                        let shape = NearDisk::fourier(&FourierParams { n, delta, inertia })
-                            .map_err(|e| {
-                                anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed)
-                            })?;
+                        let shape = NearDisk::fourier(&FourierParams {
+                            n,
+                            delta,
+                            inertia,
+                            gap: Default::default(),
+                        })
+                        .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))?;
                         bench_packing::<2, _>(shape, particles, seed, skin)?
                     }
                     _ => anyhow::bail!("--dim {dim}: must be 2 or 3 (2 for near-disks)"),

@@ -24,6 +24,7 @@ pub fn run(particles: &[usize], nalgebra: bool) -> Result<()> {
             n: 2,
             delta: 0.1,
             inertia: None,
+            gap: Default::default(),
         })
         .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))?;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);

@@ -68,6 +68,7 @@ fn near_disk_hessian_matches_finite_differences() {
             n,
             delta: 0.2,
             inertia: None,
+            gap: Default::default(),
         })
         .unwrap();
         check::<2, _>(shape, 24, 1..=2);

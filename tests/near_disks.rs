@@ -16,6 +16,7 @@ fn fourier(n: u32, delta: f64) -> NearDisk {
         n,
         delta,
         inertia: None,
+        gap: Default::default(),
     })
     .unwrap()
 }

@@ -92,6 +92,7 @@ fn near_disk_zero_modes_count_the_missing_contacts() {
             n: 2,
             delta,
             inertia: None,
+            gap: Default::default(),
         })
         .unwrap();
         let mut scene = jammed::<2, _>(shape, 64, seed);

@@ -99,6 +99,7 @@ fn twelve_lobes_jam() {
         n: 12,
         delta: 0.006,
         inertia: None,
+        gap: Default::default(),
     })
     .unwrap();
     assert!(n12.is_convex(), "the file's Δ must keep n = 12 convex");
@@ -177,6 +178,7 @@ fn nearly_coincident_centres_give_finite_deterministic_contacts() {
         n: 2,
         delta: 0.1,
         inertia: None,
+        gap: Default::default(),
     })
     .unwrap();
     for r in [Vector::<2>::new(0.0, 0.0), Vector::<2>::new(3e-13, -4e-13)] {
@@ -237,6 +239,7 @@ fn wound_and_opposite_orientations_give_the_same_gap() {
         n: 3,
         delta: 0.1,
         inertia: None,
+        gap: Default::default(),
     })
     .unwrap();
     let r = Vector::<2>::new(0.9, 0.5);

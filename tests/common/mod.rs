@@ -31,6 +31,7 @@ pub fn multi_mode() -> NearDisk {
         modes,
         delta: 0.2,
         inertia: None,
+        gap: Default::default(),
     })
     .unwrap()
 }

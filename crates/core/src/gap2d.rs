@@ -280,10 +280,11 @@ pub struct ExactGap {
 /// orientations `theta_i`, `theta_j` and body-frame support functions
 /// `sup_i`, `sup_j` (module documentation).
 ///
-/// Safeguarded Newton on `g'(ψ) = 0` from the line of centres: a step is
-/// taken only where `g'' < 0` (else a gradient step), is capped at 0.3 rad,
-/// and is halved until `g` does not decrease. Converged when the step is
-/// below 10⁻¹⁴ rad (the gap is then exact to round-off: `g` is stationary).
+/// Safeguarded Newton on `g'(ψ) = 0` from the line of centres: a Newton
+/// step is taken only where `g'' < 0` (else a gradient step); steps larger
+/// than 10⁻³ rad are capped at 0.3 rad and halved until `g` does not
+/// decrease; smaller Newton steps are taken as they are (quadratic
+/// convergence). Converged when the step is below 10⁻¹⁴ rad.
 pub fn exact<S: Fn(f64) -> SupportJet, T: Fn(f64) -> SupportJet>(
     r_ij: &Vector<2>,
     theta_i: f64,
@@ -318,12 +319,18 @@ pub fn exact<S: Fn(f64) -> SupportJet, T: Fn(f64) -> SupportJet>(
             0.1 * g1.signum()
         };
         step = step.clamp(-0.3, 0.3);
-        if step.abs() < 1e-14 {
-            // Take the tiny last step without a test: it cannot hurt.
+        if g2 < 0.0 && step.abs() < 1e-3 {
+            // Close to the maximum Newton converges quadratically; take the
+            // step untested: near the top `g` is flat to round-off and a
+            // test on its value would stop ψ ~1e-8 short (√(ε/|g''|)),
+            // spoiling the gradient n = e(ψ) at that level.
             psi += step;
             cur = eval(psi);
-            converged = true;
-            break;
+            if step.abs() < 1e-14 {
+                converged = true;
+                break;
+            }
+            continue;
         }
         let mut next = eval(psi + step);
         let mut halvings = 0;

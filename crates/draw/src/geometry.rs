@@ -64,6 +64,7 @@ impl Outline {
             n,
             delta,
             inertia: Some(1.0),
+            gap: Default::default(),
         })
         .map_err(|e| param_error("fourier", e))?;
         Ok(Outline::NearDisk(shape))
@@ -75,6 +76,7 @@ impl Outline {
             modes,
             delta,
             inertia: Some(1.0),
+            gap: Default::default(),
         })
         .map_err(|e| param_error("fourier_sum", e))?;
         Ok(Outline::NearDisk(shape))

@@ -35,6 +35,7 @@
 //! `R⁰[1 + Δ F(φ − θ_i)]`; both describe the same family of shapes.)
 
 use jamkit_core::first_order::{Profile, gap_hessian};
+use jamkit_core::gap2d::{self, GapModel, Jet3, SupportJet};
 use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, ParamSpec, Shape, Vector};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
@@ -64,7 +65,16 @@ pub const FOURIER_INFO: FamilyInfo = FamilyInfo {
             is_list: false,
             default: Some("None"),
         },
+        GAP_SPEC,
     ],
+};
+
+/// The `gap` parameter shared by both near-disk families.
+const GAP_SPEC: ParamSpec = ParamSpec {
+    name: "gap",
+    about: "gap model: FirstOrder (the paper's, O(Δ) exact), SecondOrder (O(Δ²)), Exact (common normal; convex outlines only)",
+    is_list: false,
+    default: Some("FirstOrder"),
 };
 
 /// The `fourier_sum` family's self-description.
@@ -91,6 +101,7 @@ pub const FOURIER_SUM_INFO: FamilyInfo = FamilyInfo {
             is_list: false,
             default: Some("None"),
         },
+        GAP_SPEC,
     ],
 };
 
@@ -118,6 +129,9 @@ pub struct FourierParams {
     /// Moment of inertia (`None`: Δ).
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
+    /// The gap model (default: the paper's first order).
+    #[serde(default)]
+    pub gap: GapModel,
 }
 
 /// Parameters of `fourier_sum`.
@@ -131,6 +145,9 @@ pub struct FourierSumParams {
     /// Moment of inertia (`None`: Δ).
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
+    /// The gap model (default: the paper's first order).
+    #[serde(default)]
+    pub gap: GapModel,
 }
 
 /// A near-disk family: `Δ`, the modes of `F`, and the moment of inertia.
@@ -144,6 +161,8 @@ pub struct NearDisk {
     inertia: f64,
     /// `Σ |a_k|`, a bound on `|F|`.
     f_bound: f64,
+    /// The gap model.
+    gap: GapModel,
 }
 
 /// An orientation, stored as the unit complex number `e^{iθ}`
@@ -270,12 +289,13 @@ impl NearDisk {
                 b: 0.0,
             }],
             p.inertia,
+            p.gap,
         )
     }
 
     /// The `fourier_sum` family.
     pub fn fourier_sum(p: &FourierSumParams) -> Result<Self, ParamError> {
-        Self::new("fourier_sum", p.delta, p.modes.clone(), p.inertia)
+        Self::new("fourier_sum", p.delta, p.modes.clone(), p.inertia, p.gap)
     }
 
     fn new(
@@ -283,6 +303,7 @@ impl NearDisk {
         delta: f64,
         modes: Vec<Mode>,
         inertia: Option<f64>,
+        gap: GapModel,
     ) -> Result<Self, ParamError> {
         let err = |field: &str, value: String, allowed: &str| ParamError {
             field: field.into(),
@@ -336,6 +357,7 @@ impl NearDisk {
             f_bound: modes.iter().map(|m| m.a.abs()).sum(),
             modes,
             inertia,
+            gap,
         };
         let min_r = shape.min_relative_radius();
         if min_r <= 0.0 {
@@ -347,7 +369,21 @@ impl NearDisk {
                 ),
             ));
         }
+        if gap == GapModel::Exact && !shape.is_convex() {
+            return Err(err(
+                "params.gap",
+                "Exact".into(),
+                &format!(
+                    "needs a convex outline, and Δ = {delta} makes it non-convex (the common normal is then not unique); use FirstOrder or SecondOrder, or a smaller Δ"
+                ),
+            ));
+        }
         Ok(shape)
+    }
+
+    /// The gap model.
+    pub fn gap_model(&self) -> GapModel {
+        self.gap
     }
 
     /// `Δ`.
@@ -431,6 +467,91 @@ impl NearDisk {
             * PI
             / m as f64;
         perimeter * perimeter / (4.0 * PI * self.relative_area())
+    }
+
+    /// `(F, F', F'')` at the lab angle `φ` (slow path, for the exact gap).
+    fn f_jet(&self, phi: f64) -> (f64, f64, f64) {
+        let (mut f, mut df, mut ddf) = (0.0, 0.0, 0.0);
+        for m in &self.modes {
+            let n = m.n as f64;
+            let (s, c) = (n * phi + m.b).sin_cos();
+            f += m.a * s;
+            df += m.a * n * c;
+            ddf -= m.a * n * n * s;
+        }
+        (f, df, ddf)
+    }
+
+    /// `[F, F', F'', F''']` of both bodies of a pair (see
+    /// [`NearDisk::f_pair`]), for the second-order gap.
+    fn f_pair_jet3(&self, z_i: (f64, f64), z_j: (f64, f64), w_conj: (f64, f64)) -> [Jet3; 2] {
+        let e = [cmul(z_i, w_conj), cmul((-z_j.0, -z_j.1), w_conj)];
+        let mut out = [[0.0; 4]; 2];
+        for (m, &phase) in self.modes.iter().zip(&self.phases) {
+            let n = m.n as f64;
+            for (o, &e) in out.iter_mut().zip(&e) {
+                let p = cmul(cpow(e, m.n), phase);
+                o[0] += m.a * p.1;
+                o[1] += m.a * n * p.0;
+                o[2] -= m.a * n * n * p.1;
+                o[3] -= m.a * n * n * n * p.0;
+            }
+        }
+        out
+    }
+
+    /// The second-order gap's partials (see [`jamkit_core::gap2d`]).
+    fn second_order(
+        &self,
+        size_i: f64,
+        o_i: &Angle,
+        size_j: f64,
+        o_j: &Angle,
+        r_ij: &Vector<2>,
+    ) -> gap2d::Partials {
+        let r = r_ij.norm();
+        let u = if r > 0.0 {
+            r_ij * (1.0 / r)
+        } else {
+            Vector::<2>::new(1.0, 0.0)
+        };
+        let [p_i, p_j] = self.f_pair_jet3((o_i.cos, o_i.sin), (o_j.cos, o_j.sin), (u[0], -u[1]));
+        gap2d::second_order(r, size_i, size_j, self.delta, p_i, p_j)
+    }
+
+    /// The exact gap (see [`jamkit_core::gap2d::exact`]). In the body frame
+    /// the outline is `R(φ)/R⁰ = 1 + Δ F(−φ)`, and orientation `θ` turns it
+    /// counter-clockwise by `θ`.
+    fn exact_gap(
+        &self,
+        size_i: f64,
+        o_i: &Angle,
+        size_j: f64,
+        o_j: &Angle,
+        r_ij: &Vector<2>,
+    ) -> gap2d::ExactGap {
+        let d = self.delta;
+        let outline = |phi: f64| {
+            let (f, df, ddf) = self.f_jet(-phi);
+            (1.0 + d * f, -d * df, d * ddf)
+        };
+        let support = |size: f64| {
+            move |beta: f64| {
+                let j = gap2d::polar_support(beta, outline);
+                SupportJet {
+                    h: size * j.h,
+                    d1: size * j.d1,
+                    d2: size * j.d2,
+                }
+            }
+        };
+        gap2d::exact(
+            r_ij,
+            o_i.theta(),
+            support(size_i),
+            o_j.theta(),
+            support(size_j),
+        )
     }
 
     /// `(F, F', F'')` of both bodies of a pair (see [`NearDisk::f_pair`]),
@@ -570,6 +691,18 @@ impl Shape<2> for NearDisk {
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return;
         }
+        match self.gap {
+            GapModel::FirstOrder => {}
+            GapModel::SecondOrder => {
+                return visit(
+                    self.second_order(size_i, o_i, size_j, o_j, r_ij)
+                        .contact(r_ij),
+                );
+            }
+            GapModel::Exact => {
+                return visit(self.exact_gap(size_i, o_i, size_j, o_j, r_ij).contact());
+            }
+        }
         // NOTE: coincident centres have no direction θ_ij; take θ_ij = 0
         // (deterministic; such a pair overlaps deeply and any direction
         // pushes it apart).
@@ -608,6 +741,20 @@ impl Shape<2> for NearDisk {
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return Ok(());
         }
+        match self.gap {
+            GapModel::FirstOrder => {}
+            GapModel::SecondOrder => {
+                visit(
+                    self.second_order(size_i, o_i, size_j, o_j, r_ij)
+                        .chain(r_ij),
+                );
+                return Ok(());
+            }
+            GapModel::Exact => {
+                visit(self.exact_gap(size_i, o_i, size_j, o_j, r_ij).hessian());
+                return Ok(());
+            }
+        }
         let u = if r > 0.0 {
             r_ij / r
         } else {
@@ -635,6 +782,7 @@ mod tests {
             n,
             delta,
             inertia: None,
+            gap: Default::default(),
         })
         .unwrap()
     }
@@ -698,6 +846,7 @@ mod tests {
             }],
             delta: 0.1,
             inertia: None,
+            gap: Default::default(),
         })
         .unwrap();
         let d = Vector::<2>::new(0.7, 0.6);
@@ -731,6 +880,7 @@ mod tests {
             ],
             delta: 0.3,
             inertia: None,
+            gap: Default::default(),
         })
         .unwrap();
         let m = 4096;
@@ -785,7 +935,8 @@ mod tests {
             NearDisk::fourier(&FourierParams {
                 n: 0,
                 delta: 0.1,
-                inertia: None
+                inertia: None,
+                gap: Default::default(),
             })
             .is_err()
         );
@@ -793,7 +944,8 @@ mod tests {
             NearDisk::fourier(&FourierParams {
                 n: 2,
                 delta: f64::NAN,
-                inertia: None
+                inertia: None,
+                gap: Default::default(),
             })
             .is_err()
         );
@@ -801,7 +953,8 @@ mod tests {
             NearDisk::fourier(&FourierParams {
                 n: 2,
                 delta: 2.5,
-                inertia: None
+                inertia: None,
+                gap: Default::default(),
             })
             .is_err()
         ); // 1 − Δ/2 < 0
@@ -809,7 +962,8 @@ mod tests {
             NearDisk::fourier_sum(&FourierSumParams {
                 modes: vec![],
                 delta: 0.1,
-                inertia: None
+                inertia: None,
+                gap: Default::default(),
             })
             .is_err()
         );

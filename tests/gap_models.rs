@@ -1,0 +1,271 @@
+//! The ladder of near-disk gap models (`gap: FirstOrder | SecondOrder |
+//! Exact`): finite-difference gradients and Hessians, independent checks of
+//! the exact gap, and the order of each model's error (`docs/physics.md`,
+//! "The ladder of gap models").
+
+use jamkit_core::gap2d::GapModel;
+use jamkit_core::{Packing, Potential, Shape, SizeDistribution, Vector};
+use jamkit_engine::{Scene, check::gradient_error};
+use jamkit_fourier::{Angle, FourierParams, FourierSumParams, Mode, NearDisk};
+use jamkit_observe::hessian::{Hessian, HessianOptions, finite_difference};
+use rand::{RngExt, SeedableRng};
+use std::f64::consts::PI;
+
+fn fourier(n: u32, delta: f64, gap: GapModel) -> NearDisk {
+    NearDisk::fourier(&FourierParams {
+        n,
+        delta,
+        inertia: None,
+        gap,
+    })
+    .unwrap()
+}
+
+/// Three modes with phases (n = 2, 3, 7), Δ = 0.1 (still convex; at 0.2
+/// the n = 7 mode makes it non-convex, which `Exact` refuses): the hard case.
+fn multi_mode(gap: GapModel) -> NearDisk {
+    let m = |n, a, b| Mode { n, a, b };
+    NearDisk::fourier_sum(&FourierSumParams {
+        modes: vec![m(2, 0.4, 0.3), m(3, 0.2, -1.0), m(7, 0.05, 2.0)],
+        delta: 0.1,
+        inertia: None,
+        gap,
+    })
+    .unwrap()
+}
+
+fn shapes(gap: GapModel) -> Vec<NearDisk> {
+    let mut v: Vec<NearDisk> = (2..=5).map(|n| fourier(n, 0.15, gap)).collect();
+    v.push(multi_mode(gap));
+    v
+}
+
+fn dense(shape: NearDisk, n: usize, seed: u64) -> Scene<2, NearDisk> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let sizes = SizeDistribution::default().sample(n, &mut rng);
+    let packing = Packing::<2, NearDisk>::random(shape, sizes, 0.9, &mut rng).unwrap();
+    Scene::new(packing, Potential::Harmonic, 0.2)
+}
+
+fn gap_of(s: &NearDisk, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> f64 {
+    let mut h = f64::NAN;
+    s.contacts(
+        ri,
+        &Angle::new(ti),
+        rj,
+        &Angle::new(tj),
+        &d,
+        f64::INFINITY,
+        |c| h = c.gap,
+    );
+    h
+}
+
+/// Forces and torques against central differences, for SecondOrder and
+/// Exact. ε = 1e-7: the random dense start has pairs at small `r` where the
+/// second-order term `Δ²G²/2r` has large third derivatives, and at ε = 1e-6
+/// the truncation error reached 3e-6 of the gradient scale (it fell as ε²,
+/// so it is truncation, not a wrong term); at 1e-7 it is ~3e-8 and the
+/// round-off ~1e-16 V/ε ~ 1e-9. A wrong term would miss by ≫ 1e-6.
+#[test]
+fn second_order_and_exact_gradients_match_finite_differences() {
+    for gap in [GapModel::SecondOrder, GapModel::Exact] {
+        for shape in shapes(gap) {
+            for seed in 1..=2 {
+                let scene = dense(shape.clone(), 40, seed);
+                let (err, scale) = gradient_error(&scene, 1e-7);
+                assert!(scale > 1e-2);
+                assert!(
+                    err < 1e-6 * scale,
+                    "{gap:?} {shape:?} seed {seed}: {err:e} vs {scale:e}"
+                );
+            }
+        }
+    }
+}
+
+/// The analytic Hessian against central differences of the analytic
+/// gradient (same tolerance and reasoning as `tests/hessian.rs`: 1e-6
+/// relative to the largest entry).
+#[test]
+fn second_order_and_exact_hessians_match_finite_differences() {
+    for gap in [GapModel::SecondOrder, GapModel::Exact] {
+        for shape in shapes(gap) {
+            let mut scene = dense(shape.clone(), 24, 1);
+            let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default())
+                .unwrap()
+                .dense();
+            let fd = finite_difference(&scene, 1e-6);
+            let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+            let mut err = 0.0f64;
+            for (a, row) in fd.iter().enumerate() {
+                for (b, x) in row.iter().enumerate() {
+                    err = err.max((h[(a, b)] - x).abs());
+                }
+            }
+            assert!(scale > 0.5, "configuration should overlap");
+            assert!(
+                err < 1e-6 * scale,
+                "{gap:?} {shape:?}: error {err:e} vs scale {scale:e}"
+            );
+        }
+    }
+}
+
+/// A pair with θ_ij within 1e-9 of ±π (the branch cut of atan2, where the
+/// exact gap's Newton iteration starts): the gradient is right on both sides.
+#[test]
+fn exact_gradient_is_smooth_across_theta_ij_equal_pi() {
+    for shape in [
+        fourier(3, 0.2, GapModel::Exact),
+        multi_mode(GapModel::Exact),
+    ] {
+        for dy in [1e-9, -1e-9, 0.0] {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+            let mut p =
+                Packing::<2, NearDisk>::random(shape.clone(), vec![0.5, 0.7], 0.05, &mut rng)
+                    .unwrap();
+            let c = *p.bbox.edges() * 0.5;
+            p.positions[0] = c;
+            p.positions[1] = c + Vector::<2>::new(-1.1, dy);
+            let scene = Scene::new(p, Potential::Harmonic, 0.2);
+            let (err, scale) = gradient_error(&scene, 1e-7);
+            assert!(scale > 1e-3, "the pair must overlap");
+            assert!(err < 1e-6 * scale, "dy = {dy}: {err:e} vs {scale:e}");
+        }
+    }
+}
+
+/// The outline of body `i` (size `ri`, angle `ti`) in the lab direction `φ`.
+fn radius(s: &NearDisk, ri: f64, ti: f64, phi: f64) -> f64 {
+    ri * s.relative_radius(ti - phi)
+}
+
+/// The exact gap checked without its own machinery: the support function
+/// by brute force (the largest projection of 5·10⁴ outline points, low by
+/// at most ~R(δφ)²/2 ≈ 10⁻⁸), and the maximum over the normal direction by a
+/// scan (the exact gap must be at least every scanned `g(ψ)` and at most
+/// their maximum plus the scan's resolution).
+#[test]
+fn exact_gap_is_the_max_over_normals_of_the_brute_force_support_gap() {
+    let s = multi_mode(GapModel::Exact);
+    let m = 50_000;
+    let support = |ri: f64, ti: f64, psi: f64| {
+        (0..m)
+            .map(|k| {
+                let phi = 2.0 * PI * k as f64 / m as f64;
+                radius(&s, ri, ti, phi) * (phi - psi).cos()
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    for _ in 0..4 {
+        let (ti, tj) = (
+            rng.random::<f64>() * 2.0 * PI,
+            rng.random::<f64>() * 2.0 * PI,
+        );
+        let a = rng.random::<f64>() * 2.0 * PI;
+        let dist = 1.2 + 0.2 * (rng.random::<f64>() - 0.5);
+        let d = Vector::<2>::new(dist * a.cos(), dist * a.sin());
+        let h = gap_of(&s, 0.5, ti, 0.7, tj, d);
+        let g = |psi: f64| {
+            d[0] * psi.cos() + d[1] * psi.sin() - support(0.5, ti, psi) - support(0.7, tj, psi + PI)
+        };
+        // g is smooth with |g''| ≲ 2: a scan with step 5e-3 around the line
+        // of centres (±0.3 rad) finds its maximum to ~|g''|(2.5e-3)² ≈ 1e-5.
+        let best = (-60..=60)
+            .map(|k| g(a + 5e-3 * k as f64))
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(h >= best - 3e-8, "exact {h} below the scan's max {best}");
+        assert!(h <= best + 2e-5, "exact {h} above the scan's max {best}");
+    }
+}
+
+/// Order of each model: over random pairs near contact, the largest error
+/// of `h` against `Exact` scales as Δ² (FirstOrder) and Δ³ (SecondOrder).
+/// Fitted log–log slopes over Δ = 10⁻³ … 10⁻¹ must lie within 0.25 of 2
+/// and 3 (the leading coefficients vary with the pairs sampled, so the
+/// slope is not exact; a wrong order would miss by ≥ 1).
+#[test]
+fn first_order_error_scales_as_delta_squared_and_second_order_as_delta_cubed() {
+    for n in [2, 3, 5] {
+        let deltas = [1e-3, 3e-3, 1e-2, 3e-2, 1e-1];
+        let mut errs = [[0.0f64; 5]; 2];
+        for (k, &delta) in deltas.iter().enumerate() {
+            let exact = fourier(n, delta, GapModel::Exact);
+            let models = [
+                fourier(n, delta, GapModel::FirstOrder),
+                fourier(n, delta, GapModel::SecondOrder),
+            ];
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+            for _ in 0..200 {
+                let (ti, tj) = (
+                    rng.random::<f64>() * 2.0 * PI,
+                    rng.random::<f64>() * 2.0 * PI,
+                );
+                let a = rng.random::<f64>() * 2.0 * PI;
+                // Near contact: within ±Δ·R of touching.
+                let dist = 1.2 + 0.5 * delta * (rng.random::<f64>() - 0.5);
+                let d = Vector::<2>::new(dist * a.cos(), dist * a.sin());
+                let he = gap_of(&exact, 0.5, ti, 0.7, tj, d);
+                for (e, m) in errs.iter_mut().zip(&models) {
+                    e[k] = e[k].max((gap_of(m, 0.5, ti, 0.7, tj, d) - he).abs());
+                }
+            }
+        }
+        for (order, e) in [(2.0, errs[0]), (3.0, errs[1])] {
+            let slope = fit_slope(&deltas, &e);
+            println!("n = {n}: order {order}: errors {e:?}, fitted slope {slope:.3}");
+            assert!(
+                (slope - order).abs() < 0.25,
+                "n = {n}: slope {slope} for order {order}: {e:?}"
+            );
+        }
+    }
+}
+
+/// Least-squares slope of log y against log x.
+fn fit_slope(x: &[f64], y: &[f64]) -> f64 {
+    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
+    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
+    let n = x.len() as f64;
+    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
+    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = lx.iter().map(|a| (a - mx) * (a - mx)).sum();
+    sxy / sxx
+}
+
+/// `h_ij = h_ji` and invariance under a global rotation, for both new
+/// models (round-off: 1e-14 on gaps of order 1).
+#[test]
+fn new_models_are_symmetric_and_rotation_invariant() {
+    for gap in [GapModel::SecondOrder, GapModel::Exact] {
+        let s = multi_mode(gap);
+        let d = Vector::<2>::new(0.8, -0.9);
+        let h = gap_of(&s, 0.5, 0.3, 0.7, -1.2, d);
+        assert!((h - gap_of(&s, 0.7, -1.2, 0.5, 0.3, -d)).abs() < 1e-14);
+        for alpha in [0.4, 2.0, PI, -2.5] {
+            let (sa, ca) = f64::sin_cos(alpha);
+            let dr = Vector::<2>::new(ca * d[0] - sa * d[1], sa * d[0] + ca * d[1]);
+            let hr = gap_of(&s, 0.5, 0.3 + alpha, 0.7, -1.2 + alpha, dr);
+            assert!((h - hr).abs() < 1e-14, "{gap:?} α = {alpha}: {h} vs {hr}");
+        }
+    }
+}
+
+/// The exact gap needs a convex outline: a non-convex one is refused with
+/// the field, the value and what is allowed; the other models only warn.
+#[test]
+fn exact_gap_refuses_non_convex_outlines() {
+    let p = |gap| FourierParams {
+        n: 5,
+        delta: 0.5,
+        inertia: None,
+        gap,
+    };
+    let e = NearDisk::fourier(&p(GapModel::Exact)).unwrap_err();
+    assert_eq!(e.field, "params.gap");
+    assert!(e.allowed.contains("convex"), "{e:?}");
+    let s = NearDisk::fourier(&p(GapModel::SecondOrder)).unwrap();
+    assert!(!s.warnings().is_empty());
+}
