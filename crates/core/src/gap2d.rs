@@ -66,11 +66,17 @@
 //! centres; [`polar_support`] gives `H, H', H''` of any star-shaped convex
 //! outline `R(φ)` from the boundary point whose normal points along `β`.
 
-use crate::math::{Matrix, Vector};
+use crate::math::{Matrix, Unit, Vector, cmul, turn_unit, unit_of_angle};
 use crate::shape::{Contact, GapHessian};
 
 /// Which gap a near-disk family uses.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+///
+/// In experiment files it is written as a string, `gap: "Exact"`
+/// (`"FirstOrder"`, `"SecondOrder"`, `"Exact"`; case, `_` and `-` are
+/// ignored): family parameters pass through RON's untyped values, which
+/// keep strings but drop the names of bare identifiers. Read it with
+/// [`deserialize_gap`], which turns a bare name into a clear error.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum GapModel {
     /// The paper's first-order gap, exact to `O(Δ)`.
     #[default]
@@ -79,6 +85,50 @@ pub enum GapModel {
     SecondOrder,
     /// The true signed distance along the common normal (convex outlines).
     Exact,
+}
+
+impl std::str::FromStr for GapModel {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        let key: String = text
+            .chars()
+            .filter(|c| !matches!(c, '_' | '-' | ' '))
+            .collect::<String>()
+            .to_ascii_lowercase();
+        match key.as_str() {
+            "firstorder" | "first" => Ok(GapModel::FirstOrder),
+            "secondorder" | "second" => Ok(GapModel::SecondOrder),
+            "exact" => Ok(GapModel::Exact),
+            _ => Err(format!(
+                "unknown gap model {text:?}: allowed are \"FirstOrder\", \"SecondOrder\", \"Exact\""
+            )),
+        }
+    }
+}
+
+/// Deserialize a family's `gap` parameter: a string naming the model, or
+/// `None`/absent for the paper's `FirstOrder`. A bare RON identifier
+/// (`gap: Exact`) reaches a family as a unit value without its name, and
+/// is refused with a message saying how to write it.
+pub fn deserialize_gap<'de, D: serde::Deserializer<'de>>(d: D) -> Result<GapModel, D::Error> {
+    #[derive(serde::Deserialize)]
+    #[serde(untagged)]
+    enum Raw {
+        Name(String),
+        // Before `Wrapped`: a unit value would read as `None`.
+        Unit(()),
+        Wrapped(Option<String>),
+    }
+    use serde::Deserialize;
+    use serde::de::Error;
+    match Raw::deserialize(d)? {
+        Raw::Name(s) | Raw::Wrapped(Some(s)) => s.parse().map_err(D::Error::custom),
+        Raw::Wrapped(None) => Ok(GapModel::FirstOrder),
+        Raw::Unit(()) => Err(D::Error::custom(
+            "write the gap model as a string, e.g. gap: \"Exact\" (allowed: \"FirstOrder\", \"SecondOrder\", \"Exact\")",
+        )),
+    }
 }
 
 impl GapModel {
@@ -223,53 +273,95 @@ pub struct SupportJet {
 /// form by `outline(φ) = (R, R', R'')` (body frame), in the direction `β`.
 ///
 /// The support point is the boundary point whose outward normal points
-/// along `β`: its polar angle `φ` solves `ν(φ) = φ − atan2(R', R) = β`,
-/// found by Newton's method from `φ = β` (`ν' = (R² + 2R'² − R R'')/(R² + R'²)`
-/// is positive on a convex outline). Then with `δ = φ − β`:
+/// along `β`: its polar angle `φ` solves `ν(φ) = φ − atan(R'/R) = β`, i.e.
+/// with `δ = φ − β`, `q(φ) = R sin δ − R' cos δ = 0`, found by Newton's
+/// method (`q' = 2R' sin δ + (R − R'') cos δ = (cos δ/R)(R² + 2R'² − R R'')`
+/// is positive on a convex outline). Then
 /// `H = R cos δ`, `H' = R sin δ`, `H'' = ρ − H`,
 /// `ρ = (R² + R'²)^{3/2} / (R² + 2R'² − R R'')`.
 ///
 /// NOTE: on a non-convex outline `ν` is not monotonic, the support point
 /// jumps and `ρ` changes sign; callers refuse such outlines.
 pub fn polar_support<F: Fn(f64) -> (f64, f64, f64)>(beta: f64, outline: F) -> SupportJet {
-    let mut phi = beta;
-    let (mut r, mut r1, mut r2) = outline(phi);
+    let e = unit_of_angle(beta);
+    polar_support_unit(e, e, |p: Unit| outline(p.1.atan2(p.0))).0
+}
+
+/// [`polar_support`] with directions as unit complex numbers (no
+/// trigonometric call): `e_beta = e^{iβ}`, Newton started from the support
+/// point `p0 = e^{iφ₀}`, `outline(e^{iφ}) = (R, R', R'')`. Returns the
+/// [`SupportPoint`] too, so that a caller asking for nearby directions can
+/// start the next search there.
+#[inline]
+pub fn polar_support_unit<F: Fn(Unit) -> (f64, f64, f64)>(
+    e_beta: Unit,
+    p0: Unit,
+    outline: F,
+) -> (SupportJet, SupportPoint) {
+    let back = (e_beta.0, -e_beta.1);
+    let mut p = p0;
+    let (mut r, mut r1, mut r2) = outline(p);
+    let mut d = cmul(p, back);
     for _ in 0..30 {
-        let nu = phi - r1.atan2(r);
-        // The mismatch, wrapped to (−π, π].
-        let mut m = nu - beta;
-        m -= std::f64::consts::TAU * (m / std::f64::consts::TAU).round();
-        let dnu = (r * r + 2.0 * r1 * r1 - r * r2) / (r * r + r1 * r1);
-        let step = (m / dnu).clamp(-0.5, 0.5);
-        phi -= step;
-        (r, r1, r2) = outline(phi);
-        if step.abs() < 1e-15 {
+        let q = r * d.1 - r1 * d.0;
+        let dq = 2.0 * r1 * d.1 + (r - r2) * d.0;
+        let step = if dq > 0.0 {
+            (q / dq).clamp(-0.5, 0.5)
+        } else {
+            // Far from the root (δ beyond ±π/2): turn towards β.
+            0.5 * d.1.signum()
+        };
+        p = turn_unit(p, -step);
+        (r, r1, r2) = outline(p);
+        d = cmul(p, back);
+        // Quadratic convergence: after a step s the error is ~C s² with
+        // C = |q''/2q'| ≲ n³Δ; at s < 1e-7 that is ≲ 1e-13 in φ, which moves
+        // H by ~1e-26 (H is stationary in φ) and H' by ~1e-13.
+        if step.abs() < 1e-7 {
             break;
         }
     }
-    let (sd, cd) = (phi - beta).sin_cos();
     let q = r * r + r1 * r1;
-    let rho = q * q.sqrt() / (r * r + 2.0 * r1 * r1 - r * r2);
-    let h = r * cd;
-    SupportJet {
-        h,
-        d1: r * sd,
-        d2: rho - h,
-    }
+    let k = r * r + 2.0 * r1 * r1 - r * r2;
+    let rho = q * q.sqrt() / k;
+    let h = r * d.0;
+    (
+        SupportJet {
+            h,
+            d1: r * d.1,
+            d2: rho - h,
+        },
+        SupportPoint {
+            p,
+            dphi_dbeta: q / k,
+        },
+    )
+}
+
+/// Where a support search ended: the support point `e^{iφ}` and how fast it
+/// moves with the direction, `dφ/dβ = 1/ν' = (R² + R'²)/(R² + 2R'² − R R'')`,
+/// so that the next search, for a nearby direction `β + dβ`, can start at
+/// `φ + dβ dφ/dβ` (error O(dβ²)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SupportPoint {
+    /// `e^{iφ}`.
+    pub p: Unit,
+    /// `dφ/dβ` there.
+    pub dphi_dbeta: f64,
 }
 
 /// The exact gap of two convex bodies at the optimum normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExactGap {
-    /// The direction `ψ*` of the common normal (from `i` towards `j`).
-    pub psi: f64,
+    /// The common normal `n = e^{iψ*}` (from `i` towards `j`).
+    pub normal: Unit,
     /// The signed distance `h = g(ψ*)`.
     pub gap: f64,
     /// Body `i`'s support function at `ψ* − θ_i`.
     pub jet_i: SupportJet,
     /// Body `j`'s support function at `ψ* + π − θ_j`.
     pub jet_j: SupportJet,
-    /// Newton iterations taken.
+    /// Newton iterations taken (each evaluates both support functions).
     pub iterations: u32,
     /// False when the iteration stopped at its cap (the last iterate is
     /// returned; never observed on convex outlines).
@@ -278,13 +370,8 @@ pub struct ExactGap {
 
 /// The exact signed distance `h = max_ψ g(ψ)` of two convex bodies with
 /// orientations `theta_i`, `theta_j` and body-frame support functions
-/// `sup_i`, `sup_j` (module documentation).
-///
-/// Safeguarded Newton on `g'(ψ) = 0` from the line of centres: a Newton
-/// step is taken only where `g'' < 0` (else a gradient step); steps larger
-/// than 10⁻³ rad are capped at 0.3 rad and halved until `g` does not
-/// decrease; smaller Newton steps are taken as they are (quadratic
-/// convergence). Converged when the step is below 10⁻¹⁴ rad.
+/// `sup_i`, `sup_j` of the angle (module documentation), started from the
+/// line of centres. See [`exact_unit`], which this wraps.
 pub fn exact<S: Fn(f64) -> SupportJet, T: Fn(f64) -> SupportJet>(
     r_ij: &Vector<2>,
     theta_i: f64,
@@ -292,22 +379,54 @@ pub fn exact<S: Fn(f64) -> SupportJet, T: Fn(f64) -> SupportJet>(
     theta_j: f64,
     sup_j: T,
 ) -> ExactGap {
-    use std::f64::consts::PI;
-    let eval = |psi: f64| {
-        let (s, c) = psi.sin_cos();
-        let ji = sup_i(psi - theta_i);
-        let jj = sup_j(psi + PI - theta_j);
-        let g = r_ij[0] * c + r_ij[1] * s - ji.h - jj.h;
+    let w0 = if r_ij.norm() > 0.0 {
+        (r_ij[0] / r_ij.norm(), r_ij[1] / r_ij.norm())
+    } else {
+        (1.0, 0.0)
+    };
+    exact_unit(
+        r_ij,
+        w0,
+        unit_of_angle(theta_i),
+        |e: Unit| sup_i(e.1.atan2(e.0)),
+        unit_of_angle(theta_j),
+        |e: Unit| sup_j(e.1.atan2(e.0)),
+    )
+}
+
+/// The exact gap with every direction a unit complex number: the first
+/// guess of the normal `w0 = e^{iψ₀}`, the orientations `z = e^{iθ}`, and
+/// support functions of the body-frame direction `e^{iβ}`.
+///
+/// Safeguarded Newton on `g'(ψ) = 0`: a Newton step is taken only where
+/// `g'' < 0` (else a gradient step); steps larger than 10⁻³ rad are capped
+/// at 0.3 rad and halved until `g` does not decrease; smaller Newton steps
+/// are taken as they are (quadratic convergence; near the top `g` is flat
+/// to round-off, and a test on its value would stop ψ ~1e-8 short).
+/// Converged after a Newton step below 10⁻⁷ rad: what is left, ~C·10⁻¹⁴
+/// with `C = |g'''/2g''| = O(1)`, moves `h` by ~10⁻²⁸ (`g` is stationary)
+/// and the normal by ~10⁻¹⁴.
+pub fn exact_unit<S: Fn(Unit) -> SupportJet, T: Fn(Unit) -> SupportJet>(
+    r_ij: &Vector<2>,
+    w0: Unit,
+    z_i: Unit,
+    sup_i: S,
+    z_j: Unit,
+    sup_j: T,
+) -> ExactGap {
+    let (zi_bar, zj_bar_neg) = ((z_i.0, -z_i.1), (-z_j.0, z_j.1));
+    let eval = |w: Unit| {
+        let (c, s) = w;
+        let ji = sup_i(cmul(w, zi_bar));
+        let jj = sup_j(cmul(w, zj_bar_neg));
+        let along = r_ij[0] * c + r_ij[1] * s;
+        let g = along - ji.h - jj.h;
         let g1 = -r_ij[0] * s + r_ij[1] * c - ji.d1 - jj.d1;
-        let g2 = -(r_ij[0] * c + r_ij[1] * s) - ji.d2 - jj.d2;
+        let g2 = -along - ji.d2 - jj.d2;
         (g, g1, g2, ji, jj)
     };
-    let mut psi = if r_ij.norm() > 0.0 {
-        r_ij[1].atan2(r_ij[0])
-    } else {
-        0.0
-    };
-    let mut cur = eval(psi);
+    let mut w = w0;
+    let mut cur = eval(w);
     let mut converged = false;
     let mut iterations = 0;
     while iterations < 60 {
@@ -320,23 +439,21 @@ pub fn exact<S: Fn(f64) -> SupportJet, T: Fn(f64) -> SupportJet>(
         };
         step = step.clamp(-0.3, 0.3);
         if g2 < 0.0 && step.abs() < 1e-3 {
-            // Close to the maximum Newton converges quadratically; take the
-            // step untested: near the top `g` is flat to round-off and a
-            // test on its value would stop ψ ~1e-8 short (√(ε/|g''|)),
-            // spoiling the gradient n = e(ψ) at that level.
-            psi += step;
-            cur = eval(psi);
-            if step.abs() < 1e-14 {
+            w = turn_unit(w, step);
+            cur = eval(w);
+            if step.abs() < 1e-7 {
                 converged = true;
                 break;
             }
             continue;
         }
-        let mut next = eval(psi + step);
+        let mut next_w = turn_unit(w, step);
+        let mut next = eval(next_w);
         let mut halvings = 0;
         while next.0 < g && halvings < 40 {
             step *= 0.5;
-            next = eval(psi + step);
+            next_w = turn_unit(w, step);
+            next = eval(next_w);
             halvings += 1;
         }
         if next.0 < g {
@@ -345,12 +462,12 @@ pub fn exact<S: Fn(f64) -> SupportJet, T: Fn(f64) -> SupportJet>(
             converged = true;
             break;
         }
-        psi += step;
+        w = next_w;
         cur = next;
     }
     let (g, _, _, jet_i, jet_j) = cur;
     ExactGap {
-        psi,
+        normal: w,
         gap: g,
         jet_i,
         jet_j,
@@ -362,7 +479,7 @@ pub fn exact<S: Fn(f64) -> SupportJet, T: Fn(f64) -> SupportJet>(
 impl ExactGap {
     /// The contact: `∂h/∂r_j = n`, `∂h/∂θ = H'`.
     pub fn contact(&self) -> Contact<2> {
-        let (s, c) = self.psi.sin_cos();
+        let (c, s) = self.normal;
         Contact {
             gap: self.gap,
             grad_r: Vector::<2>::new(c, s),
@@ -373,7 +490,7 @@ impl ExactGap {
 
     /// The gap with its second derivatives (module documentation).
     pub fn hessian(&self) -> GapHessian<2> {
-        let (s, c) = self.psi.sin_cos();
+        let (c, s) = self.normal;
         let nt = Vector::<2>::new(-s, c);
         let (hi, hj) = (self.jet_i.d2, self.jet_j.d2);
         let k = self.gap + self.jet_i.h + hi + self.jet_j.h + hj;

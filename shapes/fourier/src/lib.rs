@@ -36,6 +36,7 @@
 
 use jamkit_core::first_order::{Profile, gap_hessian};
 use jamkit_core::gap2d::{self, GapModel, Jet3, SupportJet};
+use jamkit_core::math::{Unit, cmul, turn_unit, unit_of_angle};
 use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, ParamSpec, Shape, Vector};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
@@ -72,9 +73,9 @@ pub const FOURIER_INFO: FamilyInfo = FamilyInfo {
 /// The `gap` parameter shared by both near-disk families.
 const GAP_SPEC: ParamSpec = ParamSpec {
     name: "gap",
-    about: "gap model: FirstOrder (the paper's, O(Δ) exact), SecondOrder (O(Δ²)), Exact (common normal; convex outlines only)",
+    about: "gap model, a string: \"FirstOrder\" (the paper's, error O(Δ²)), \"SecondOrder\" (error O(Δ³)), \"Exact\" (common normal; convex outlines only); None: FirstOrder",
     is_list: false,
-    default: Some("FirstOrder"),
+    default: Some("None"),
 };
 
 /// The `fourier_sum` family's self-description.
@@ -130,7 +131,7 @@ pub struct FourierParams {
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
     /// The gap model (default: the paper's first order).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "jamkit_core::gap2d::deserialize_gap")]
     pub gap: GapModel,
 }
 
@@ -146,7 +147,7 @@ pub struct FourierSumParams {
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
     /// The gap model (default: the paper's first order).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "jamkit_core::gap2d::deserialize_gap")]
     pub gap: GapModel,
 }
 
@@ -163,6 +164,9 @@ pub struct NearDisk {
     f_bound: f64,
     /// The gap model.
     gap: GapModel,
+    /// Per unit size, how far the exact gap can fall below the first-order
+    /// one (`Δ² F'²_max / (1 − Δ F_max)`, ∞ where that bound is not proven).
+    exact_slack: f64,
 }
 
 /// An orientation, stored as the unit complex number `e^{iθ}`
@@ -179,8 +183,7 @@ impl Angle {
     pub fn new(theta: f64) -> Self {
         // NOTE: wrapping first keeps sin/cos accurate for angles that have
         // wound many turns; θ and θ + 2π are the same orientation.
-        let theta = theta - 2.0 * PI * (theta / (2.0 * PI)).round();
-        let (sin, cos) = theta.sin_cos();
+        let (cos, sin) = unit_of_angle(theta);
         Self { cos, sin }
     }
 
@@ -189,35 +192,20 @@ impl Angle {
         self.sin.atan2(self.cos)
     }
 
-    /// Turn by `dθ`. Small turns (every FIRE step near a minimum) multiply
-    /// `e^{iθ}` by `e^{i dθ}` from its Taylor series instead of calling
-    /// `sin_cos`, which cost a sixth of a near-disk step.
-    ///
-    /// NOTE: for `|dθ| < 10⁻²` the truncated series (through `dθ⁷` and `dθ⁸`)
-    /// is exact in double precision (next terms < 3·10⁻²⁴); the product is
-    /// renormalised by one Newton step for `1/|z|`, so `|e^{iθ}| = 1` to
-    /// round-off however many turns accumulate.
+    /// `e^{iθ}`.
+    pub fn unit(&self) -> Unit {
+        (self.cos, self.sin)
+    }
+
+    /// Turn by `dθ` ([`jamkit_core::math::turn_unit`]). Small turns (every
+    /// FIRE step near a minimum) multiply `e^{iθ}` by `e^{i dθ}` from its
+    /// Taylor series instead of calling `sin_cos`, which cost a sixth of a
+    /// near-disk step.
     #[inline]
     pub fn turned(self, dtheta: f64) -> Self {
-        if dtheta.abs() >= 1e-2 {
-            return Self::new(self.theta() + dtheta);
-        }
-        let x2 = dtheta * dtheta;
-        let s = dtheta * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
-        let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
-        let (cos, sin) = cmul((self.cos, self.sin), (c, s));
-        let fix = 1.5 - 0.5 * (cos * cos + sin * sin);
-        Self {
-            cos: cos * fix,
-            sin: sin * fix,
-        }
+        let (cos, sin) = turn_unit((self.cos, self.sin), dtheta);
+        Self { cos, sin }
     }
-}
-
-/// Complex product.
-#[inline(always)]
-fn cmul(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
-    (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0)
 }
 
 /// `z²`, bit for bit `cmul(z, z)` (`ab + ba = 2ab` exactly).
@@ -355,6 +343,16 @@ impl NearDisk {
             delta,
             phases: modes.iter().map(|m| (m.b.cos(), m.b.sin())).collect(),
             f_bound: modes.iter().map(|m| m.a.abs()).sum(),
+            exact_slack: {
+                let f_max: f64 = modes.iter().map(|m| m.a.abs()).sum();
+                let df_max: f64 = modes.iter().map(|m| m.a.abs() * m.n as f64).sum();
+                // The bound needs R_max/R_min = (1 + ΔF)/(1 − ΔF) < 1.85.
+                if delta * f_max < 0.25 {
+                    delta * delta * df_max * df_max / (1.0 - delta * f_max)
+                } else {
+                    f64::INFINITY
+                }
+            },
             modes,
             inertia,
             gap,
@@ -519,26 +517,17 @@ impl NearDisk {
         size_j: f64,
         o_j: &Angle,
         r_ij: &Vector<2>,
-    ) -> Contact<2> {
+        max_gap: f64,
+    ) -> Option<Contact<2>> {
         match self.gap {
-            GapModel::SecondOrder => self
-                .second_order(size_i, o_i, size_j, o_j, r_ij)
-                .contact(r_ij),
-            _ => self.exact_gap(size_i, o_i, size_j, o_j, r_ij).contact(),
+            GapModel::SecondOrder => Some(
+                self.second_order(size_i, o_i, size_j, o_j, r_ij)
+                    .contact(r_ij),
+            ),
+            _ => self
+                .exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap)
+                .map(|e| e.contact()),
         }
-    }
-
-    /// `(F, F', F'')` at the lab angle `φ` (slow path, for the exact gap).
-    fn f_jet(&self, phi: f64) -> (f64, f64, f64) {
-        let (mut f, mut df, mut ddf) = (0.0, 0.0, 0.0);
-        for m in &self.modes {
-            let n = m.n as f64;
-            let (s, c) = (n * phi + m.b).sin_cos();
-            f += m.a * s;
-            df += m.a * n * c;
-            ddf -= m.a * n * n * s;
-        }
-        (f, df, ddf)
     }
 
     /// `[F, F', F'', F''']` of both bodies of a pair (see
@@ -578,9 +567,18 @@ impl NearDisk {
         gap2d::second_order(r, size_i, size_j, self.delta, p_i, p_j)
     }
 
-    /// The exact gap (see [`jamkit_core::gap2d::exact`]). In the body frame
-    /// the outline is `R(φ)/R⁰ = 1 + Δ F(−φ)`, and orientation `θ` turns it
+    /// The exact gap (see [`jamkit_core::gap2d::exact`]), or `None` when
+    /// it certainly exceeds `max_gap`. In the body frame the outline is
+    /// `R(φ)/R⁰ = 1 + Δ F(−φ)`, and orientation `θ` turns it
     /// counter-clockwise by `θ`.
+    ///
+    /// Two uses of the first-order gap `h₁` (cheap):
+    /// * a bound: `h ≥ h₁ − (s_i + s_j)`, with `s = R⁰ Δ² F'²_max / (1 − Δ F_max)`
+    ///   (the support function exceeds the radius `R(ψ)` by at most
+    ///   `(6/11) L²/R_min`, `L = max|R'|`, when `R_max < 1.85 R_min`; see
+    ///   `docs/physics.md`), so far pairs skip the iteration;
+    /// * the first guess of the normal, `ψ₀ = θ_ij + Δ(R_i⁰F_i' + R_j⁰F_j')/r`,
+    ///   exact to `O(Δ²)`.
     fn exact_gap(
         &self,
         size_i: f64,
@@ -588,15 +586,48 @@ impl NearDisk {
         size_j: f64,
         o_j: &Angle,
         r_ij: &Vector<2>,
-    ) -> gap2d::ExactGap {
+        max_gap: f64,
+    ) -> Option<gap2d::ExactGap> {
+        let r = r_ij.norm();
+        let first = self.first_order(size_i, o_i, size_j, o_j, r_ij, r);
+        if first.gap - self.exact_slack * (size_i + size_j) > max_gap {
+            return None;
+        }
+        let w0 = if r > 0.0 {
+            let u = (r_ij[0] / r, r_ij[1] / r);
+            turn_unit(u, -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r)
+        } else {
+            (1.0, 0.0)
+        };
         let d = self.delta;
-        let outline = |phi: f64| {
-            let (f, df, ddf) = self.f_jet(-phi);
+        // R(φ)/R⁰ = 1 + Δ F(−φ) at p = e^{iφ}: e^{−iφ} = p̄.
+        let outline = |p: Unit| {
+            let (mut f, mut df, mut ddf) = (0.0, 0.0, 0.0);
+            for (m, &phase) in self.modes.iter().zip(&self.phases) {
+                let n = m.n as f64;
+                let v = cmul(cpow_pair((p.0, -p.1), (1.0, 0.0), m.n).0, phase);
+                f += m.a * v.1;
+                df += m.a * n * v.0;
+                ddf -= m.a * n * n * v.1;
+            }
             (1.0 + d * f, -d * df, d * ddf)
         };
+        // Each body's support search starts where its previous one ended,
+        // turned by the change of direction: after the first Newton step on
+        // ψ the support point moves by ~1e-4 rad and one inner step suffices.
         let support = |size: f64| {
-            move |beta: f64| {
-                let j = gap2d::polar_support(beta, outline);
+            let last = std::cell::Cell::new(None::<(Unit, gap2d::SupportPoint)>);
+            move |e: Unit| {
+                let p0 = match last.get() {
+                    Some((e_prev, sp)) => {
+                        // dβ = arg(e ē_prev), small: sin dβ ≈ dβ to O(dβ³).
+                        let turn = cmul(e, (e_prev.0, -e_prev.1));
+                        turn_unit(sp.p, turn.1 * sp.dphi_dbeta)
+                    }
+                    None => e,
+                };
+                let (j, sp) = gap2d::polar_support_unit(e, p0, outline);
+                last.set(Some((e, sp)));
                 SupportJet {
                     h: size * j.h,
                     d1: size * j.d1,
@@ -604,13 +635,14 @@ impl NearDisk {
                 }
             }
         };
-        gap2d::exact(
+        Some(gap2d::exact_unit(
             r_ij,
-            o_i.theta(),
+            w0,
+            o_i.unit(),
             support(size_i),
-            o_j.theta(),
+            o_j.unit(),
             support(size_j),
-        )
+        ))
     }
 
     /// `(F, F', F'')` of both bodies of a pair (see [`NearDisk::f_pair`]),
@@ -753,11 +785,13 @@ impl Shape<2> for NearDisk {
         // One call of `visit` for every model: a second call site (an early
         // return for the other models) cost the first-order pair loop 6 %.
         let contact = if self.gap == GapModel::FirstOrder {
-            self.first_order(size_i, o_i, size_j, o_j, r_ij, r)
+            Some(self.first_order(size_i, o_i, size_j, o_j, r_ij, r))
         } else {
-            self.beyond_first_order(size_i, o_i, size_j, o_j, r_ij)
+            self.beyond_first_order(size_i, o_i, size_j, o_j, r_ij, max_gap)
         };
-        visit(contact);
+        if let Some(c) = contact {
+            visit(c);
+        }
     }
 
     /// Second derivatives of the first-order gap
@@ -786,7 +820,9 @@ impl Shape<2> for NearDisk {
                 return Ok(());
             }
             GapModel::Exact => {
-                visit(self.exact_gap(size_i, o_i, size_j, o_j, r_ij).hessian());
+                if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
+                    visit(e.hessian());
+                }
                 return Ok(());
             }
         }
@@ -938,30 +974,6 @@ mod tests {
             let expected = 0.5 * delta * delta * (1.0 - 1.0 / (n * n) as f64);
             assert_relative_eq!(s.asphericity() - 1.0, expected, max_relative = 1e-3);
         }
-    }
-
-    /// Many small turns agree with their sum: after 10⁵ turns the angle is
-    /// within 1e-11 of the (compensated) sum of the increments, i.e. an
-    /// error of ~1e-16 per turn, and `|e^{iθ}| = 1` to round-off.
-    #[test]
-    fn small_turns_accumulate_exactly() {
-        let mut a = Angle::new(0.3);
-        let (mut sum, mut carry) = (0.3f64, 0.0f64);
-        for k in 0..100_000 {
-            let d = 1e-3 * ((k % 7) as f64 - 2.9);
-            a = a.turned(d);
-            // Kahan summation of the exact total angle.
-            let y = d - carry;
-            let t = sum + y;
-            carry = (t - sum) - y;
-            sum = t;
-        }
-        let b = Angle::new(sum);
-        assert!(
-            (a.cos - b.cos).abs() < 1e-11 && (a.sin - b.sin).abs() < 1e-11,
-            "{a:?} vs {b:?}"
-        );
-        assert!((a.cos * a.cos + a.sin * a.sin - 1.0).abs() < 1e-15);
     }
 
     #[test]
