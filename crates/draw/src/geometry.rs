@@ -39,17 +39,23 @@ impl Outline {
             family: family.to_string(),
             message,
         };
+        // `null` is an absent optional (e.g. `gap`, `inertia`): drop it so
+        // that the family's default applies.
+        let mut params = params.clone();
+        if let Some(map) = params.as_object_mut() {
+            map.retain(|_, v| !v.is_null());
+        }
         match family {
             "sphere" => Ok(Outline::Disk),
             "nmer" => Ok(Outline::Spheres),
             "fourier" => {
                 let p: FourierParams =
-                    serde_json::from_value(params.clone()).map_err(|e| bad(e.to_string()))?;
+                    serde_json::from_value(params).map_err(|e| bad(e.to_string()))?;
                 Self::fourier(p.n, p.delta)
             }
             "fourier_sum" => {
                 let p: FourierSumParams =
-                    serde_json::from_value(params.clone()).map_err(|e| bad(e.to_string()))?;
+                    serde_json::from_value(params).map_err(|e| bad(e.to_string()))?;
                 Self::fourier_sum(p.modes, p.delta)
             }
             other => Err(DrawError::UnknownFamily(other.to_string())),
