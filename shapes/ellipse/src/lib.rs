@@ -597,7 +597,7 @@ mod tests {
         let h = s.support(0.7);
         let eps = 1e-5;
         for k in 0..40 {
-            let beta = -3.14 + 0.161 * k as f64;
+            let beta = -3.0 + 0.161 * k as f64;
             let (m, c, p) = (h(beta - eps), h(beta), h(beta + eps));
             assert_relative_eq!(c.d1, (p.h - m.h) / (2.0 * eps), epsilon = 1e-8);
             assert_relative_eq!(c.d2, (p.d1 - m.d1) / (2.0 * eps), epsilon = 1e-8);
