@@ -291,3 +291,63 @@ fn table(ell: &[Row], disks: &[Row], size: usize) -> String {
     }
     m
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(a_minus_1: f64, parameter: f64, phi: f64) -> Row {
+        Row {
+            a_minus_1,
+            parameter,
+            packings: 3,
+            phi: (phi, 0.001),
+            z_j: (4.5, 0.01),
+            rattlers: (0.02, 0.005),
+        }
+    }
+
+    /// Rows of equal A (to 1e-6 relative) share a line; others get their
+    /// own, sorted by A, with dashes for the missing family.
+    #[test]
+    fn table_pairs_rows_of_equal_asphericity() {
+        let disks = [row(3.7e-3, 0.1, 0.85), row(1e-4, 0.02, 0.84)];
+        let ell = [row(3.7e-3 * (1.0 + 1e-9), 1.105, 0.86), row(0.5, 3.0, 0.9)];
+        let t = table(&ell, &disks, 128);
+        let lines: Vec<&str> = t
+            .lines()
+            .filter(|l| l.starts_with("| ") && !l.starts_with("| A"))
+            .collect();
+        assert_eq!(lines.len(), 3, "{t}");
+        assert!(
+            lines[0].starts_with("| 1.000e-4 | 0.02 | — |"),
+            "{}",
+            lines[0]
+        );
+        assert!(
+            lines[1].contains("| 0.1 | 1.105000 | 0.8500 ± 0.0010 | 0.8600 ± 0.0010 |"),
+            "{}",
+            lines[1]
+        );
+        assert!(
+            lines[2].starts_with("| 5.000e-1 | — | 3.000000 |"),
+            "{}",
+            lines[2]
+        );
+        assert!(t.contains("N = 128"));
+    }
+
+    /// The near-disk and ellipse asphericities of the Fig. 5 grid agree
+    /// (the files' aspect ratios match A to ~1e-9 in α, so A to ~1e-10).
+    #[test]
+    fn grid_asphericities_match() {
+        for (delta, alpha) in [(0.01, 1.010050054), (0.3, 1.345872045)] {
+            let (a, b) = (
+                near_disk_asphericity(delta).unwrap(),
+                ellipse_asphericity(alpha).unwrap(),
+            );
+            assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+        }
+        assert!(ellipse_asphericity(0.5).is_none());
+    }
+}
