@@ -5,7 +5,9 @@
 //! `jamkit-fourier`; a disk is `Δ = 0`), so its outline points are
 //! `r + R(φ) (cos φ, sin φ)`. A body that crosses an edge of the periodic
 //! box `[0, L₁) × [0, L₂)` is drawn as several pieces: the body and its
-//! periodic images, each clipped to the box.
+//! periodic images, each clipped to the box. An ellipse (`jamkit-ellipse`)
+//! has `R(φ) = R⁰/√(α⁻¹cos²(θ − φ) + α sin²(θ − φ))`, its long axis along
+//! `e(θ)`.
 
 use crate::DrawError;
 use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
@@ -15,7 +17,7 @@ use std::f64::consts::PI;
 pub type Point = [f64; 2];
 
 /// The families [`Outline::from_family`] knows how to draw.
-pub const DRAWABLE_FAMILIES: &[&str] = &["sphere", "fourier", "fourier_sum", "nmer"];
+pub const DRAWABLE_FAMILIES: &[&str] = &["sphere", "fourier", "fourier_sum", "nmer", "ellipse"];
 
 /// The outline law of a family, shared by all bodies of a packing.
 #[derive(Clone, Debug)]
@@ -24,6 +26,8 @@ pub enum Outline {
     Disk,
     /// A near-disk: `R(φ) = R⁰ [1 + Δ F(θ − φ)]`.
     NearDisk(NearDisk),
+    /// An ellipse of aspect ratio `α` and the area of the disk `R⁰`.
+    Ellipse(jamkit_ellipse::Ellipse),
     /// A body made of spheres (`nmer`), drawn from the packing file's
     /// `spheres` rows as the union of its disks ([`union_outlines`]); a
     /// body without rows (α = 1 runs as disks) is the disk of radius `R⁰`.
@@ -52,6 +56,11 @@ impl Outline {
                 let p: FourierParams =
                     serde_json::from_value(params).map_err(|e| bad(e.to_string()))?;
                 Self::fourier(p.n, p.delta)
+            }
+            "ellipse" => {
+                let p: jamkit_ellipse::EllipseParams =
+                    serde_json::from_value(params.clone()).map_err(|e| bad(e.to_string()))?;
+                Self::ellipse(p.aspect)
             }
             "fourier_sum" => {
                 let p: FourierSumParams =
@@ -88,19 +97,45 @@ impl Outline {
         Ok(Outline::NearDisk(shape))
     }
 
-    /// `R/R⁰` as a function of the body-frame angle `ψ`: `1 + Δ F(ψ)`.
+    /// The `ellipse` outline of aspect ratio `aspect`.
+    pub fn ellipse(aspect: f64) -> Result<Self, DrawError> {
+        let shape = jamkit_ellipse::Ellipse::new(&jamkit_ellipse::EllipseParams {
+            aspect,
+            inertia: None,
+        })
+        .map_err(|e| DrawError::Params {
+            family: "ellipse".to_string(),
+            message: e.to_string(),
+        })?;
+        Ok(Outline::Ellipse(shape))
+    }
+
+    /// `R/R⁰` as a function of the body-frame angle `ψ`: `1 + Δ F(ψ)`
+    /// (near-disks), `1/√(α⁻¹cos²ψ + α sin²ψ)` (ellipses).
     pub fn relative_radius(&self, psi: f64) -> f64 {
         match self {
             Outline::Disk | Outline::Spheres => 1.0,
             Outline::NearDisk(s) => s.relative_radius(psi),
+            Outline::Ellipse(s) => s.relative_radius(psi),
         }
     }
 
-    /// `Δ` (0 for disks).
+    /// `Δ` (0 for disks and ellipses).
     pub fn delta(&self) -> f64 {
         match self {
-            Outline::Disk | Outline::Spheres => 0.0,
+            Outline::Disk | Outline::Spheres | Outline::Ellipse(_) => 0.0,
             Outline::NearDisk(s) => s.delta(),
+        }
+    }
+
+    /// True for outlines that are disks (a near-disk with `Δ = 0`, an
+    /// ellipse with `α = 1`): they are jammed as disks and store no angles.
+    pub fn is_round(&self) -> bool {
+        match self {
+            Outline::Disk => true,
+            Outline::Spheres => false,
+            Outline::NearDisk(s) => s.delta() == 0.0,
+            Outline::Ellipse(s) => s.aspect() == 1.0,
         }
     }
 
@@ -329,6 +364,28 @@ mod tests {
             1.0 + delta / n as f64,
             epsilon = 1e-12
         );
+    }
+
+    #[test]
+    fn ellipse_outline_has_the_area_of_its_disk_and_its_long_axis_along_theta() {
+        let o = Outline::from_family(
+            "ellipse",
+            &serde_json::json!({"aspect": 2.0, "inertia": null}),
+        )
+        .unwrap();
+        let poly = o.body_points([0.0, 0.0], 0.5, 0.7, 4000);
+        // Area π (R⁰)² to the polygon's O(1/m²) deficit (~1e-6 here).
+        assert_relative_eq!(polygon_area(&poly), PI * 0.25, max_relative = 1e-5);
+        // The farthest point is at a = R⁰√α along e(θ).
+        let far = poly
+            .iter()
+            .max_by(|p, q| (p[0].hypot(p[1])).total_cmp(&q[0].hypot(q[1])))
+            .unwrap();
+        assert_relative_eq!(far[0].hypot(far[1]), 0.5 * 2f64.sqrt(), max_relative = 1e-6);
+        let t = far[1].atan2(far[0]);
+        assert!((t - 0.7).abs() < 2e-3 || (t - 0.7 + PI).abs() < 2e-3, "{t}");
+        assert!(Outline::from_family("ellipse", &serde_json::json!({"aspect": 0.5})).is_err());
+        assert!(Outline::ellipse(1.0).unwrap().is_round());
     }
 
     #[test]

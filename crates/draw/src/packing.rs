@@ -111,10 +111,11 @@ impl Packing2d {
                 file.rattler.len()
             )));
         }
-        let needs_angles = matches!(outline, Outline::NearDisk(_));
+        let needs_angles = matches!(outline, Outline::NearDisk(_) | Outline::Ellipse(_));
         if needs_angles && file.orientations.len() != n {
-            // A Δ = 0 near-disk is jammed as a disk and stores no angles.
-            if !(file.orientations.is_empty() && outline.delta() == 0.0) {
+            // A Δ = 0 near-disk (α = 1 ellipse) is jammed as a disk and
+            // stores no angles.
+            if !(file.orientations.is_empty() && outline.is_round()) {
                 return Err(bad(format!(
                     "orientations has {} entries for {n} positions (family `{}` needs one angle per body)",
                     file.orientations.len(),

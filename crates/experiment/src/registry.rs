@@ -20,6 +20,7 @@ pub const FAMILIES: &[FamilyInfo] = &[
     jamkit_fourier::FOURIER_SUM_INFO,
     jamkit_lobed::INFO,
     jamkit_nmer::INFO,
+    jamkit_ellipse::INFO,
 ];
 
 /// Dimensions the engine is compiled for (families with `Dims::Any`).
@@ -149,6 +150,19 @@ pub fn dispatch<V: SceneVisitor>(
                 }
                 _ => unreachable!("checked by supports_dim"),
             }
+        }
+        "ellipse" => {
+            let p: jamkit_ellipse::EllipseParams = parse_params(family, params)?;
+            let shape = jamkit_ellipse::Ellipse::new(&p)
+                .map_err(|e| ExperimentError::invalid(e.field, e.value, e.allowed))?;
+            // α = 1 is the disk of radius R⁰: run it as `sphere` (no
+            // rotational coordinates, same random stream, hence the same
+            // packing as `sphere` for the same seed), as near-disks with Δ = 0.
+            Ok(if p.aspect == 1.0 {
+                visitor.visit::<2, _>(jamkit_sphere::Sphere)
+            } else {
+                visitor.visit::<2, _>(shape)
+            })
         }
         other => unreachable!("family `{other}` is in FAMILIES but has no dispatch arm"),
     }

@@ -121,6 +121,10 @@ pub fn report(dirs: &[PathBuf], out: &Path, options: &Options) -> Result<Report,
         claims: Vec::new(),
         notes: Vec::new(),
     };
+    // Fig. 5 (ellipses) is drawn only when the runs hold ellipse packings;
+    // those are not near-disk packings, but are not "left out" either.
+    let fig05 = crate::ellipses::fig05(dirs, &r.points, out)?;
+    let skipped = skipped - fig05.as_ref().map_or(0, |f| f.files).min(skipped);
     if skipped > 0 {
         r.notes
             .push(format!("{skipped} packing files were not near-disk packings with n and Δ, or unreadable, and were left out."));
@@ -130,7 +134,18 @@ pub fn report(dirs: &[PathBuf], out: &Path, options: &Options) -> Result<Report,
     r.dz_against_delta()?;
     r.gaps()?;
     r.spectra()?;
-    let markdown = r.markdown(dirs);
+    let mut markdown = r.markdown(dirs);
+    if let Some(f) = fig05 {
+        markdown += &f.markdown;
+        for stem in &f.figures {
+            let name = stem
+                .file_name()
+                .map(|s| s.to_string_lossy().to_string())
+                .unwrap_or_default();
+            let _ = writeln!(markdown, "\n![{name}]({name}.png)");
+        }
+        r.figures.extend(f.figures);
+    }
     let path = out.join("report.md");
     std::fs::write(&path, &markdown).map_err(|e| ReportError::Io { path, error: e })?;
     Ok(Report {

@@ -8,12 +8,15 @@
 //! * [`fit`]: power laws on log–log axes with bootstrap errors over packings;
 //! * [`plot`]: figures with error bars and guide lines, SVG and PNG;
 //! * [`figures`]: the paper's Figs. 7–13 and the markdown summary with the
-//!   table "paper's claim | our measurement | agrees?".
+//!   table "paper's claim | our measurement | agrees?"; Fig. 5 (ellipses
+//!   against `n = 2` near-disks at equal asphericity) when the runs hold
+//!   `ellipse` packings.
 //!
 //! A figure whose data are absent (no spectrum measured, one system size
 //! only, …) is skipped and the summary says so.
 
 pub mod data;
+mod ellipses;
 pub mod figures;
 pub mod fit;
 pub mod plot;
