@@ -291,6 +291,7 @@ fn fig05_aspect_ratios_match_the_near_disk_asphericity() {
                 n: 2,
                 delta: *delta,
                 inertia: None,
+                gap: Default::default(),
             })
             .unwrap();
             let expected = Ellipse::aspect_for_asphericity(nd.asphericity()).unwrap();

@@ -108,6 +108,7 @@ fn near_disk_asphericity(delta: f64) -> Option<f64> {
         n: 2,
         delta,
         inertia: Some(1.0),
+        gap: Default::default(),
     })
     .ok()
     .map(|s| s.asphericity())
