@@ -40,6 +40,8 @@ use std::time::Instant;
 pub const DEFAULT_OUT: &str = "docs/speed-vs-error";
 /// The document whose generated block the default run rewrites.
 const DOC: &str = "docs/speed-vs-error.md";
+/// [`DEFAULT_OUT`] relative to the directory of [`DOC`].
+const LINK_DIR: &str = "speed-vs-error";
 const BEGIN: &str = "<!-- generated: jamkit bench accuracy -->";
 const END: &str = "<!-- end generated -->";
 
@@ -677,8 +679,12 @@ fn rewrite_doc(doc: &Path, md: &str) -> Result<()> {
     if b < a {
         bail!("{}: `{END}` comes before `{BEGIN}`", doc.display());
     }
-    // Headings of the tables are one level below the document's sections.
-    let body = md.replace("\n## ", "\n### ");
+    // Headings of the tables are one level below the document's sections,
+    // and the links of tables.md (to files next to it) go into the
+    // output directory.
+    let body = md
+        .replace("\n## ", "\n### ")
+        .replace("](", &format!("]({}/", LINK_DIR));
     let new = format!("{}{BEGIN}\n\n{body}\n{}", &text[..a], &text[b..]);
     write(doc, &new)?;
     eprintln!("rewrote the generated block of {}", doc.display());
