@@ -669,26 +669,46 @@ fn rewrite_doc(doc: &Path, md: &str) -> Result<()> {
         );
         return Ok(());
     };
-    let (Some(a), Some(b)) = (text.find(BEGIN), text.find(END)) else {
-        eprintln!(
-            "note: {} has no `{BEGIN}` … `{END}` block; left alone",
-            doc.display()
-        );
-        return Ok(());
-    };
-    if b < a {
-        bail!("{}: `{END}` comes before `{BEGIN}`", doc.display());
-    }
     // Headings of the tables are one level below the document's sections,
     // and the links of tables.md (to files next to it) go into the
     // output directory.
     let body = md
         .replace("\n## ", "\n### ")
-        .replace("](", &format!("]({}/", LINK_DIR));
-    let new = format!("{}{BEGIN}\n\n{body}\n{}", &text[..a], &text[b..]);
-    write(doc, &new)?;
-    eprintln!("rewrote the generated block of {}", doc.display());
+        .replace("](", &format!("]({LINK_DIR}/"));
+    match splice(&text, &body) {
+        Ok(new) => {
+            write(doc, &new)?;
+            eprintln!("rewrote the generated block of {}", doc.display());
+        }
+        Err(why) => eprintln!("note: {}: {why}; left alone", doc.display()),
+    }
     Ok(())
+}
+
+/// `text` with the lines strictly between the line `BEGIN` and the line
+/// `END` replaced by `body`. Only whole lines count as markers, so that
+/// prose may quote them; exactly one pair must exist.
+fn splice(text: &str, body: &str) -> std::result::Result<String, String> {
+    let mut begin = Vec::new();
+    let mut end = Vec::new();
+    let mut at = 0;
+    for line in text.split_inclusive('\n') {
+        match line.trim_end() {
+            BEGIN => begin.push(at + line.len()),
+            END => end.push(at),
+            _ => {}
+        }
+        at += line.len();
+    }
+    match (begin.as_slice(), end.as_slice()) {
+        ([b], [e]) if b <= e => Ok(format!("{}\n{body}\n{}", &text[..*b], &text[*e..])),
+        ([_], [_]) => Err(format!("`{END}` comes before `{BEGIN}`")),
+        _ => Err(format!(
+            "needs exactly one line `{BEGIN}` and one line `{END}` (found {} and {})",
+            begin.len(),
+            end.len()
+        )),
+    }
 }
 
 fn write_csvs(
@@ -1151,4 +1171,25 @@ fn figures(dir: &Path, pairs: &[PairRow], tols: &TolRuns) -> Result<()> {
     .write(&dir.join("tolerances"))
     .map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_whole_marker_lines_delimit_the_generated_block() {
+        let doc =
+            format!("prose quoting `{BEGIN}` and `{END}`\n{BEGIN}\nold\ntables\n{END}\nafter\n");
+        let new = splice(&doc, "NEW").unwrap();
+        assert_eq!(
+            new,
+            format!("prose quoting `{BEGIN}` and `{END}`\n{BEGIN}\n\nNEW\n{END}\nafter\n")
+        );
+        // Idempotent: a second run replaces the block it wrote.
+        assert_eq!(splice(&new, "NEW").unwrap(), new);
+        assert!(splice("no markers\n", "x").is_err());
+        assert!(splice(&format!("{END}\n{BEGIN}\n"), "x").is_err());
+        assert!(splice(&format!("{BEGIN}\n{END}\n{BEGIN}\n{END}\n"), "x").is_err());
+    }
 }
