@@ -533,6 +533,15 @@ fn opt(x: Option<f64>, fmt: impl Fn(f64) -> String) -> String {
     x.map(fmt).unwrap_or_default()
 }
 
+/// `x` with `digits` decimals, "–" when undefined (no packing converged).
+fn fixed(x: f64, digits: usize) -> String {
+    if x.is_finite() {
+        format!("{x:.digits$}")
+    } else {
+        "–".into()
+    }
+}
+
 fn sci(x: f64) -> String {
     if x.is_finite() {
         format!("{x:.2e}")
@@ -912,7 +921,9 @@ fn packing_table(plan: &Plan, runs: &ModelRuns) -> String {
     );
     for (delta, model, rows) in runs {
         let ok = ok_results(rows);
-        let col = |f: fn(&PackResult) -> f64| mean(&ok.iter().map(f).collect::<Vec<_>>());
+        let col = |f: fn(&PackResult) -> f64, digits: usize| {
+            fixed(mean(&ok.iter().map(f).collect::<Vec<_>>()), digits)
+        };
         let phis: Vec<f64> = ok.iter().map(|r| r.phi).collect();
         let diffs = if *model == GapModel::Exact {
             None
@@ -937,17 +948,17 @@ fn packing_table(plan: &Plan, runs: &ModelRuns) -> String {
         };
         let _ = writeln!(
             md,
-            "| {delta} | {} | {}/{} | {:.2} | {:.0} | {:.6} | {} | {:.4} | {:.1} | {:.1} | {dphi} | {} | {} | {} |",
+            "| {delta} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {dphi} | {} | {} | {} |",
             model.name(),
             ok.len(),
             rows.len(),
-            col(|r| r.wall_s),
-            col(|r| r.steps as f64),
-            col(|r| r.phi),
+            col(|r| r.wall_s, 2),
+            col(|r| r.steps as f64, 0),
+            col(|r| r.phi, 6),
             sci(std_dev(&phis)),
-            col(|r| r.z),
-            col(|r| r.n_c as f64),
-            col(|r| r.rattlers as f64),
+            col(|r| r.z, 4),
+            col(|r| r.n_c as f64, 1),
+            col(|r| r.rattlers as f64, 1),
             dcol(&|x| x.1.abs(), 4),
             dcol(&|x| x.2.abs() as f64, 0),
             dcol(&|x| x.3.abs() as f64, 0),
@@ -1014,11 +1025,14 @@ fn tolerance_table(plan: &Plan, runs: &TolRuns) -> String {
         let phis: Vec<f64> = ok.iter().map(|r| r.phi).collect();
         let _ = writeln!(
             md,
-            "| {lo:.0e}…{hi:.0e} | {ft:.0e} | {}/{} | {:.2} | {:.0} | {} | {} | {} | {} |",
+            "| {lo:.0e}…{hi:.0e} | {ft:.0e} | {}/{} | {} | {} | {} | {} | {} | {} |",
             ok.len(),
             rows.len(),
-            mean(&ok.iter().map(|r| r.wall_s).collect::<Vec<_>>()),
-            mean(&ok.iter().map(|r| r.steps as f64).collect::<Vec<_>>()),
+            fixed(mean(&ok.iter().map(|r| r.wall_s).collect::<Vec<_>>()), 2),
+            fixed(
+                mean(&ok.iter().map(|r| r.steps as f64).collect::<Vec<_>>()),
+                0
+            ),
             dmax(&|x| x.0.abs(), &sci),
             dmax(&|x| x.2.abs() as f64, &|v| format!("{v:.0}")),
             dmax(&|x| x.3.abs() as f64, &|v| format!("{v:.0}")),
