@@ -1,8 +1,11 @@
 //! `jamkit bench`: timings of the engine, for docs/performance.md.
 //!
 //! * `packing`: one packing with the paper's protocol per seed, one thread:
-//!   binary disks (default) or near-disks (`--family fourier --n 2 --delta 0.1`);
+//!   binary disks (default) or near-disks (`--family fourier --n 2 --delta 0.1`,
+//!   with `--gap first-order|second-order|exact`);
 //! * `eval`: time per energy-and-gradient evaluation against N;
+//! * `accuracy`: speed against error of the gap models and tolerances
+//!   (`bench_accuracy.rs`);
 //! * `spectrum`: Hessian assembly and eigensolvers (`bench_spectrum.rs`).
 //!
 //! Each packing line ends with a hash of the final state (box, centres,
@@ -11,6 +14,7 @@
 
 use anyhow::Result;
 use clap::{Subcommand, ValueEnum};
+use jamkit_core::gap2d::GapModel;
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::{Fire, FireParams, JamParams, Objective, Scene, jam};
 use jamkit_fourier::{FourierParams, NearDisk};
@@ -18,6 +22,28 @@ use jamkit_observe::summarize;
 use jamkit_sphere::Sphere;
 use rand::SeedableRng;
 use std::time::Instant;
+
+/// The gap model of near-disks on the command line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum GapArg {
+    /// The paper's first-order gap.
+    #[default]
+    FirstOrder,
+    /// With its O(Δ²) correction.
+    SecondOrder,
+    /// The exact gap along the common normal (convex outlines only).
+    Exact,
+}
+
+impl From<GapArg> for GapModel {
+    fn from(g: GapArg) -> Self {
+        match g {
+            GapArg::FirstOrder => GapModel::FirstOrder,
+            GapArg::SecondOrder => GapModel::SecondOrder,
+            GapArg::Exact => GapModel::Exact,
+        }
+    }
+}
 
 /// Which bodies `bench packing` jams.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -53,6 +79,9 @@ pub enum BenchCommand {
         /// Moment of inertia of the near-disks (default: the paper's I = Δ).
         #[arg(long)]
         inertia: Option<f64>,
+        /// Gap model of the near-disks.
+        #[arg(long, value_enum, default_value_t = GapArg::FirstOrder)]
+        gap: GapArg,
         /// Verlet skin in units of the smallest bounding radius (as
         /// `engine.skin` in an experiment file).
         #[arg(long, default_value_t = 0.4)]
@@ -63,6 +92,33 @@ pub enum BenchCommand {
         /// Particle numbers.
         #[arg(long, value_delimiter = ',', default_value = "256,1024,4096,16384")]
         particles: Vec<usize>,
+    },
+    /// Speed against error of the near-disk gap models and of FIRE's
+    /// tolerances: CSV, figures and tables.md (docs/speed-vs-error.md).
+    Accuracy {
+        /// Output directory; the default also rewrites the generated block
+        /// of docs/speed-vs-error.md.
+        #[arg(short, long, value_name = "DIR", default_value = crate::bench_accuracy::DEFAULT_OUT)]
+        out: std::path::PathBuf,
+        /// Small sizes, for a smoke test (seconds).
+        #[arg(long)]
+        quick: bool,
+        /// Seeds of the packings per gap model [default: 1,2,3; quick: 1].
+        #[arg(long, value_delimiter = ',')]
+        seeds: Option<Vec<u64>>,
+        /// Seeds of the tolerance ladder [default: 1,2,3,4; quick: 1,2].
+        #[arg(long, value_delimiter = ',')]
+        tol_seeds: Option<Vec<u64>>,
+        /// Bodies per packing of the tolerance ladder [default: 256; quick: 12].
+        #[arg(long)]
+        particles: Option<usize>,
+        /// Bodies per packing of the gap-model comparison [default: 64, as
+        /// an Exact packing at N = 256 takes ~15 min; quick: 10].
+        #[arg(long)]
+        packing_particles: Option<usize>,
+        /// Δ of the packings per gap model (n = 2) [default: 0.01,0.1; quick: 0.1].
+        #[arg(long, value_delimiter = ',')]
+        packing_deltas: Option<Vec<f64>>,
     },
     /// Time Hessian assembly and eigenvalues of near-disks (n = 2, Δ = 0.1).
     Spectrum {
@@ -77,6 +133,23 @@ pub enum BenchCommand {
 
 pub fn run(what: BenchCommand) -> Result<()> {
     match what {
+        BenchCommand::Accuracy {
+            out,
+            quick,
+            seeds,
+            tol_seeds,
+            particles,
+            packing_particles,
+            packing_deltas,
+        } => crate::bench_accuracy::run(&crate::bench_accuracy::Options {
+            out,
+            quick,
+            seeds,
+            tol_seeds,
+            particles,
+            packing_particles,
+            packing_deltas,
+        }),
         BenchCommand::Spectrum {
             particles,
             nalgebra,
@@ -89,6 +162,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
             n,
             delta,
             inertia,
+            gap,
             skin,
         } => {
             out!(
@@ -107,7 +181,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
                             n,
                             delta,
                             inertia,
-                            gap: Default::default(),
+                            gap: gap.into(),
                         })
                         .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))?;
                         bench_packing::<2, _>(shape, particles, seed, skin)?
@@ -144,7 +218,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
 
 /// A random scene as `jamkit run` builds it: sizes, then centres, then
 /// orientations from one stream, skin `skin` × the smallest bounding radius.
-fn random_scene<const D: usize, S: Shape<D>>(
+pub(crate) fn random_scene<const D: usize, S: Shape<D>>(
     shape: S,
     n: usize,
     seed: u64,
@@ -162,7 +236,7 @@ fn random_scene<const D: usize, S: Shape<D>>(
 }
 
 /// FNV-1a over the bits of the box edges, centres and orientation coordinates.
-fn packing_hash<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> u64 {
+pub(crate) fn packing_hash<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let mut eat = |x: f64| {
         for b in x.to_bits().to_le_bytes() {
