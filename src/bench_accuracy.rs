@@ -907,8 +907,8 @@ fn packing_table(plan: &Plan, runs: &ModelRuns) -> String {
          standard deviation of φ_J across seeds, the statistical error one pays anyway.\n",
         plan.packing_particles,
         if plan.packing_particles < plan.particles {
-            " (not more: an Exact packing costs ~200× a first-order one per step, \
-             ~15 min at N = 256)"
+            " (not more: Exact packings take minutes each at N = 256; the N = 256 \
+             comparison is the Fig. 5 gap-model run of docs/reproduction.md)"
         } else {
             ""
         },

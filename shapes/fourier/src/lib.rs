@@ -45,7 +45,7 @@ use std::f64::consts::PI;
 /// The `fourier` family's self-description.
 pub const FOURIER_INFO: FamilyInfo = FamilyInfo {
     name: "fourier",
-    about: "near-disks R(θ) = R0 [1 + Δ sin(nθ)/n] with the paper's first-order gap (2D)",
+    about: "near-disks R(θ) = R0 [1 + Δ sin(nθ)/n] with the paper's first-order gap, or a second-order or exact one (2D)",
     dims: Dims::Only(&[2]),
     params: &[
         ParamSpec {
@@ -81,7 +81,7 @@ const GAP_SPEC: ParamSpec = ParamSpec {
 /// The `fourier_sum` family's self-description.
 pub const FOURIER_SUM_INFO: FamilyInfo = FamilyInfo {
     name: "fourier_sum",
-    about: "near-disks R(θ) = R0 [1 + Δ Σ_k a_k sin(n_k θ + b_k)] with the first-order gap (2D)",
+    about: "near-disks R(θ) = R0 [1 + Δ Σ_k a_k sin(n_k θ + b_k)] with the first-order gap, or a second-order or exact one (2D)",
     dims: Dims::Only(&[2]),
     params: &[
         ParamSpec {
