@@ -9,7 +9,6 @@ use jamkit_ellipse::{Axis, Ellipse, EllipseParams};
 use jamkit_engine::{Objective, Scene, check::gradient_error};
 use jamkit_experiment::{Experiment, overrides};
 use jamkit_fourier::{FourierParams, NearDisk};
-use jamkit_observe::hessian::{Hessian, HessianOptions, finite_difference};
 use rand::{RngExt, SeedableRng};
 use std::f64::consts::PI;
 use std::path::Path;
@@ -210,17 +209,7 @@ fn scene_hessian_matches_finite_differences() {
     for aspect in [1.1, 2.0] {
         for seed in 1..=2 {
             let mut scene = dense(ellipse(aspect), 24, seed);
-            let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default())
-                .unwrap()
-                .dense();
-            let fd = finite_difference(&scene, 1e-6);
-            let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-            let mut err = 0.0f64;
-            for (a, row) in fd.iter().enumerate() {
-                for (b, x) in row.iter().enumerate() {
-                    err = err.max((h[(a, b)] - x).abs());
-                }
-            }
+            let (err, scale) = common::hessian_fd_error(&mut scene);
             assert!(scale > 0.5, "configuration should overlap");
             assert!(
                 err < 1e-6 * scale,

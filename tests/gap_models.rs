@@ -7,7 +7,6 @@ use jamkit_core::gap2d::GapModel;
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution, Vector};
 use jamkit_engine::{Scene, check::gradient_error};
 use jamkit_fourier::{Angle, FourierParams, FourierSumParams, Mode, NearDisk};
-use jamkit_observe::hessian::{Hessian, HessianOptions, finite_difference};
 use rand::{RngExt, SeedableRng};
 use std::f64::consts::PI;
 
@@ -94,17 +93,7 @@ fn second_order_and_exact_hessians_match_finite_differences() {
     for gap in [GapModel::SecondOrder, GapModel::Exact] {
         for shape in shapes(gap) {
             let mut scene = dense(shape.clone(), 24, 1);
-            let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default())
-                .unwrap()
-                .dense();
-            let fd = finite_difference(&scene, 1e-6);
-            let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-            let mut err = 0.0f64;
-            for (a, row) in fd.iter().enumerate() {
-                for (b, x) in row.iter().enumerate() {
-                    err = err.max((h[(a, b)] - x).abs());
-                }
-            }
+            let (err, scale) = common::hessian_fd_error(&mut scene);
             assert!(scale > 0.5, "configuration should overlap");
             assert!(
                 err < 1e-6 * scale,

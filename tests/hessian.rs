@@ -8,7 +8,6 @@ use jamkit_engine::Scene;
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_lobed::{Lobed, LobedParams};
 use jamkit_nmer::{Nmer, NmerParams, SphereSpec};
-use jamkit_observe::hessian::{Hessian, HessianOptions, finite_difference};
 use jamkit_sphere::Sphere;
 use rand::SeedableRng;
 
@@ -36,17 +35,7 @@ fn dense<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64) -> Scene<D,
 fn check<const D: usize, S: Shape<D>>(shape: S, n: usize, seeds: std::ops::RangeInclusive<u64>) {
     for seed in seeds {
         let mut scene = dense::<D, S>(shape.clone(), n, seed);
-        let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default())
-            .unwrap()
-            .dense();
-        let fd = finite_difference(&scene, 1e-6);
-        let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-        let mut err = 0.0f64;
-        for (a, row) in fd.iter().enumerate() {
-            for (b, x) in row.iter().enumerate() {
-                err = err.max((h[(a, b)] - x).abs());
-            }
-        }
+        let (err, scale) = common::hessian_fd_error(&mut scene);
         assert!(scale > 0.5, "configuration should overlap");
         assert!(
             err < 1e-6 * scale,

@@ -653,18 +653,8 @@ impl NearDisk {
         z_j: (f64, f64),
         w_conj: (f64, f64),
     ) -> [(f64, f64, f64); 2] {
-        let e = [cmul(z_i, w_conj), cmul((-z_j.0, -z_j.1), w_conj)];
-        let mut out = [(0.0, 0.0, 0.0); 2];
-        for (m, &phase) in self.modes.iter().zip(&self.phases) {
-            let n = m.n as f64;
-            for (o, &e) in out.iter_mut().zip(&e) {
-                let p = cmul(cpow(e, m.n), phase);
-                o.0 += m.a * p.1;
-                o.1 += m.a * n * p.0;
-                o.2 -= m.a * n * n * p.1;
-            }
-        }
-        out
+        self.f_pair_jet3(z_i, z_j, w_conj)
+            .map(|[f, df, ddf, _]| (f, df, ddf))
     }
 
     /// `F(A)` and `F'(A)` for both bodies of a pair: `A_i = θ_i − θ_ij` and
