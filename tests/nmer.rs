@@ -500,12 +500,12 @@ fn run_small(file: &str, sets: &[&str]) -> Vec<jamkit_experiment::record::Packin
 
 /// Contacts among non-rattlers recomputed from the packing file's `spheres`
 /// rows alone (centres, radii, body index; minimum image in the box), with
-/// no knowledge of orientations.
-fn contacts_from_spheres(p: &jamkit_experiment::record::PackingFile) -> usize {
+/// no knowledge of orientations: the indices of the two spheres of each.
+fn contacts_from_spheres(p: &jamkit_experiment::record::PackingFile) -> Vec<(usize, usize)> {
     let d = p.dim;
-    let mut count = 0;
+    let mut found = Vec::new();
     for (a, s) in p.spheres.iter().enumerate() {
-        for t in &p.spheres[a + 1..] {
+        for (b, t) in p.spheres.iter().enumerate().skip(a + 1) {
             let (bi, bj) = (s[d + 1] as usize, t[d + 1] as usize);
             if bi == bj || p.rattler[bi] || p.rattler[bj] {
                 continue;
@@ -517,10 +517,36 @@ fn contacts_from_spheres(p: &jamkit_experiment::record::PackingFile) -> usize {
                     (x - l * (x / l).round()).powi(2)
                 })
                 .sum();
-            count += usize::from(dist2.sqrt() - s[d] - t[d] < 0.0);
+            if dist2.sqrt() - s[d] - t[d] < 0.0 {
+                found.push((a, b));
+            }
         }
     }
-    count
+    found
+}
+
+/// `2 Σ_b r_b / N_nr` of a 2D dimer packing from its `spheres` rows alone:
+/// a non-rattler touching on one of its spheres counts `r_b = 2`
+/// coordinates (its rotation about that sphere is free), one touching on
+/// both spheres `r_b = 3` (in 2D two spheres' contacts always pin the
+/// rotation, barring an exactly degenerate arrangement).
+fn z_iso_2d_from_spheres(p: &jamkit_experiment::record::PackingFile) -> f64 {
+    let mut touched = vec![[false; 2]; p.particles];
+    for (a, b) in contacts_from_spheres(p) {
+        for s in [a, b] {
+            let body = p.spheres[s][p.dim + 1] as usize;
+            // The two spheres of body k are rows 2k and 2k + 1.
+            touched[body][s - 2 * body] = true;
+        }
+    }
+    let (mut coordinates, mut kept) = (0, 0);
+    for (body, t) in touched.iter().enumerate() {
+        if !p.rattler[body] {
+            kept += 1;
+            coordinates += if t[0] && t[1] { 3 } else { 2 };
+        }
+    }
+    2.0 * coordinates as f64 / kept as f64
 }
 
 /// The sanity experiment, shrunk: 2D dimers (α = 1.5, 2.0; N = 64, two
@@ -562,9 +588,20 @@ fn small_dimer_packings_jam_near_isostatic() {
             p.id
         );
         assert_eq!(
-            contacts_from_spheres(p),
+            contacts_from_spheres(p).len(),
             p.measures.n_contacts.unwrap(),
             "{}",
+            p.id
+        );
+        // z_iso (from the margin, i.e. the rank rule's coordinates) is the
+        // count of coordinates read off which spheres touch.
+        let z_iso = p.z_iso().unwrap();
+        if p.dim == 2 {
+            assert_eq!(z_iso, z_iso_2d_from_spheres(p), "{}", p.id);
+        }
+        assert!(
+            z_iso <= expected && z_iso > expected - 1.0,
+            "{}: z_iso = {z_iso}",
             p.id
         );
     }

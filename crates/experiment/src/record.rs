@@ -152,6 +152,24 @@ impl PackingFile {
     pub fn load_matching(path: &Path, settings: &serde_json::Value) -> Option<Self> {
         Self::load(path).filter(|f| &f.settings == settings)
     }
+
+    /// The isostatic contact number of this packing's non-rattlers,
+    /// `z_iso = 2 n_coord / N_nr`, with `n_coord` the coordinates the
+    /// margin counts (`iso_margin = N_c − (n_coord − d)`, so
+    /// `n_coord = N_c − iso_margin + d`): `2 f` when every non-rattler
+    /// counts `f` coordinates, less when bodies made of spheres are held
+    /// on one sphere only (the rank rule counts `d` coordinates for them).
+    /// `z_J − z_iso = 2 (iso_margin − d) / N_nr`. `None` without contacts
+    /// or when every body rattles.
+    pub fn z_iso(&self) -> Option<f64> {
+        let m = &self.measures;
+        let kept = self.particles.checked_sub(m.n_rattlers?)?;
+        if kept == 0 {
+            return None;
+        }
+        let coordinates = m.n_contacts? as i64 - m.iso_margin? + self.dim as i64;
+        Some(2.0 * coordinates as f64 / kept as f64)
+    }
 }
 
 /// Quote a CSV field when needed.
@@ -431,6 +449,8 @@ pub struct PointSummary {
     pub phi: (f64, f64),
     /// z_J mean and s.e.m.
     pub z_j: (f64, f64),
+    /// [`PackingFile::z_iso`] mean and s.e.m.
+    pub z_iso: (f64, f64),
     /// Rattler fraction mean and s.e.m.
     pub rattler_fraction: (f64, f64),
     /// Smallest isostaticity margin.
@@ -467,6 +487,7 @@ pub fn summarize_points(groups: &[(String, Vec<&PackingFile>)]) -> Vec<PointSumm
                 samples: files.len(),
                 phi: mean_sem(&col(&|p| Some(p.measures.phi))),
                 z_j: mean_sem(&col(&|p| p.measures.z_j)),
+                z_iso: mean_sem(&col(&|p| p.z_iso())),
                 rattler_fraction: mean_sem(&col(&|p| {
                     p.measures.n_rattlers.map(|r| r as f64 / p.particles as f64)
                 })),
@@ -504,6 +525,8 @@ pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
             "phi_j_sem",
             "z_j_mean",
             "z_j_sem",
+            "z_iso_mean",
+            "z_iso_sem",
             "rattler_fraction_mean",
             "rattler_fraction_sem",
             "iso_margin_min",
@@ -546,6 +569,8 @@ pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
             num(s.phi.1, true),
             num(s.z_j.0, false),
             num(s.z_j.1, true),
+            num(s.z_iso.0, false),
+            num(s.z_iso.1, true),
             num(s.rattler_fraction.0, false),
             num(s.rattler_fraction.1, true),
             opt(&s.iso_margin_min),
