@@ -127,21 +127,6 @@ fn forces_and_torques_match_finite_differences_3d() {
     check_gradients(shapes_3d(), 40);
 }
 
-/// All contacts of one pair.
-fn pair_contacts<const D: usize>(
-    s: &Nmer<D>,
-    o_i: &<Nmer<D> as Shape<D>>::Orientation,
-    o_j: &<Nmer<D> as Shape<D>>::Orientation,
-    r: &Vector<D>,
-) -> Vec<Contact<D>>
-where
-    Nmer<D>: Shape<D>,
-{
-    let mut out = Vec::new();
-    s.contacts(0.6, o_i, 0.5, o_j, r, 0.0, |c| out.push(c));
-    out
-}
-
 /// A crafted pair: two parallel 2D dimers (α = 2) side by side, slightly
 /// pressed together and tilted, touch at two points, and a third sphere
 /// pair overlaps when the dimers cross. Each contact's gap derivatives
@@ -153,7 +138,7 @@ fn a_pair_touching_at_several_points_has_exact_derivatives_2d() {
     // Dimer axes along x; separation along y a bit less than 0.6 + 0.5.
     let (o_i, o_j) = (Angle::new(0.02), Angle::new(-0.03));
     let r = Vector::<2>::new(0.05, 1.05);
-    let base = pair_contacts(&s, &o_i, &o_j, &r);
+    let base = s.pair_contacts(0.6, &o_i, 0.5, &o_j, &r, 0.0);
     assert!(
         base.len() >= 2,
         "side-by-side dimers touch twice, got {}",
@@ -161,12 +146,10 @@ fn a_pair_touching_at_several_points_has_exact_derivatives_2d() {
     );
     let eps = 1e-6;
     let gaps = |oi: Angle, oj: Angle, r: Vector<2>| -> Vec<f64> {
-        let mut out = Vec::new();
-        s.contacts(0.6, &oi, 0.5, &oj, &r, f64::INFINITY, |c| out.push(c.gap));
-        out
+        let all = s.pair_contacts(0.6, &oi, 0.5, &oj, &r, f64::INFINITY);
+        all.iter().map(|c| c.gap).collect()
     };
-    let mut all = Vec::new();
-    s.contacts(0.6, &o_i, 0.5, &o_j, &r, f64::INFINITY, |c| all.push(c));
+    let all = s.pair_contacts(0.6, &o_i, 0.5, &o_j, &r, f64::INFINITY);
     assert_eq!(all.len(), 4);
     for axis in 0..2 {
         let e = Vector::<2>::from_fn(|a, _| if a == axis { eps } else { 0.0 });
@@ -335,13 +318,10 @@ fn check_hessians<const D: usize>(
 {
     let m = shape.rot_dof();
     let eps = 1e-5;
-    let firsts = |oi: &<Nmer<D> as Shape<D>>::Orientation,
-                  oj: &<Nmer<D> as Shape<D>>::Orientation,
-                  r: &Vector<D>| {
-        let mut out = Vec::new();
-        shape.contacts(0.6, oi, 0.5, oj, r, f64::INFINITY, |c| out.push(c));
-        out
-    };
+    let firsts =
+        |oi: &<Nmer<D> as Shape<D>>::Orientation,
+         oj: &<Nmer<D> as Shape<D>>::Orientation,
+         r: &Vector<D>| shape.pair_contacts(0.6, oi, 0.5, oj, r, f64::INFINITY);
     let mut hessians: Vec<GapHessian<D>> = Vec::new();
     shape
         .gap_hessians(0.6, &o_i, 0.5, &o_j, &r, f64::INFINITY, |h| {

@@ -169,6 +169,23 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         visit: F,
     );
 
+    /// The contacts [`Shape::contacts`] visits for one pair, collected (for
+    /// tests and tools; the pair loop visits them without a `Vec`). With
+    /// `max_gap = ∞` every contact of the pair, also far apart.
+    fn pair_contacts(
+        &self,
+        size_i: f64,
+        o_i: &Self::Orientation,
+        size_j: f64,
+        o_j: &Self::Orientation,
+        r_ij: &Vector<D>,
+        max_gap: f64,
+    ) -> Vec<Contact<D>> {
+        let mut found = Vec::new();
+        self.contacts(size_i, o_i, size_j, o_j, r_ij, max_gap, |c| found.push(c));
+        found
+    }
+
     /// Like [`Shape::contacts`], with the second derivatives of each gap
     /// (for the Hessian; not a hot path). Must visit the same contacts, with
     /// the same gaps and first derivatives, as `contacts`.

@@ -571,17 +571,7 @@ mod tests {
     }
 
     fn contact(s: &Ellipse, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> Contact<2> {
-        let mut out = None;
-        s.contacts(
-            ri,
-            &Axis::new(ti),
-            rj,
-            &Axis::new(tj),
-            &d,
-            f64::INFINITY,
-            |c| out = Some(c),
-        );
-        out.unwrap()
+        s.pair_contacts(ri, &Axis::new(ti), rj, &Axis::new(tj), &d, f64::INFINITY)[0]
     }
 
     fn gap(s: &Ellipse, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> f64 {

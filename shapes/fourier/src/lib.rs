@@ -849,17 +849,7 @@ mod tests {
     }
 
     fn gap(s: &NearDisk, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> f64 {
-        let mut h = f64::NAN;
-        s.contacts(
-            ri,
-            &Angle::new(ti),
-            rj,
-            &Angle::new(tj),
-            &d,
-            f64::INFINITY,
-            |c| h = c.gap,
-        );
-        h
+        s.pair_contacts(ri, &Angle::new(ti), rj, &Angle::new(tj), &d, f64::INFINITY)[0].gap
     }
 
     /// The complex-arithmetic gap equals the paper's formula written with

@@ -462,17 +462,7 @@ mod tests {
     }
 
     fn contact(s: &Lobed, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> Contact<2> {
-        let mut out = None;
-        s.contacts(
-            ri,
-            &Angle::new(ti),
-            rj,
-            &Angle::new(tj),
-            &d,
-            f64::INFINITY,
-            |c| out = Some(c),
-        );
-        out.expect("max_gap = ∞ visits every pair")
+        s.pair_contacts(ri, &Angle::new(ti), rj, &Angle::new(tj), &d, f64::INFINITY)[0]
     }
 
     /// `G` written directly from its definition, with `exp` and `sin`.

@@ -396,7 +396,7 @@ impl<const D: usize> Nmer<D> {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
-    use jamkit_core::{Contact, Shape};
+    use jamkit_core::Shape;
     use std::f64::consts::PI;
 
     fn dimer<const D: usize>(alpha: f64) -> Nmer<D> {
@@ -453,9 +453,7 @@ mod tests {
         let oj = Quaternion::normalized(-0.7, 0.1, 0.4, 0.2).unwrap();
         let r = Vector::<3>::new(0.5, 0.6, -0.3);
         let collect = |a: &Quaternion, b: &Quaternion, r: Vector<3>, sa: f64, sb: f64| {
-            let mut v: Vec<Contact<3>> = Vec::new();
-            s.contacts(sa, a, sb, b, &r, f64::INFINITY, |c| v.push(c));
-            v
+            s.pair_contacts(sa, a, sb, b, &r, f64::INFINITY)
         };
         let ij = collect(&oi, &oj, r, 0.6, 0.5);
         let ji = collect(&oj, &oi, -r, 0.5, 0.6);
