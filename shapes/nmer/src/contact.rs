@@ -37,8 +37,34 @@ use jamkit_core::{Contact, GapHessian, MAX_ROT, Matrix, RotVec, Shape, Vector};
 use rand::{Rng, RngExt};
 use std::f64::consts::PI;
 
-/// World-frame offsets `d_a = R⁰ R(o) s_a` of one body's spheres.
-type Offsets<const D: usize> = [Vector<D>; MAX_SPHERES];
+/// World-frame offsets `d_a = R⁰ R(o) s_a` of one body's spheres, room for
+/// `M` of them (the first `min(k, M)` filled).
+///
+/// NOTE: `M` is 2 for dimers, 4 up to four spheres, else `MAX_SPHERES`
+/// (`by_spheres!`): with room for 16 always, zeroing and moving the
+/// two 16-vector arrays of every pair took a third of a 3D dimer step.
+type Offsets<const D: usize, const M: usize> = [Vector<D>; M];
+
+/// Run `$body` with the const `$m` the room [`Offsets`] needs for `$shape`'s
+/// spheres: 2, 4 or `MAX_SPHERES` (same arithmetic, so the same bits).
+macro_rules! by_spheres {
+    ($shape:expr, $m:ident => $body:block) => {
+        match $shape.spheres() {
+            0..=2 => {
+                const $m: usize = 2;
+                $body
+            }
+            3..=4 => {
+                const $m: usize = 4;
+                $body
+            }
+            _ => {
+                const $m: usize = MAX_SPHERES;
+                $body
+            }
+        }
+    };
+}
 
 /// Visit every sphere pair `(a, b)` with `h ≤ max_gap`, giving `a`, `b`, the
 /// gap, `n` and `|v|`.
@@ -126,8 +152,8 @@ fn assemble<const D: usize>(
 }
 
 impl Nmer<2> {
-    fn world(&self, size: f64, o: &Angle) -> Offsets<2> {
-        let mut d = [Vector::<2>::zeros(); MAX_SPHERES];
+    fn world<const M: usize>(&self, size: f64, o: &Angle) -> Offsets<2, M> {
+        let mut d = [Vector::<2>::zeros(); M];
         for (out, s) in d.iter_mut().zip(&self.offsets) {
             *out = o.apply(s) * size;
         }
@@ -192,7 +218,7 @@ impl Shape<2> for Nmer<2> {
     }
 
     fn sphere_decomposition(&self, size: f64, o: &Angle) -> Option<Vec<(Vector<2>, f64)>> {
-        let d = self.world(size, o);
+        let d = self.world::<MAX_SPHERES>(size, o);
         Some(
             (0..self.spheres())
                 .map(|a| (d[a], self.radii[a] * size))
@@ -214,25 +240,27 @@ impl Shape<2> for Nmer<2> {
         if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
             return;
         }
-        let k = self.spheres();
-        let (d_i, d_j) = (self.world(size_i, o_i), self.world(size_j, o_j));
-        sphere_pairs(
-            &self.radii,
-            size_i,
-            &d_i[..k],
-            size_j,
-            &d_j[..k],
-            r_ij,
-            max_gap,
-            |a, b, gap, n, _| {
-                visit(Contact {
-                    gap,
-                    grad_r: n,
-                    grad_rot_i: [-cross2(&d_i[a], &n), 0.0, 0.0],
-                    grad_rot_j: [cross2(&d_j[b], &n), 0.0, 0.0],
-                })
-            },
-        );
+        by_spheres!(self, M => {
+            let k = self.spheres();
+            let (d_i, d_j) = (self.world::<M>(size_i, o_i), self.world::<M>(size_j, o_j));
+            sphere_pairs(
+                &self.radii,
+                size_i,
+                &d_i[..k],
+                size_j,
+                &d_j[..k],
+                r_ij,
+                max_gap,
+                |a, b, gap, n, _| {
+                    visit(Contact {
+                        gap,
+                        grad_r: n,
+                        grad_rot_i: [-cross2(&d_i[a], &n), 0.0, 0.0],
+                        grad_rot_j: [cross2(&d_j[b], &n), 0.0, 0.0],
+                    })
+                },
+            );
+        })
     }
 
     fn gap_hessians<F: FnMut(GapHessian<2>)>(
@@ -249,7 +277,10 @@ impl Shape<2> for Nmer<2> {
             return Ok(());
         }
         let k = self.spheres();
-        let (d_i, d_j) = (self.world(size_i, o_i), self.world(size_j, o_j));
+        let (d_i, d_j) = (
+            self.world::<MAX_SPHERES>(size_i, o_i),
+            self.world::<MAX_SPHERES>(size_j, o_j),
+        );
         let perp = |d: &Vector<2>| Vector::<2>::new(-d[1], d[0]);
         sphere_pairs(
             &self.radii,
@@ -285,20 +316,28 @@ impl Shape<2> for Nmer<2> {
 }
 
 impl Nmer<3> {
-    fn world(&self, size: f64, o: &Quaternion) -> Offsets<3> {
-        let [c0, c1, c2] = o.columns();
-        let mut d = [Vector::<3>::zeros(); MAX_SPHERES];
+    fn world<const M: usize>(&self, size: f64, o: &Quaternion) -> Offsets<3, M> {
+        self.world_of::<M>(size, &o.columns())
+    }
+
+    /// [`Nmer::world`] from the columns of `R(o)`.
+    #[inline(always)]
+    fn world_of<const M: usize>(&self, size: f64, columns: &[Vector<3>; 3]) -> Offsets<3, M> {
+        let [c0, c1, c2] = columns;
+        let mut d = [Vector::<3>::zeros(); M];
         for (out, s) in d.iter_mut().zip(&self.offsets) {
             *out = (c0 * s[0] + c1 * s[1] + c2 * s[2]) * size;
         }
         d
     }
 
-    /// The rotation axes `e_p` of the body's rotational coordinates: the
-    /// world axes, or `R(o) x̂, R(o) ŷ` for a linear body.
-    fn axes(&self, o: &Quaternion) -> [Vector<3>; 3] {
+    /// The rotation axes `e_p` of the body's rotational coordinates, from
+    /// the columns of `R(o)`: the world axes, or `R(o) x̂, R(o) ŷ` for a
+    /// linear body.
+    #[inline(always)]
+    fn axes(&self, columns: &[Vector<3>; 3]) -> [Vector<3>; 3] {
         if self.linear {
-            o.columns()
+            *columns
         } else {
             [Vector::<3>::x(), Vector::<3>::y(), Vector::<3>::z()]
         }
@@ -397,7 +436,7 @@ impl Shape<3> for Nmer<3> {
     }
 
     fn sphere_decomposition(&self, size: f64, o: &Quaternion) -> Option<Vec<(Vector<3>, f64)>> {
-        let d = self.world(size, o);
+        let d = self.world::<MAX_SPHERES>(size, o);
         Some(
             (0..self.spheres())
                 .map(|a| (d[a], self.radii[a] * size))
@@ -419,26 +458,29 @@ impl Shape<3> for Nmer<3> {
         if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
             return;
         }
-        let k = self.spheres();
-        let (d_i, d_j) = (self.world(size_i, o_i), self.world(size_j, o_j));
-        let (e_i, e_j) = (self.axes(o_i), self.axes(o_j));
-        sphere_pairs(
-            &self.radii,
-            size_i,
-            &d_i[..k],
-            size_j,
-            &d_j[..k],
-            r_ij,
-            max_gap,
-            |a, b, gap, n, _| {
-                visit(Contact {
-                    gap,
-                    grad_r: n,
-                    grad_rot_i: self.project(&e_i, -d_i[a].cross(&n)),
-                    grad_rot_j: self.project(&e_j, d_j[b].cross(&n)),
-                })
-            },
-        );
+        let (c_i, c_j) = (o_i.columns(), o_j.columns());
+        let (e_i, e_j) = (self.axes(&c_i), self.axes(&c_j));
+        by_spheres!(self, M => {
+            let k = self.spheres();
+            let (d_i, d_j) = (self.world_of::<M>(size_i, &c_i), self.world_of::<M>(size_j, &c_j));
+            sphere_pairs(
+                &self.radii,
+                size_i,
+                &d_i[..k],
+                size_j,
+                &d_j[..k],
+                r_ij,
+                max_gap,
+                |a, b, gap, n, _| {
+                    visit(Contact {
+                        gap,
+                        grad_r: n,
+                        grad_rot_i: self.project(&e_i, -d_i[a].cross(&n)),
+                        grad_rot_j: self.project(&e_j, d_j[b].cross(&n)),
+                    })
+                },
+            );
+        })
     }
 
     fn gap_hessians<F: FnMut(GapHessian<3>)>(
@@ -456,8 +498,11 @@ impl Shape<3> for Nmer<3> {
         }
         let k = self.spheres();
         let m = Shape::<3>::rot_dof(self);
-        let (d_i, d_j) = (self.world(size_i, o_i), self.world(size_j, o_j));
-        let (e_i, e_j) = (self.axes(o_i), self.axes(o_j));
+        let (d_i, d_j) = (
+            self.world::<MAX_SPHERES>(size_i, o_i),
+            self.world::<MAX_SPHERES>(size_j, o_j),
+        );
+        let (e_i, e_j) = (self.axes(&o_i.columns()), self.axes(&o_j.columns()));
         // n · ½[e_p × (e_q × d) + e_q × (e_p × d)]
         //   = ½[(n·e_q)(e_p·d) + (n·e_p)(e_q·d)] − (n·d)(e_p·e_q).
         let curvature_terms = |e: &[Vector<3>; 3], d: &Vector<3>, n: &Vector<3>, sign: f64| {
