@@ -137,7 +137,7 @@ fn delta_zero_reproduces_the_sphere_packing() {
 /// The engine's lane pass for near-disks (`Shape::contacts_lanes`, chosen
 /// by `Shape::LANE_CONTACTS`; AVX2 where the CPU has it) gives the energy
 /// and gradient of the generic pass through `Shape::contacts` bit for bit:
-/// n = 2..5, sums of modes, both potentials, the second-order gap, and
+/// n = 2..5, sums of modes (with and without phases), both potentials, and
 /// lists whose length is no multiple of the chunk.
 #[test]
 fn lane_pass_matches_the_generic_pass_bit_for_bit() {
@@ -160,15 +160,6 @@ fn lane_pass_matches_the_generic_pass_bit_for_bit() {
             delta: 0.15,
             inertia: None,
             gap: Default::default(),
-        })
-        .unwrap(),
-    );
-    shapes.push(
-        NearDisk::fourier(&FourierParams {
-            n: 3,
-            delta: 0.1,
-            inertia: None,
-            gap: jamkit_core::gap2d::GapModel::SecondOrder,
         })
         .unwrap(),
     );

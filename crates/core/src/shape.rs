@@ -239,11 +239,21 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     const BALL: bool = false;
 
     /// True when every pair has at most one contact and the family computes
-    /// them several pairs at a time in [`Shape::contacts_lanes`]. The
-    /// engine's energy pass then asks for a chunk of pairs per call and sums
-    /// with no branch per pair; `tests` check that it gives the same bits
-    /// as the pass through [`Shape::contacts`].
+    /// them several pairs at a time in [`Shape::contacts_lanes`]. Where
+    /// [`Shape::use_lanes`] agrees, the engine's energy pass then asks for a
+    /// chunk of pairs per call and sums with no branch per pair; `tests`
+    /// check that it gives the same bits as the pass through
+    /// [`Shape::contacts`].
     const LANE_CONTACTS: bool = false;
+
+    /// Whether the energy pass should use [`Shape::contacts_lanes`] for
+    /// these parameters (only asked when [`Shape::LANE_CONTACTS`]). Default
+    /// true; a family says no where its lanes would only call
+    /// [`Shape::contacts`] one pair after the other, which the generic pass
+    /// does with less overhead.
+    fn use_lanes(&self) -> bool {
+        true
+    }
 
     /// Inertia of each rotational coordinate (the mass FIRE gives it).
     fn rot_inertia(&self, _size: f64) -> RotVec {

@@ -217,7 +217,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             }
             .energy_gradient(grad);
         }
-        if S::LANE_CONTACTS {
+        if S::LANE_CONTACTS && self.packing.shape.use_lanes() {
             let p = &self.packing;
             let (owners, partners) = self.neighbors.pairs();
             return crate::lanes::Lanes {

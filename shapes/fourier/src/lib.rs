@@ -819,12 +819,23 @@ impl Shape<2> for NearDisk {
     /// At most one contact per pair, for every gap model.
     const LANE_CONTACTS: bool = true;
 
-    /// The first-order contacts by [`NearDisk::first_order_lanes`]; the
-    /// other gap models one pair at a time.
+    /// Only the first-order gap has a lane kernel.
     ///
-    /// NOTE: one copy of the kernel per mode number of the paper's family
-    /// (`N` a constant, so `e^{inA}`'s products are straight-line code);
-    /// the branch is taken the same way for every call of a run.
+    /// NOTE: through the lanes (one `contacts` call per pair, apart pairs
+    /// included), second-order packings took 1.40 s user against 0.95 s
+    /// through the generic pass (N = 64, n = 3, Δ = 0.1; same bits).
+    fn use_lanes(&self) -> bool {
+        self.gap == GapModel::FirstOrder
+    }
+
+    /// The first-order contacts by [`NearDisk::first_order_lanes`]; the
+    /// other gap models one pair at a time (correct, though the engine does
+    /// not ask: [`NearDisk::use_lanes`]).
+    ///
+    /// NOTE: one copy of the kernel per mode number n ≤ 6 of the paper's
+    /// family (`n` a literal in each arm, so `e^{inA}`'s products are
+    /// straight-line code); the branch, once per chunk of pairs, goes the
+    /// same way for every call of a run.
     #[inline(always)]
     fn contacts_lanes<const W: usize>(
         &self,
