@@ -297,8 +297,10 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
 
     /// The contacts of `W` pairs with `max_gap = 0` (the energy's): lane `l`
     /// gets the contact [`Shape::contacts`] visits for pair `l`, bit for
-    /// bit, or none where it visits none. Used only when
-    /// [`Shape::LANE_CONTACTS`] (at most one contact per pair).
+    /// bit, or none where it visits none. Every lane of `out` must be
+    /// written (`found` at least): it holds the previous call's contacts.
+    /// Used only when [`Shape::LANE_CONTACTS`] (at most one contact per
+    /// pair).
     ///
     /// The default calls [`Shape::contacts`] for one pair after the other.
     #[inline(always)]
