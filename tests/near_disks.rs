@@ -133,3 +133,53 @@ fn delta_zero_reproduces_the_sphere_packing() {
         assert_eq!(a.phi.to_bits(), b.phi.to_bits());
     }
 }
+
+/// The engine's lane pass for near-disks (`Shape::contacts_lanes`, chosen
+/// by `Shape::LANE_CONTACTS`; AVX2 where the CPU has it) gives the energy
+/// and gradient of the generic pass through `Shape::contacts` bit for bit:
+/// n = 2..5, sums of modes (with and without phases), both potentials, and
+/// lists whose length is no multiple of the chunk.
+#[test]
+fn lane_pass_matches_the_generic_pass_bit_for_bit() {
+    let mut shapes: Vec<NearDisk> = (2..=5).map(|n| fourier(n, 0.2)).collect();
+    shapes.push(multi_mode());
+    shapes.push(
+        NearDisk::fourier_sum(&jamkit_fourier::FourierSumParams {
+            modes: vec![
+                jamkit_fourier::Mode {
+                    n: 2,
+                    a: 0.3,
+                    b: 0.0,
+                },
+                jamkit_fourier::Mode {
+                    n: 4,
+                    a: 0.1,
+                    b: 0.0,
+                },
+            ],
+            delta: 0.15,
+            inertia: None,
+            gap: Default::default(),
+        })
+        .unwrap(),
+    );
+    let bits = |g: &[f64]| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for shape in shapes {
+        for (n, phi, seed) in [(301, 0.86, 1), (97, 0.6, 2), (40, 0.9, 3)] {
+            for potential in [Potential::Harmonic, Potential::Hertzian] {
+                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+                let sizes = SizeDistribution::default().sample(n, &mut rng);
+                let packing =
+                    Packing::<2, NearDisk>::random(shape.clone(), sizes, phi, &mut rng).unwrap();
+                let mut scene = Scene::new(packing, potential, 0.2);
+                let (mut fast, mut generic) = (vec![0.0; scene.dof()], vec![0.0; scene.dof()]);
+                let e_fast = scene.energy_gradient(&mut fast);
+                let e_generic = scene.energy_gradient_generic(&mut generic);
+                assert!(e_fast > 0.0);
+                let what = format!("{shape:?}, N = {n}, {potential:?}");
+                assert_eq!(e_fast.to_bits(), e_generic.to_bits(), "{what}");
+                assert_eq!(bits(&fast), bits(&generic), "{what}");
+            }
+        }
+    }
+}

@@ -38,5 +38,5 @@ pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use packing::Packing;
 pub use periodic::PeriodicBox;
 pub use potential::Potential;
-pub use shape::{Contact, GapHessian, Shape};
+pub use shape::{Contact, ContactLanes, GapHessian, PairLanes, Shape, contacts_one_by_one};
 pub use sizes::SizeDistribution;

@@ -98,6 +98,115 @@ impl<const D: usize> GapHessian<D> {
     }
 }
 
+/// `W` pairs side by side, for [`Shape::contacts_lanes`]: each field holds
+/// one entry per pair (*lane*), so that a family can write its contact as
+/// plain loops over lanes that the compiler turns into vector instructions.
+#[derive(Clone, Copy, Debug)]
+pub struct PairLanes<const D: usize, O, const W: usize> {
+    /// `R⁰_i`.
+    pub size_i: [f64; W],
+    /// `R⁰_j`.
+    pub size_j: [f64; W],
+    /// `bounding_radius(R⁰_i)`, bit for bit.
+    pub reach_i: [f64; W],
+    /// `bounding_radius(R⁰_j)`, bit for bit.
+    pub reach_j: [f64; W],
+    /// Orientation of body `i`.
+    pub o_i: [O; W],
+    /// Orientation of body `j`.
+    pub o_j: [O; W],
+    /// `r_ij = r_j − r_i` (minimum image), one array per axis.
+    pub r_ij: [[f64; W]; D],
+    /// `|r_ij|²`, bit for bit `Vector::norm_squared` of `r_ij`.
+    pub r2: [f64; W],
+}
+
+impl<const D: usize, O: Copy, const W: usize> PairLanes<D, O, W> {
+    /// Lane `l`'s separation as a vector.
+    #[inline(always)]
+    pub fn separation(&self, l: usize) -> Vector<D> {
+        Vector::<D>::from_fn(|a, _| self.r_ij[a][l])
+    }
+}
+
+/// The contacts of [`PairLanes`], one per lane at most, laid out the same way.
+#[derive(Clone, Copy, Debug)]
+pub struct ContactLanes<const D: usize, const W: usize> {
+    /// Whether the lane's pair has a contact (the other fields of a lane
+    /// without one are arbitrary, and ignored).
+    pub found: [bool; W],
+    /// The gap.
+    pub gap: [f64; W],
+    /// `∂h/∂r_j`, one array per axis.
+    pub grad_r: [[f64; W]; D],
+    /// `∂h/∂q_i`, one array per rotational coordinate.
+    pub grad_rot_i: [[f64; W]; MAX_ROT],
+    /// `∂h/∂q_j`.
+    pub grad_rot_j: [[f64; W]; MAX_ROT],
+}
+
+impl<const D: usize, const W: usize> Default for ContactLanes<D, W> {
+    fn default() -> Self {
+        Self {
+            found: [false; W],
+            gap: [0.0; W],
+            grad_r: [[0.0; W]; D],
+            grad_rot_i: [[0.0; W]; MAX_ROT],
+            grad_rot_j: [[0.0; W]; MAX_ROT],
+        }
+    }
+}
+
+impl<const D: usize, const W: usize> ContactLanes<D, W> {
+    /// Store `c` as lane `l`'s contact.
+    #[inline(always)]
+    pub fn set(&mut self, l: usize, c: &Contact<D>) {
+        self.found[l] = true;
+        self.gap[l] = c.gap;
+        for a in 0..D {
+            self.grad_r[a][l] = c.grad_r[a];
+        }
+        for a in 0..MAX_ROT {
+            self.grad_rot_i[a][l] = c.grad_rot_i[a];
+            self.grad_rot_j[a][l] = c.grad_rot_j[a];
+        }
+    }
+
+    /// Lane `l`'s contact, if it has one.
+    pub fn get(&self, l: usize) -> Option<Contact<D>> {
+        self.found[l].then(|| Contact {
+            gap: self.gap[l],
+            grad_r: Vector::<D>::from_fn(|a, _| self.grad_r[a][l]),
+            grad_rot_i: std::array::from_fn(|a| self.grad_rot_i[a][l]),
+            grad_rot_j: std::array::from_fn(|a| self.grad_rot_j[a][l]),
+        })
+    }
+}
+
+/// [`Shape::contacts_lanes`] one pair at a time through
+/// [`Shape::contacts`] (its default; a family that overrides it for some
+/// parameters calls this for the others). A pair with more than one contact
+/// keeps the last: only families with [`Shape::LANE_CONTACTS`] are asked.
+#[inline(always)]
+pub fn contacts_one_by_one<const D: usize, S: Shape<D>, const W: usize>(
+    shape: &S,
+    pairs: &PairLanes<D, S::Orientation, W>,
+    out: &mut ContactLanes<D, W>,
+) {
+    for l in 0..W {
+        out.found[l] = false;
+        shape.contacts(
+            pairs.size_i[l],
+            &pairs.o_i[l],
+            pairs.size_j[l],
+            &pairs.o_j[l],
+            &pairs.separation(l),
+            0.0,
+            |c| out.set(l, &c),
+        );
+    }
+}
+
 /// A family of bodies, generic over the dimension `D`.
 ///
 /// Implementations are small values (the family's parameters) shared by all
@@ -128,6 +237,23 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     /// handles several pairs per instruction; `tests` check that it gives
     /// the same bits as [`Shape::contacts`].
     const BALL: bool = false;
+
+    /// True when every pair has at most one contact and the family computes
+    /// them several pairs at a time in [`Shape::contacts_lanes`]. Where
+    /// [`Shape::use_lanes`] agrees, the engine's energy pass then asks for a
+    /// chunk of pairs per call and sums with no branch per pair; `tests`
+    /// check that it gives the same bits as the pass through
+    /// [`Shape::contacts`].
+    const LANE_CONTACTS: bool = false;
+
+    /// Whether the energy pass should use [`Shape::contacts_lanes`] for
+    /// these parameters (only asked when [`Shape::LANE_CONTACTS`]). Default
+    /// true; a family says no where its lanes would only call
+    /// [`Shape::contacts`] one pair after the other, which the generic pass
+    /// does with less overhead.
+    fn use_lanes(&self) -> bool {
+        true
+    }
 
     /// Inertia of each rotational coordinate (the mass FIRE gives it).
     fn rot_inertia(&self, _size: f64) -> RotVec {
@@ -184,6 +310,23 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         let mut found = Vec::new();
         self.contacts(size_i, o_i, size_j, o_j, r_ij, max_gap, |c| found.push(c));
         found
+    }
+
+    /// The contacts of `W` pairs with `max_gap = 0` (the energy's): lane `l`
+    /// gets the contact [`Shape::contacts`] visits for pair `l`, bit for
+    /// bit, or none where it visits none. Every lane of `out` must be
+    /// written (`found` at least): it holds the previous call's contacts.
+    /// Used only when [`Shape::LANE_CONTACTS`] (at most one contact per
+    /// pair).
+    ///
+    /// The default calls [`Shape::contacts`] for one pair after the other.
+    #[inline(always)]
+    fn contacts_lanes<const W: usize>(
+        &self,
+        pairs: &PairLanes<D, Self::Orientation, W>,
+        out: &mut ContactLanes<D, W>,
+    ) {
+        contacts_one_by_one(self, pairs, out);
     }
 
     /// Like [`Shape::contacts`], with the second derivatives of each gap

@@ -18,6 +18,7 @@
 mod balls;
 pub mod check;
 pub mod fire;
+mod lanes;
 pub mod neighbors;
 pub mod protocol;
 pub mod scene;

@@ -217,6 +217,18 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             }
             .energy_gradient(grad);
         }
+        if S::LANE_CONTACTS && self.packing.shape.use_lanes() {
+            let p = &self.packing;
+            let (owners, partners) = self.neighbors.pairs();
+            return crate::lanes::Lanes {
+                packing: p,
+                pair_reach: self.neighbors.pair_reach(),
+                owners,
+                partners,
+                potential: self.potential,
+            }
+            .energy_gradient(grad);
+        }
         #[cfg(target_arch = "x86_64")]
         if crate::simd::avx2() {
             // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`).
@@ -230,10 +242,11 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         e
     }
 
-    /// The energy and gradient by the generic pass even for balls (tests
-    /// compare it with the balls' kernel).
-    #[cfg(test)]
-    pub(crate) fn energy_gradient_generic(&mut self, grad: &mut [f64]) -> f64 {
+    /// The energy and gradient by the generic pass (one pair at a time
+    /// through `Shape::contacts`) even where a faster kernel exists: tests
+    /// compare the kernels with it, bit for bit.
+    #[doc(hidden)]
+    pub fn energy_gradient_generic(&mut self, grad: &mut [f64]) -> f64 {
         self.refresh_neighbors();
         let mut found = Vec::new();
         self.pair_sum(grad, &mut found)
