@@ -61,6 +61,39 @@ fn overrides_reach_the_grid() {
     assert!(err.contains("epz"), "{err}");
 }
 
+/// A family parameter of the wrong type is named, with its value and what
+/// the family allows (serde alone names no field for an optional one).
+#[test]
+fn a_parameter_of_the_wrong_type_is_named() {
+    for (file, set, field, allowed) in [
+        (
+            "experiments/sanity/dimers2d.ron",
+            "params.inertia=heavy",
+            "params.inertia",
+            "moment of inertia",
+        ),
+        (
+            "experiments/sanity/dimers2d.ron",
+            "params.alpha=abc",
+            "params.alpha",
+            "aspect ratio",
+        ),
+        (
+            "experiments/paper/phi_j.ron",
+            "params.n=abc",
+            "params.n",
+            "mode number",
+        ),
+    ] {
+        let (code, _, err) = jamkit(&["validate", file, "--set", set]);
+        assert_eq!(code, 1, "{set}: {err}");
+        assert!(
+            err.contains(field) && err.contains(allowed) && !err.contains("untagged"),
+            "{set}: {err}"
+        );
+    }
+}
+
 #[test]
 fn shapes_lists_the_sphere_family() {
     let (code, out, _) = jamkit(&["shapes"]);

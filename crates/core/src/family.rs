@@ -63,10 +63,16 @@ where
         Wrapped(Option<T>),
         Bare(T),
     }
-    Ok(
-        match <Either<T> as serde::Deserialize>::deserialize(deserializer)? {
-            Either::Wrapped(v) => v,
-            Either::Bare(v) => Some(v),
-        },
-    )
+    // NOTE: the untagged enum's own error ("did not match any variant of
+    // untagged enum Either") says nothing to a user; the caller names the
+    // field and what it allows.
+    let either = <Either<T> as serde::Deserialize>::deserialize(deserializer).map_err(|_| {
+        <D::Error as serde::de::Error>::custom(
+            "a value of the wrong type (give the value itself, or None)",
+        )
+    })?;
+    Ok(match either {
+        Either::Wrapped(v) => v,
+        Either::Bare(v) => Some(v),
+    })
 }

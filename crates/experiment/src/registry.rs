@@ -73,16 +73,40 @@ pub fn parse_params<T: DeserializeOwned>(
     family: &str,
     params: &ParamMap,
 ) -> Result<T, ExperimentError> {
-    let map: ron::Map = params
-        .iter()
-        .map(|(k, v)| (ron::Value::String(k.clone()), v.clone()))
-        .collect();
-    ron::Value::Map(map).into_rust().map_err(|e| {
-        ExperimentError::invalid(
-            format!("params (family `{family}`)"),
-            ron::to_string(params).unwrap_or_default(),
-            e.to_string(),
-        )
+    let read = |skip: Option<&str>| -> Result<T, ron::Error> {
+        let map: ron::Map = params
+            .iter()
+            .filter(|(k, _)| Some(k.as_str()) != skip)
+            .map(|(k, v)| (ron::Value::String(k.clone()), v.clone()))
+            .collect();
+        ron::Value::Map(map).into_rust()
+    };
+    read(None).map_err(|e| {
+        let message = e.to_string();
+        // NOTE: serde names no field when a value has the wrong type (an
+        // optional parameter read leniently says only "did not match any
+        // variant"); the field is the one whose removal makes that error go.
+        let culprit = params
+            .iter()
+            .find(|(k, _)| read(Some(k)).map_or_else(|e| e.to_string() != message, |_| true));
+        match culprit {
+            Some((name, value)) => {
+                let about = family_info(family)
+                    .ok()
+                    .and_then(|info| info.param(name).map(|p| p.about))
+                    .unwrap_or("see `jamkit shapes`");
+                ExperimentError::invalid(
+                    format!("params.{name} (family `{family}`)"),
+                    ron::to_string(value).unwrap_or_default(),
+                    format!("{message}; {name}: {about}"),
+                )
+            }
+            None => ExperimentError::invalid(
+                format!("params (family `{family}`)"),
+                ron::to_string(params).unwrap_or_default(),
+                message,
+            ),
+        }
     })
 }
 
