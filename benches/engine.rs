@@ -74,9 +74,10 @@ fn jam_disks(c: &mut Criterion) {
 }
 
 criterion_group!(
-    benches,
-    energy_gradient,
-    energy_gradient_near_disks,
-    jam_disks
+    name = benches;
+    // NOTE: no plots: criterion's plotters backend panicked on a machine
+    // without system fonts (the numbers are what docs/performance.md uses).
+    config = Criterion::default().without_plots();
+    targets = energy_gradient, energy_gradient_near_disks, jam_disks
 );
 criterion_main!(benches);
