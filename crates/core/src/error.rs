@@ -14,13 +14,19 @@ pub enum Error {
     },
     /// The minimiser hit its step cap before either stopping criterion held.
     #[error(
-        "FIRE did not converge in {steps} steps at phi = {phi:.12} (V/N = {energy_per_particle:.3e}, sum |dV/dq|^2 = {force_sq:.3e}); raise minimizer.max_steps or loosen minimizer.force_tol"
+        "FIRE did not converge in {steps} steps at phi = {phi:.12} (V/N = {energy_per_particle:.3e}, sum |dV/dq|^2 = {force_sq:.3e}, of which body {worst_body} carries {worst_share:.0}% and rotational coordinates {rotational_share:.0}%); raise minimizer.max_steps or loosen minimizer.force_tol"
     )]
     NotConverged {
         steps: u64,
         phi: f64,
         energy_per_particle: f64,
         force_sq: f64,
+        /// The body with the largest share of `Σ (∂V/∂q)²`.
+        worst_body: usize,
+        /// Its share, in per cent.
+        worst_share: f64,
+        /// The share of all rotational coordinates, in per cent.
+        rotational_share: f64,
     },
     /// The jamming bisection ran out of steps or of floating-point resolution.
     #[error("jamming search failed at phi = {phi:.15} after {steps} density changes: {reason}")]

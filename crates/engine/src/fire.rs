@@ -35,6 +35,34 @@ pub trait Objective {
     fn displace(&mut self, dq: &[f64]);
     /// Packing fraction, for error messages.
     fn phi(&self) -> f64;
+    /// Translational coordinates of each body, which come first among its
+    /// `dof / bodies` coordinates (for error messages; default: all).
+    fn translations_per_body(&self) -> usize {
+        self.dof() / self.bodies().max(1)
+    }
+}
+
+/// Where the residual force of an unconverged minimisation sits: the body
+/// with the largest share of `Σ g²` and that share, and the share of the
+/// rotational coordinates (per cent; the gradient `g` has `stride`
+/// coordinates per body, the first `translations` of them translational).
+fn residual_shares(g: &[f64], stride: usize, translations: usize) -> (usize, f64, f64) {
+    let total: f64 = g.iter().map(|x| x * x).sum();
+    if !(total > 0.0) || stride == 0 {
+        return (0, 0.0, 0.0);
+    }
+    let (mut worst, mut worst_sq, mut rotational) = (0, 0.0, 0.0);
+    for (b, body) in g.chunks(stride).enumerate() {
+        let sq: f64 = body.iter().map(|x| x * x).sum();
+        if sq > worst_sq {
+            (worst, worst_sq) = (b, sq);
+        }
+        rotational += body[translations.min(body.len())..]
+            .iter()
+            .map(|x| x * x)
+            .sum::<f64>();
+    }
+    (worst, 100.0 * worst_sq / total, 100.0 * rotational / total)
 }
 
 /// Which FIRE.
@@ -297,11 +325,17 @@ impl Fire {
                 });
             }
             if steps >= p.max_steps {
+                let stride = n / obj.bodies().max(1);
+                let (worst_body, worst_share, rotational_share) =
+                    residual_shares(g, stride, obj.translations_per_body());
                 return Err(Error::NotConverged {
                     steps,
                     phi: obj.phi(),
                     energy_per_particle: energy / bodies,
                     force_sq,
+                    worst_body,
+                    worst_share,
+                    rotational_share,
                 });
             }
             // Power P = F·v with F = −g.
@@ -567,5 +601,18 @@ mod tests {
             fire.minimize(&mut q),
             Err(Error::NotConverged { steps: 10, .. })
         ));
+    }
+
+    /// The residual's largest body share and rotational share: three bodies
+    /// of two translations and one rotation each.
+    #[test]
+    fn residual_shares_find_the_body_and_the_rotations() {
+        let g = [0.0, 0.0, 3.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let (body, share, rotational) = residual_shares(&g, 3, 2);
+        assert_eq!(body, 0);
+        assert!((share - 90.0).abs() < 1e-12 && (rotational - 90.0).abs() < 1e-12);
+        let g = [0.0, 2.0, 0.0, 0.0, 0.0, 1.0];
+        assert_eq!(residual_shares(&g, 3, 3), (0, 80.0, 0.0));
+        assert_eq!(residual_shares(&[0.0; 4], 2, 2), (0, 0.0, 0.0));
     }
 }

@@ -442,4 +442,8 @@ impl<const D: usize, S: Shape<D>> Objective for Scene<D, S> {
     fn phi(&self) -> f64 {
         self.packing.phi()
     }
+
+    fn translations_per_body(&self) -> usize {
+        D
+    }
 }
