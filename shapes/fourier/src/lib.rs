@@ -1214,16 +1214,16 @@ mod tests {
             };
             let mut found = 0;
             for l in 0..W {
-                let mut expected = None;
-                s.contacts(
-                    lanes.size_i[l],
-                    &lanes.o_i[l],
-                    lanes.size_j[l],
-                    &lanes.o_j[l],
-                    &lanes.separation(l),
-                    0.0,
-                    |c| expected = Some(c),
-                );
+                let expected = s
+                    .pair_contacts(
+                        lanes.size_i[l],
+                        &lanes.o_i[l],
+                        lanes.size_j[l],
+                        &lanes.o_j[l],
+                        &lanes.separation(l),
+                        0.0,
+                    )
+                    .pop();
                 found += usize::from(expected.is_some());
                 assert_eq!(
                     bits(out.get(l)),
