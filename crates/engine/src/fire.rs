@@ -46,6 +46,12 @@ pub trait Objective {
 /// with the largest share of `Σ g²` and that share, and the share of the
 /// rotational coordinates (per cent; the gradient `g` has `stride`
 /// coordinates per body, the first `translations` of them translational).
+///
+/// NOTE: cold and out of line: it runs once, on the error path; inlined
+/// into FIRE's loop, disk packings took 2.03 s user against 1.91–1.95 s
+/// out of line (N = 1024, seed 3, three interleaved runs each).
+#[cold]
+#[inline(never)]
 fn residual_shares(g: &[f64], stride: usize, translations: usize) -> (usize, f64, f64) {
     let total: f64 = g.iter().map(|x| x * x).sum();
     if !(total > 0.0) || stride == 0 {
