@@ -1,20 +1,8 @@
 //! `jamkit bench accuracy --quick`: the files it writes, their rows, and the
 //! fitted orders of the gap models (2 for FirstOrder, 3 for SecondOrder).
 
-use std::process::Command;
-
-fn jamkit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_jamkit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+mod common;
+use common::jamkit;
 
 fn rows(path: &std::path::Path) -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(path).unwrap();

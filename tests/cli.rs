@@ -1,20 +1,9 @@
 //! The `jamkit` binary: errors are messages with exit code 1, never panics.
 
 use std::path::Path;
-use std::process::Command;
 
-fn jamkit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_jamkit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+mod common;
+use common::jamkit;
 
 #[test]
 fn bad_files_exit_with_a_message_and_no_panic() {

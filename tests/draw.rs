@@ -3,20 +3,9 @@
 //! panels, and clear errors (never panics) for what cannot be drawn.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn jamkit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_jamkit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+mod common;
+use common::jamkit;
 
 /// Jam one packing of 16 bodies into `dir` and return its file.
 fn jam(dir: &Path, extra: &[&str]) -> PathBuf {

@@ -77,3 +77,17 @@ pub fn hessian_fd_error<const D: usize, S: jamkit_core::Shape<D>>(
     }
     (err, scale)
 }
+
+/// Run the `jamkit` binary in the workspace root: exit code, stdout, stderr.
+pub fn jamkit(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_jamkit"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
