@@ -557,6 +557,20 @@ impl NearDisk {
         }
     }
 
+    /// [`NearDisk::first_order_lanes`] for one mode `m` with `m.n = N`, a
+    /// constant, so that `e^{iNA}` is straight-line products.
+    #[inline(always)]
+    fn single_mode_lanes<const N: u32, const W: usize>(
+        &self,
+        m: Mode,
+        pairs: &PairLanes<2, Angle, W>,
+        out: &mut ContactLanes<2, W>,
+    ) {
+        self.first_order_lanes(pairs, out, |e_i, e_j| {
+            single_mode(m, cpow_pair(e_i, e_j, N))
+        });
+    }
+
     /// The contact of the second-order or the exact gap.
     ///
     /// NOTE: kept out of line and cold: inlined into the pair loop, these
@@ -849,24 +863,12 @@ impl Shape<2> for NearDisk {
             && m.b == 0.0
         {
             match m.n {
-                1 => self.first_order_lanes(pairs, out, |e_i, e_j| {
-                    single_mode(m, cpow_pair(e_i, e_j, 1))
-                }),
-                2 => self.first_order_lanes(pairs, out, |e_i, e_j| {
-                    single_mode(m, cpow_pair(e_i, e_j, 2))
-                }),
-                3 => self.first_order_lanes(pairs, out, |e_i, e_j| {
-                    single_mode(m, cpow_pair(e_i, e_j, 3))
-                }),
-                4 => self.first_order_lanes(pairs, out, |e_i, e_j| {
-                    single_mode(m, cpow_pair(e_i, e_j, 4))
-                }),
-                5 => self.first_order_lanes(pairs, out, |e_i, e_j| {
-                    single_mode(m, cpow_pair(e_i, e_j, 5))
-                }),
-                6 => self.first_order_lanes(pairs, out, |e_i, e_j| {
-                    single_mode(m, cpow_pair(e_i, e_j, 6))
-                }),
+                1 => self.single_mode_lanes::<1, W>(m, pairs, out),
+                2 => self.single_mode_lanes::<2, W>(m, pairs, out),
+                3 => self.single_mode_lanes::<3, W>(m, pairs, out),
+                4 => self.single_mode_lanes::<4, W>(m, pairs, out),
+                5 => self.single_mode_lanes::<5, W>(m, pairs, out),
+                6 => self.single_mode_lanes::<6, W>(m, pairs, out),
                 n => self.first_order_lanes(pairs, out, |e_i, e_j| {
                     single_mode(m, cpow_pair(e_i, e_j, n))
                 }),
