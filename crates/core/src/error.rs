@@ -14,7 +14,7 @@ pub enum Error {
     },
     /// The minimiser hit its step cap before either stopping criterion held.
     #[error(
-        "FIRE did not converge in {steps} steps at phi = {phi:.12} (V/N = {energy_per_particle:.3e}, sum |dV/dq|^2 = {force_sq:.3e}, of which body {worst_body} carries {worst_share:.0}% and rotational coordinates {rotational_share:.0}%); raise minimizer.max_steps or loosen minimizer.force_tol"
+        "FIRE did not converge in {steps} steps at phi = {phi:.12} (V/N = {energy_per_particle:.3e}, sum |dV/dq|^2 = {force_sq:.3e}, of which body {worst_body} carries {worst_share:.0}% and rotational coordinates {rotational_share:.0}%); if the residual does not fall, lower minimizer.dt_max (FIRE crawls as dt_max nears 2/omega_max, its stability limit), else raise minimizer.max_steps or loosen minimizer.force_tol"
     )]
     NotConverged {
         steps: u64,

@@ -255,6 +255,19 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         true
     }
 
+    /// The largest FIRE time step for packings of this family (translations
+    /// of unit mass, rotations of [`Shape::rot_inertia`]); `None`: the
+    /// engine's default 0.5. FIRE's semi-implicit Euler step is stable
+    /// below `2/ω_max`, `ω_max` the highest vibration frequency of a
+    /// jammed packing, and FIRE crawls well before that limit (at
+    /// `0.87 · 2/ω_max` it stalled on 3D dimers). A family whose bodies
+    /// touch at several points per pair, and so vibrate faster than
+    /// spheres (`ω_max² ≈ 12` for 3D dimers against 6 for spheres), says
+    /// so here. An experiment's `minimizer.dt_max` overrides it.
+    fn fire_dt_max(&self) -> Option<f64> {
+        None
+    }
+
     /// Inertia of each rotational coordinate (the mass FIRE gives it).
     fn rot_inertia(&self, _size: f64) -> RotVec {
         [1.0; 3]

@@ -82,6 +82,10 @@ pub enum FireVariant {
 }
 
 /// FIRE's parameters and stopping criteria.
+/// `Δt_max` when neither the experiment nor the family sets it: stable with
+/// room to spare for disks and spheres of unit mass (`2/ω_max ≈ 0.8`).
+pub const DEFAULT_DT_MAX: f64 = 0.5;
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FireParams {
@@ -89,8 +93,12 @@ pub struct FireParams {
     pub variant: FireVariant,
     /// Initial time step.
     pub dt_init: f64,
-    /// Largest time step.
-    pub dt_max: f64,
+    /// Largest time step; `None`: the family's own
+    /// ([`jamkit_core::Shape::fire_dt_max`], 0.5 unless the family says
+    /// otherwise). FIRE slows to a crawl as `dt_max` nears `2/ω_max`, the
+    /// stability limit of the semi-implicit Euler step on the stiffest
+    /// vibration (`ω_max² ≈ 5.4` for jammed disks, ≈ 12 for 3D dimers).
+    pub dt_max: Option<f64>,
     /// Smallest time step (FIRE 2.0 only).
     pub dt_min: f64,
     /// Steps with `P > 0` before `Δt` may grow (`N_min` in FIRE, `N_delay`
@@ -120,7 +128,7 @@ impl Default for FireParams {
         Self {
             variant: FireVariant::Fire,
             dt_init: 0.1,
-            dt_max: 0.5,
+            dt_max: None,
             dt_min: 0.002,
             n_min: None,
             f_inc: 1.1,
@@ -144,6 +152,11 @@ impl FireParams {
         }
     }
 
+    /// `Δt_max` in force (`dt_max`, or 0.5 when no family chose it).
+    pub fn dt_max(&self) -> f64 {
+        self.dt_max.unwrap_or(DEFAULT_DT_MAX)
+    }
+
     /// `N_min` (FIRE) or `N_delay` (FIRE 2.0) in force.
     pub fn n_min(&self) -> u32 {
         self.n_min.unwrap_or(match self.variant {
@@ -164,7 +177,7 @@ impl FireParams {
     pub fn validate(&self, prefix: &str) -> Result<()> {
         let positive = [
             ("dt_init", self.dt_init),
-            ("dt_max", self.dt_max),
+            ("dt_max", self.dt_max()),
             ("dt_min", self.dt_min),
             ("energy_tol", self.energy_tol),
             ("force_tol", self.force_tol),
@@ -178,10 +191,10 @@ impl FireParams {
                 ));
             }
         }
-        if self.dt_max < self.dt_init {
+        if self.dt_max() < self.dt_init {
             return Err(Error::invalid(
                 format!("{prefix}.dt_max"),
-                self.dt_max,
+                self.dt_max(),
                 format!("must be at least dt_init = {}", self.dt_init),
             ));
         }
@@ -296,6 +309,7 @@ impl Fire {
         let unit = inv_m.iter().all(|&m| m == 1.0);
 
         let mut dt = p.dt_init;
+        let dt_max = p.dt_max();
         let (alpha_start, n_min) = (p.alpha_start(), p.n_min());
         let mut alpha = alpha_start;
         let mut positive_steps: u32 = 0;
@@ -359,7 +373,7 @@ impl Fire {
                         let keep = 1.0 - alpha;
                         positive_steps += 1;
                         if positive_steps > n_min {
-                            dt = (dt * p.f_inc).min(p.dt_max);
+                            dt = (dt * p.f_inc).min(dt_max);
                             alpha *= p.f_alpha;
                         }
                         (keep, steer)
@@ -389,7 +403,7 @@ impl Fire {
                     if power > 0.0 {
                         positive_steps += 1;
                         if positive_steps > n_min {
-                            dt = (dt * p.f_inc).min(p.dt_max);
+                            dt = (dt * p.f_inc).min(dt_max);
                             alpha *= p.f_alpha;
                         }
                     } else {

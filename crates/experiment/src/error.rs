@@ -26,12 +26,25 @@ pub enum ExperimentError {
         source: std::io::Error,
     },
     /// The engine failed on one sample.
-    #[error("sample {sample}: {source}")]
+    #[error("sample {sample}: {source}{}", saved_note(saved))]
     Sample {
         sample: String,
         #[source]
         source: jamkit_core::Error,
+        /// The configuration the engine stopped at, when there is one to
+        /// look at (a minimisation that did not converge); the runner
+        /// saves it as `packings/<id>.failed.json` and sets `saved`.
+        state: Option<Box<crate::record::PackingFile>>,
+        /// Where `state` was saved.
+        saved: Option<String>,
     },
+}
+
+fn saved_note(saved: &Option<String>) -> String {
+    saved
+        .as_ref()
+        .map(|p| format!(" (the configuration it stopped at is in {p})"))
+        .unwrap_or_default()
 }
 
 impl ExperimentError {
@@ -45,6 +58,16 @@ impl ExperimentError {
             field: field.into(),
             value: jamkit_core::error::show_value(&value),
             allowed: allowed.into(),
+        }
+    }
+
+    /// A sample's engine error, without a configuration to keep.
+    pub fn sample(sample: impl Into<String>, source: jamkit_core::Error) -> Self {
+        Self::Sample {
+            sample: sample.into(),
+            source,
+            state: None,
+            saved: None,
         }
     }
 

@@ -13,8 +13,9 @@ use crate::reload::{PackingVisitor, reload};
 use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use jamkit_core::{Packing, Shape};
+use jamkit_engine::fire::DEFAULT_DT_MAX;
 use jamkit_engine::{
-    Fire, JamParams, PressureParams, Scene, compress_to_phi, compress_to_pressure, jam,
+    Fire, FireParams, JamParams, PressureParams, Scene, compress_to_phi, compress_to_pressure, jam,
 };
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::saddle::{self, SaddleParams};
@@ -91,7 +92,8 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
                 (file, eigen, true)
             }
             _ => {
-                let (file, eigen) = run_job(experiment, point, job)?;
+                let (file, eigen) = run_job(experiment, point, job)
+                    .map_err(|err| keep_failed_state(err, &packing_dir))?;
                 (file, eigen, false)
             }
         };
@@ -102,6 +104,8 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             record::write_atomic(&dir.join(format!("{}.csv", job.id)), table.as_bytes())?;
         }
         file.save(&path)?;
+        // A stalled configuration from an earlier attempt is stale now.
+        let _ = std::fs::remove_file(failed_path(&packing_dir, &job.id));
         bar.inc(1);
         Ok((file, reused))
     };
@@ -157,6 +161,38 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
     })
 }
 
+/// Where the configuration of a failed sample goes.
+pub fn failed_path(packing_dir: &Path, id: &str) -> PathBuf {
+    packing_dir.join(format!("{id}.failed.json"))
+}
+
+/// Save the configuration a failed sample stopped at (if it carries one)
+/// as `<id>.failed.json` and say where in the error. A failure to save it
+/// is mentioned instead; the sample's own error is what matters.
+fn keep_failed_state(err: ExperimentError, packing_dir: &Path) -> ExperimentError {
+    match err {
+        ExperimentError::Sample {
+            sample,
+            source,
+            state: Some(state),
+            saved: None,
+        } => {
+            let path = failed_path(packing_dir, &sample);
+            let saved = match state.save(&path) {
+                Ok(()) => path.display().to_string(),
+                Err(e) => format!("nowhere: saving it failed ({e})"),
+            };
+            ExperimentError::Sample {
+                sample,
+                source,
+                state: None,
+                saved: Some(saved),
+            }
+        }
+        other => other,
+    }
+}
+
 fn group_by_point<'a>(
     experiment: &Experiment,
     points: &[Point],
@@ -184,6 +220,7 @@ fn group_by_point<'a>(
 /// Everything that shapes one packing, for the resume check.
 pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json::Value {
     let e = experiment;
+    let minimizer = minimizer_at(e, point).unwrap_or_else(|_| e.minimizer.clone());
     serde_json::json!({
         "dim": e.dim,
         "family": e.family,
@@ -192,11 +229,32 @@ pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json
         "seed": job.seed,
         "sizes": e.sizes,
         "protocol": e.protocol,
-        "minimizer": e.minimizer,
+        "minimizer": minimizer,
         "potential": e.potential,
         "rattlers": e.rattlers,
         "engine": e.engine,
     })
+}
+
+/// The minimiser of `e` for the family at `point`, with `dt_max` filled in
+/// (the experiment's, else the family's, else 0.5), so that the settings a
+/// packing records hold the time step it was made with.
+pub fn minimizer_at(e: &Experiment, point: &Point) -> Result<FireParams, ExperimentError> {
+    struct Resolve<'a>(&'a FireParams);
+    impl SceneVisitor for Resolve<'_> {
+        type Output = FireParams;
+        fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> FireParams {
+            with_family_dt_max(self.0, &shape)
+        }
+    }
+    registry::dispatch(&e.family, e.dim, &point.params, Resolve(&e.minimizer))
+}
+
+/// `m` with `dt_max` set: its own, else the family's, else 0.5.
+fn with_family_dt_max<const D: usize, S: Shape<D>>(m: &FireParams, shape: &S) -> FireParams {
+    let mut m = m.clone();
+    m.dt_max = Some(m.dt_max.or(shape.fire_dt_max()).unwrap_or(DEFAULT_DT_MAX));
+    m
 }
 
 /// The observables of `experiment`, as stored with each packing.
@@ -254,11 +312,9 @@ impl SceneVisitor for SampleVisitor<'_> {
 
     fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Self::Output {
         let (e, job) = (self.experiment, self.job);
-        let sample_err = |source| ExperimentError::Sample {
-            sample: job.id.clone(),
-            source,
-        };
+        let sample_err = |source| ExperimentError::sample(job.id.clone(), source);
         let start = Instant::now();
+        let minimizer = with_family_dt_max(&e.minimizer, &shape);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(job.seed);
         let sizes = e.sizes.sample(self.point.particles, &mut rng);
         let min_reach = sizes
@@ -268,9 +324,9 @@ impl SceneVisitor for SampleVisitor<'_> {
         let packing = Packing::<D, S>::random(shape, sizes, e.protocol.phi_start(), &mut rng)
             .map_err(sample_err)?;
         let mut scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
-        let mut fire = Fire::new(e.minimizer.clone());
+        let mut fire = Fire::new(minimizer);
         let mut saddle_escapes = None;
-        let outcome = match e.protocol {
+        let outcome: Result<_, jamkit_core::Error> = match e.protocol {
             Protocol::Jam {
                 eps,
                 energy_low,
@@ -285,7 +341,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                     energy_high,
                     max_density_steps,
                 };
-                let mut outcome = jam(&mut scene, &mut fire, &params).map_err(sample_err)?;
+                jam(&mut scene, &mut fire, &params).and_then(|mut outcome| {
                 if escape_saddles {
                     let threshold = e
                         .rattlers
@@ -297,8 +353,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                         &params,
                         &SaddleParams::default(),
                         threshold,
-                    )
-                    .map_err(sample_err)?;
+                    )?;
                     outcome.phi = s.phi;
                     outcome.energy_per_particle = s.energy_per_particle;
                     outcome.fire_steps += s.fire_steps;
@@ -306,6 +361,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                     saddle_escapes = Some(s.rounds);
                 }
                 Ok(outcome)
+                })
             }
             Protocol::Phi { phi, eps, .. } => compress_to_phi(&mut scene, &mut fire, phi, eps),
             Protocol::Pressure {
@@ -324,8 +380,20 @@ impl SceneVisitor for SampleVisitor<'_> {
                     max_density_steps,
                 },
             ),
-        }
-        .map_err(sample_err)?;
+        };
+        let outcome = match outcome {
+            Ok(outcome) => outcome,
+            Err(source) => {
+                // Keep what the engine stopped at, for a look at why.
+                let state = self.failed_state(&mut scene, &source, start);
+                return Err(ExperimentError::Sample {
+                    sample: job.id.clone(),
+                    source,
+                    state: state.map(Box::new),
+                    saved: None,
+                });
+            }
+        };
 
         let observed = observe(e, &mut scene).map_err(sample_err)?;
         let measures = observed.measures(
@@ -340,9 +408,23 @@ impl SceneVisitor for SampleVisitor<'_> {
             },
             &scene.packing().shape,
         );
-        let p = scene.packing();
-        let write = e.output.packings;
-        let file = PackingFile {
+        let mut file = self.file(scene.packing(), e.output.packings, measures);
+        file.rattler = observed.rattler();
+        Ok((file, observed.eigenvalue_table))
+    }
+}
+
+impl SampleVisitor<'_> {
+    /// The packing file of `p` with `measures` (the configuration only when
+    /// `write`).
+    fn file<const D: usize, S: Shape<D>>(
+        &self,
+        p: &Packing<D, S>,
+        write: bool,
+        measures: Measures,
+    ) -> PackingFile {
+        let (e, job) = (self.experiment, self.job);
+        PackingFile {
             id: job.id.clone(),
             experiment: e.name.clone(),
             family: e.family.clone(),
@@ -353,8 +435,8 @@ impl SceneVisitor for SampleVisitor<'_> {
             protocol: e.protocol.name().to_string(),
             settings: settings(e, self.point, job),
             observables: observables_value(e),
-            phi: outcome.phi,
-            energy_per_particle: outcome.energy_per_particle,
+            phi: measures.phi,
+            energy_per_particle: measures.energy_per_particle,
             measures,
             box_edges: p.bbox.edges().iter().copied().collect(),
             positions: if write {
@@ -376,10 +458,42 @@ impl SceneVisitor for SampleVisitor<'_> {
             } else {
                 Vec::new()
             },
-            rattler: observed.rattler(),
+            rattler: Vec::new(),
             spheres: if write { sphere_rows(p) } else { Vec::new() },
+        }
+    }
+
+    /// The configuration a failed protocol stopped at, as a packing file
+    /// whose `flag` is the error (`None` for errors with nothing to look
+    /// at: a bad start, a non-finite energy).
+    fn failed_state<const D: usize, S: Shape<D>>(
+        &self,
+        scene: &mut Scene<D, S>,
+        error: &jamkit_core::Error,
+        start: Instant,
+    ) -> Option<PackingFile> {
+        let jamkit_core::Error::NotConverged { steps, .. } = error else {
+            return None;
         };
-        Ok((file, observed.eigenvalue_table))
+        let bodies = scene.packing().len().max(1) as f64;
+        let energy = scene.energy();
+        let measures = Measures {
+            phi: scene.packing().phi(),
+            energy_per_particle: energy / bodies,
+            n_contacts: None,
+            n_rattlers: None,
+            z_j: None,
+            iso_margin: None,
+            pressure: None,
+            fire_steps: *steps,
+            minimizations: 0,
+            wall_s: start.elapsed().as_secs_f64(),
+            flag: error.to_string(),
+            saddle_escapes: None,
+            spectrum: None,
+            gaps: None,
+        };
+        Some(self.file(scene.packing(), true, measures))
     }
 }
 
@@ -509,10 +623,8 @@ fn remeasure(
         fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> Self::Output {
             let (e, mut file) = (self.e, self.file);
             let start = Instant::now();
-            let observed = observe(e, &mut scene).map_err(|source| ExperimentError::Sample {
-                sample: file.id.clone(),
-                source,
-            })?;
+            let observed = observe(e, &mut scene)
+                .map_err(|source| ExperimentError::sample(file.id.clone(), source))?;
             let old = &file.measures;
             let run = Protocolled {
                 phi: old.phi,

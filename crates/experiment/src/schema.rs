@@ -414,7 +414,10 @@ pub const MAX_PARTICLES: usize = 10_000_000;
 impl Experiment {
     /// Parse RON text; `file` names the source in errors.
     pub fn from_ron(text: &str, file: &str) -> Result<Self, ExperimentError> {
+        // Optional fields take a bare value (`dt_max: 0.3`) as well as
+        // `Some(0.3)`.
         ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
             .from_str(text)
             .map_err(|e| ExperimentError::Parse {
                 file: file.to_string(),

@@ -1,0 +1,111 @@
+//! FIRE's time step against the stability limit of the packings it makes,
+//! and what a failed minimisation leaves behind.
+
+mod common;
+
+use common::{run_into, run_ok};
+use jamkit_core::Shape;
+use jamkit_engine::{Objective, Scene};
+use jamkit_experiment::Experiment;
+use jamkit_experiment::record::PackingFile;
+use jamkit_experiment::reload::{PackingVisitor, reload};
+use jamkit_experiment::runner::failed_path;
+use jamkit_observe::hessian::{Hessian, HessianOptions};
+
+fn experiment(family: &str, dim: usize, params: &str, extra: &str) -> Experiment {
+    let text = format!(
+        r#"(name: "steps", dim: {dim}, family: "{family}", params: {{ {params} }},
+            sizes: Binary(small: 0.5, large: 0.7), particles: 64, samples: 1,
+            protocol: Jam(phi_start: 0.1, eps: 1e-3, energy_low: 1e-16, energy_high: 2e-16),
+            rattlers: (min_contacts: None), observables: [Contacts] {extra})"#
+    );
+    Experiment::from_ron(&text, "inline").unwrap()
+}
+
+/// `ω_max²`, the largest eigenvalue of `M^{-1/2} H M^{-1/2}` (translations of
+/// unit mass, rotations of the family's inertia): the stiffest vibration
+/// FIRE's Euler step must follow.
+struct OmegaMaxSq;
+
+impl PackingVisitor for OmegaMaxSq {
+    type Output = f64;
+    fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> f64 {
+        let inv_m = scene.inverse_masses().to_vec();
+        let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default()).unwrap();
+        let mut m = h.dense();
+        for r in 0..h.size {
+            for c in 0..h.size {
+                m[(r, c)] *= (inv_m[r] * inv_m[c]).sqrt();
+            }
+        }
+        let w = m.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();
+        w[h.size - 1]
+    }
+}
+
+/// The default `dt_max` (the family's, recorded in the packing's settings)
+/// sits at most at 0.7 of the semi-implicit Euler step's stability limit
+/// `2/ω_max` on a jammed packing of each kind. 0.7, because FIRE crawled
+/// at 0.87 (3D dimers with the old 0.5: 10⁵–10⁶ steps in single
+/// minimisations) and converges at 0.58–0.62 (disks and spheres with 0.5)
+/// and at 0.69 (3D dimers with 0.4), docs/sanity.md. The 3D dimers' own
+/// `ω_max² > 9` is why bodies made of spheres take a smaller step than the
+/// default: 0.5 would sit above 0.75 of their limit.
+#[test]
+fn default_time_steps_sit_well_below_the_stability_limit() {
+    let cases = [
+        ("sphere", 2, "", 0.5),
+        ("sphere", 3, "", 0.5),
+        ("nmer", 2, r#""alpha": 1.5"#, 0.35),
+        ("nmer", 3, r#""alpha": 1.5"#, 0.35),
+    ];
+    for (family, dim, params, expected_dt) in cases {
+        let e = experiment(family, dim, params, "");
+        let dir = tempfile::tempdir().unwrap();
+        let report = run_ok(&e, dir.path(), 1);
+        let p = &report.packings[0];
+        let dt_max = p.settings["minimizer"]["dt_max"].as_f64().unwrap();
+        assert_eq!(dt_max, expected_dt, "{family} {dim}D: recorded dt_max");
+        let omega_sq = reload(p, OmegaMaxSq).unwrap();
+        let ratio = dt_max * omega_sq.sqrt() / 2.0;
+        assert!(
+            ratio <= 0.7,
+            "{family} {dim}D: dt_max = {dt_max} is {ratio:.3} of 2/ω_max (ω_max² = {omega_sq:.3})"
+        );
+        if family == "nmer" && dim == 3 {
+            assert!(
+                omega_sq > 9.0,
+                "3D dimers: ω_max² = {omega_sq:.3}, expected the stiff multi-contact modes"
+            );
+        }
+    }
+}
+
+/// A sample whose minimisation hits the step cap leaves the configuration
+/// it stopped at in `<id>.failed.json` (loadable, flagged with the error,
+/// every body's centre there), the error says where it is, and a rerun
+/// that succeeds removes it.
+#[test]
+fn a_failed_sample_keeps_its_configuration_until_a_rerun_succeeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let capped = experiment("nmer", 2, r#""alpha": 1.5"#, ", minimizer: (max_steps: 50)");
+    let report = run_into(&capped, dir.path(), 1);
+    assert_eq!(report.failures.len(), 1);
+    let message = report.failures[0].to_string();
+    let path = failed_path(&dir.path().join("packings"), "nmer_d2_N64_alpha1.5_s1");
+    assert!(
+        message.contains(&path.display().to_string()),
+        "the error names the saved file: {message}"
+    );
+    let failed = PackingFile::load_checked(&path).unwrap();
+    assert!(failed.measures.flag.contains("did not converge"));
+    assert_eq!(failed.positions.len(), 64);
+    assert_eq!(failed.orientations.len(), 64);
+    assert!(failed.phi > 0.1 - 1e-12, "φ = {}", failed.phi);
+    // The saved configuration is a scene again.
+    assert!(reload(&failed, OmegaMaxSq).unwrap().is_finite());
+
+    let full = experiment("nmer", 2, r#""alpha": 1.5"#, "");
+    run_ok(&full, dir.path(), 1);
+    assert!(!path.exists(), "a successful rerun removes the stale failed state");
+}
