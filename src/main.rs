@@ -374,19 +374,20 @@ fn real_main() -> Result<()> {
 
 fn print_table(report: &jamkit_experiment::runner::RunReport) {
     out!(
-        "{:<40} {:>7} {:>22} {:>18} {:>7} {:>10} {:>8} {:>8}",
+        "{:<40} {:>7} {:>22} {:>18} {:>7} {:>7} {:>10} {:>8} {:>8}",
         "point",
         "samples",
         "phi",
         "z",
         "z_iso",
+        "z_corr",
         "rattlers",
         "iso_min",
         "flagged"
     );
     for s in &report.summaries {
         out!(
-            "{:<40} {:>7} {:>13.6} ± {:<7.1e} {:>9.4} ± {:<6.1e} {:>7.3} {:>9.2}% {:>8} {:>8}",
+            "{:<40} {:>7} {:>13.6} ± {:<7.1e} {:>9.4} ± {:<6.1e} {:>7.3} {:>7.3} {:>9.2}% {:>8} {:>8}",
             s.label,
             s.samples,
             s.phi.0,
@@ -394,6 +395,7 @@ fn print_table(report: &jamkit_experiment::runner::RunReport) {
             s.z_j.0,
             s.z_j.1,
             s.z_iso.0,
+            s.z_corr.0,
             100.0 * s.rattler_fraction.0,
             s.iso_margin_min
                 .map(|m| m.to_string())

@@ -511,22 +511,41 @@ fn contacts_from_spheres(p: &jamkit_experiment::record::PackingFile) -> Vec<(usi
 /// both spheres `r_b = 3` (in 2D two spheres' contacts always pin the
 /// rotation, barring an exactly degenerate arrangement).
 fn z_iso_2d_from_spheres(p: &jamkit_experiment::record::PackingFile) -> f64 {
-    let mut touched = vec![[false; 2]; p.particles];
-    for (a, b) in contacts_from_spheres(p) {
-        for s in [a, b] {
-            let body = p.spheres[s][p.dim + 1] as usize;
-            // The two spheres of body k are rows 2k and 2k + 1.
-            touched[body][s - 2 * body] = true;
-        }
-    }
     let (mut coordinates, mut kept) = (0, 0);
-    for (body, t) in touched.iter().enumerate() {
+    for (body, t) in spheres_touched(p).iter().enumerate() {
         if !p.rattler[body] {
             kept += 1;
             coordinates += if t[0] && t[1] { 3 } else { 2 };
         }
     }
     2.0 * coordinates as f64 / kept as f64
+}
+
+/// Which of its two spheres each dimer touches a non-rattler with, from
+/// the `spheres` rows alone (the two spheres of body k are rows 2k and
+/// 2k + 1).
+fn spheres_touched(p: &jamkit_experiment::record::PackingFile) -> Vec<[bool; 2]> {
+    let mut touched = vec![[false; 2]; p.particles];
+    for (a, b) in contacts_from_spheres(p) {
+        for s in [a, b] {
+            let body = p.spheres[s][p.dim + 1] as usize;
+            touched[body][s - 2 * body] = true;
+        }
+    }
+    touched
+}
+
+/// Rotational rattlers of a dimer packing from its `spheres` rows alone:
+/// non-rattlers whose contacts all sit on one sphere (rank `D` of `f`).
+/// Both spheres pin the rotation of a dimer in 2D and the two rotations
+/// that are coordinates in 3D (the spin about the axis is none), barring
+/// an exactly degenerate arrangement.
+fn rot_rattlers_from_spheres(p: &jamkit_experiment::record::PackingFile) -> usize {
+    spheres_touched(p)
+        .iter()
+        .enumerate()
+        .filter(|&(body, t)| !p.rattler[body] && t[0] != t[1])
+        .count()
 }
 
 /// The sanity experiment, shrunk: 2D dimers (α = 1.5, 2.0; N = 64, two
@@ -537,7 +556,9 @@ fn z_iso_2d_from_spheres(p: &jamkit_experiment::record::PackingFile) -> f64 {
 /// (up to 0.4 below 4d − 2 in 3D), while a wrong torque or a missed sphere
 /// pair (one contact of four) moves z by ~1 or more. The isostaticity margin,
 /// with rattlers by rank (a body held on one sphere counts D coordinates,
-/// docs/sanity.md), is at least 1: the network is rigid.
+/// docs/sanity.md), is at least 1: the network is rigid. The rotational
+/// rattlers are those bodies held on one sphere, and the contact number
+/// corrected for them, `z_corr`, is within 0.05 of `4d − 2`.
 #[test]
 fn small_dimer_packings_jam_near_isostatic() {
     let mut packings = run_small(
@@ -582,6 +603,53 @@ fn small_dimer_packings_jam_near_isostatic() {
         assert!(
             z_iso <= expected && z_iso > expected - 1.0,
             "{}: z_iso = {z_iso}",
+            p.id
+        );
+        // Rotational rattlers (Shiraishi et al. 2019). A body held on one
+        // sphere is one, with f − D = D − 1 free coordinates (1 in 2D, 2 in
+        // 3D). In 2D a contact on each sphere pins the rotation, so they
+        // are exactly the bodies read off the spheres; in 3D a body with a
+        // single contact on its second sphere keeps one free rotation (the
+        // one that moves that sphere along the contact's tangent), so the
+        // rank rule may find more of them, with 1 or 2 free coordinates.
+        let (f, d) = (2 * p.dim - 1, p.dim);
+        let n_rr = p.measures.n_rot_rattlers.unwrap();
+        let free = p.measures.free_rotations.unwrap();
+        let n_nr = (p.particles - p.measures.n_rattlers.unwrap()) as f64;
+        let on_one_sphere = rot_rattlers_from_spheres(p);
+        if p.dim == 2 {
+            assert_eq!(n_rr, on_one_sphere, "{}", p.id);
+            assert_eq!(free, n_rr, "{}", p.id);
+        } else {
+            assert!(n_rr >= on_one_sphere, "{}: {n_rr} < {on_one_sphere}", p.id);
+            assert!(
+                free >= (f - d) * on_one_sphere + (n_rr - on_one_sphere) && free <= (f - d) * n_rr,
+                "{}: {free} free rotations, {n_rr} rotational rattlers",
+                p.id
+            );
+        }
+        // z_corr = z_J + 2 Σ_b (f − r_b) / N_nr, and since the margin counts
+        // f N_nr − Σ_b (f − r_b) coordinates, z_corr − 2f = 2 (margin − D) /
+        // N_nr (to round-off: both sides are sums of a few ratios ~10).
+        let z_corr = p.z_corr().unwrap();
+        assert!(
+            (z_corr - (z + 2.0 * free as f64 / n_nr)).abs() < 1e-12,
+            "{}",
+            p.id
+        );
+        assert!(
+            (z_corr - expected - 2.0 * (margin - d as i64) as f64 / n_nr).abs() < 1e-12,
+            "{}: z_corr = {z_corr}",
+            p.id
+        );
+        // The criterion, |z − (4D − 2)| ≤ 0.05, holds for z_corr
+        // (it fails for z_J here, 0.09–0.31 below): it needs
+        // |margin − D| ≤ 0.025 N_nr, i.e. 1 ≤ margin ≤ 3 at N_nr ≈ 64 in
+        // 2D (margin 4 would give +0.0625); these packings have margin 1,
+        // z_corr − 2f = −2 (D − 1) / N_nr ≈ −0.03.
+        assert!(
+            (z_corr - expected).abs() <= 0.05,
+            "{}: z_corr = {z_corr}",
             p.id
         );
     }

@@ -45,6 +45,15 @@ pub struct Measures {
     /// Gap counts below each sample point, when asked for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gaps: Option<GapCounts>,
+    /// Rotational rattlers: non-rattlers whose contacts constrain fewer
+    /// than `f` of their coordinates (a body made of spheres held on one
+    /// sphere), see `jamkit_observe::JammingSummary`. 0 when rattlers go by
+    /// count; `None` in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub n_rot_rattlers: Option<usize>,
+    /// Their free coordinates, `Σ_b (f − r_b)` over the non-rattlers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub free_rotations: Option<usize>,
 }
 
 /// The spectrum of one packing, as stored.
@@ -170,6 +179,35 @@ impl PackingFile {
         let coordinates = m.n_contacts? as i64 - m.iso_margin? + self.dim as i64;
         Some(2.0 * coordinates as f64 / kept as f64)
     }
+
+    /// The contact number corrected for rotational rattlers (Shiraishi,
+    /// Mizuno & Ikeda 2019): each free rotational coordinate counts as a
+    /// missing contact, `z_corr = z_J + 2 free_rotations / N_nr`. Since
+    /// the margin counts `Σ_b r_b = f N_nr − free_rotations` coordinates,
+    /// `z_corr = 2 f + 2 (iso_margin − d) / N_nr = z_J − z_iso + 2 f`: `2 f`
+    /// up to `O(1/N_nr)` for a packing with a small margin. Equal to `z_J`
+    /// when rattlers go by count. `None` without contacts, in files
+    /// written before `free_rotations` was recorded, or when every body
+    /// rattles.
+    pub fn z_corr(&self) -> Option<f64> {
+        let m = &self.measures;
+        let kept = self.particles.checked_sub(m.n_rattlers?)?;
+        if kept == 0 {
+            return None;
+        }
+        Some(m.z_j? + 2.0 * m.free_rotations? as f64 / kept as f64)
+    }
+
+    /// The fraction of non-rattlers that are rotational rattlers
+    /// (`None` as for [`Self::z_corr`]).
+    pub fn rot_rattler_fraction(&self) -> Option<f64> {
+        let m = &self.measures;
+        let kept = self.particles.checked_sub(m.n_rattlers?)?;
+        if kept == 0 {
+            return None;
+        }
+        Some(m.n_rot_rattlers? as f64 / kept as f64)
+    }
 }
 
 /// Quote a CSV field when needed.
@@ -236,7 +274,9 @@ pub fn results_csv(files: &[PackingFile]) -> String {
             "energy_per_particle",
             "n_contacts",
             "n_rattlers",
+            "n_rot_rattlers",
             "z_j",
+            "z_corr",
             "iso_margin",
             "pressure",
             "fire_steps",
@@ -277,7 +317,9 @@ pub fn results_csv(files: &[PackingFile]) -> String {
             format!("{:e}", m.energy_per_particle),
             opt(&m.n_contacts),
             opt(&m.n_rattlers),
+            opt(&m.n_rot_rattlers),
             opt(&m.z_j),
+            opt(&f.z_corr()),
             opt(&m.iso_margin),
             m.pressure.map(|p| format!("{p:e}")).unwrap_or_default(),
             m.fire_steps.to_string(),
@@ -451,8 +493,12 @@ pub struct PointSummary {
     pub z_j: (f64, f64),
     /// [`PackingFile::z_iso`] mean and s.e.m.
     pub z_iso: (f64, f64),
+    /// [`PackingFile::z_corr`] mean and s.e.m.
+    pub z_corr: (f64, f64),
     /// Rattler fraction mean and s.e.m.
     pub rattler_fraction: (f64, f64),
+    /// [`PackingFile::rot_rattler_fraction`] mean and s.e.m.
+    pub rot_rattler_fraction: (f64, f64),
     /// Smallest isostaticity margin.
     pub iso_margin_min: Option<i64>,
     /// Pressure mean and s.e.m.
@@ -488,9 +534,11 @@ pub fn summarize_points(groups: &[(String, Vec<&PackingFile>)]) -> Vec<PointSumm
                 phi: mean_sem(&col(&|p| Some(p.measures.phi))),
                 z_j: mean_sem(&col(&|p| p.measures.z_j)),
                 z_iso: mean_sem(&col(&|p| p.z_iso())),
+                z_corr: mean_sem(&col(&|p| p.z_corr())),
                 rattler_fraction: mean_sem(&col(&|p| {
                     p.measures.n_rattlers.map(|r| r as f64 / p.particles as f64)
                 })),
+                rot_rattler_fraction: mean_sem(&col(&|p| p.rot_rattler_fraction())),
                 iso_margin_min: files.iter().filter_map(|p| p.measures.iso_margin).min(),
                 pressure: mean_sem(&col(&|p| p.measures.pressure)),
                 fire_steps: mean_sem(&col(&|p| Some(p.measures.fire_steps as f64))).0,
@@ -527,8 +575,12 @@ pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
             "z_j_sem",
             "z_iso_mean",
             "z_iso_sem",
+            "z_corr_mean",
+            "z_corr_sem",
             "rattler_fraction_mean",
             "rattler_fraction_sem",
+            "rot_rattler_fraction_mean",
+            "rot_rattler_fraction_sem",
             "iso_margin_min",
             "pressure_mean",
             "pressure_sem",
@@ -571,8 +623,12 @@ pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
             num(s.z_j.1, true),
             num(s.z_iso.0, false),
             num(s.z_iso.1, true),
+            num(s.z_corr.0, false),
+            num(s.z_corr.1, true),
             num(s.rattler_fraction.0, false),
             num(s.rattler_fraction.1, true),
+            num(s.rot_rattler_fraction.0, false),
+            num(s.rot_rattler_fraction.1, true),
             opt(&s.iso_margin_min),
             num(s.pressure.0, true),
             num(s.pressure.1, true),
@@ -609,6 +665,55 @@ mod tests {
         // sample variance 5/3, sem = sqrt(5/12)
         assert!((s - (5.0f64 / 12.0).sqrt()).abs() < 1e-15);
         assert_eq!(mean_sem(&[7.0]), (7.0, 0.0));
+    }
+
+    /// A 2D dimer packing of 10 bodies, 2 rattlers, written before the
+    /// rotational rattlers were recorded: it loads, with no `z_corr`. With
+    /// them (3 rotational rattlers, 3 free rotations, margin 1): `z_corr =
+    /// z_J + 2·3/8`, which is also `2f + 2 (margin − d) / N_nr` and
+    /// `z_J − z_iso + 2f`; the new fields are written, and left out when
+    /// `None`.
+    #[test]
+    fn z_corr_counts_free_rotations_and_old_files_have_none() {
+        // N_c = Σ r_b − d + margin = (8·3 − 3) − 2 + 1 = 20, z_J = 40/8.
+        let mut file: PackingFile = serde_json::from_value(serde_json::json!({
+            "id": "old", "experiment": "e", "family": "nmer", "params": {},
+            "dim": 2, "particles": 10, "seed": 1, "protocol": "jam",
+            "settings": {}, "phi": 0.8, "energy_per_particle": 0.0,
+            "measures": {
+                "phi": 0.8, "energy_per_particle": 0.0, "n_contacts": 20,
+                "n_rattlers": 2, "z_j": 5.0, "iso_margin": 1, "pressure": 1e-3,
+                "fire_steps": 0, "minimizations": 0, "wall_s": 0.0, "flag": ""
+            },
+            "box": [1.0, 1.0], "positions": [], "radii": [],
+            "orientations": [], "rattler": []
+        }))
+        .unwrap();
+        assert_eq!(file.measures.n_rot_rattlers, None);
+        assert_eq!(file.z_corr(), None);
+        assert_eq!(file.rot_rattler_fraction(), None);
+        assert!(!results_csv(std::slice::from_ref(&file)).contains("NaN"));
+        file.measures.n_rot_rattlers = Some(3);
+        file.measures.free_rotations = Some(3);
+        let z_corr = file.z_corr().unwrap();
+        assert_eq!(z_corr, 5.0 + 0.75);
+        assert_eq!(z_corr, 6.0 + 2.0 * (1.0 - 2.0) / 8.0);
+        assert_eq!(z_corr, 5.0 - file.z_iso().unwrap() + 6.0);
+        assert_eq!(file.rot_rattler_fraction(), Some(3.0 / 8.0));
+        let json = serde_json::to_string(&file.measures).unwrap();
+        assert!(json.contains("\"n_rot_rattlers\":3"), "{json}");
+        file.measures.free_rotations = None;
+        let json = serde_json::to_string(&file.measures).unwrap();
+        assert!(!json.contains("free_rotations"), "{json}");
+        // results.csv: n_rot_rattlers after n_rattlers, z_corr after z_j.
+        file.measures.free_rotations = Some(3);
+        let csv = results_csv(&[file]);
+        let mut lines = csv.lines();
+        let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let cell = |c: &str| row[head.iter().position(|h| *h == c).unwrap()];
+        assert_eq!(cell("n_rot_rattlers"), "3");
+        assert_eq!(cell("z_corr"), "5.75");
     }
 
     #[test]

@@ -596,6 +596,8 @@ impl Observed {
             saddle_escapes: run.saddle_escapes,
             spectrum: self.spectrum.clone(),
             gaps: self.gaps.clone(),
+            n_rot_rattlers: contacts.map(|s| s.n_rot_rattlers),
+            free_rotations: contacts.map(|s| s.free_rotations),
         }
     }
 
