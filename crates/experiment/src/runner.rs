@@ -484,6 +484,8 @@ impl SampleVisitor<'_> {
             n_rattlers: None,
             z_j: None,
             iso_margin: None,
+            n_rot_rattlers: None,
+            free_rotations: None,
             pressure: None,
             fire_steps: *steps,
             minimizations: 0,
