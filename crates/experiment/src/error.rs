@@ -30,7 +30,7 @@ pub enum ExperimentError {
     Sample {
         sample: String,
         #[source]
-        source: jamkit_core::Error,
+        source: Box<jamkit_core::Error>,
         /// The configuration the engine stopped at, when there is one to
         /// look at (a minimisation that did not converge); the runner
         /// saves it as `packings/<id>.failed.json` and sets `saved`.
@@ -65,7 +65,7 @@ impl ExperimentError {
     pub fn sample(sample: impl Into<String>, source: jamkit_core::Error) -> Self {
         Self::Sample {
             sample: sample.into(),
-            source,
+            source: Box::new(source),
             state: None,
             saved: None,
         }

@@ -342,25 +342,25 @@ impl SceneVisitor for SampleVisitor<'_> {
                     max_density_steps,
                 };
                 jam(&mut scene, &mut fire, &params).and_then(|mut outcome| {
-                if escape_saddles {
-                    let threshold = e
-                        .rattlers
-                        .min_contacts
-                        .unwrap_or_else(|| scene.packing().shape.rattler_threshold());
-                    let s = saddle::escape_saddles(
-                        &mut scene,
-                        &mut fire,
-                        &params,
-                        &SaddleParams::default(),
-                        threshold,
-                    )?;
-                    outcome.phi = s.phi;
-                    outcome.energy_per_particle = s.energy_per_particle;
-                    outcome.fire_steps += s.fire_steps;
-                    outcome.minimizations += s.minimizations;
-                    saddle_escapes = Some(s.rounds);
-                }
-                Ok(outcome)
+                    if escape_saddles {
+                        let threshold = e
+                            .rattlers
+                            .min_contacts
+                            .unwrap_or_else(|| scene.packing().shape.rattler_threshold());
+                        let s = saddle::escape_saddles(
+                            &mut scene,
+                            &mut fire,
+                            &params,
+                            &SaddleParams::default(),
+                            threshold,
+                        )?;
+                        outcome.phi = s.phi;
+                        outcome.energy_per_particle = s.energy_per_particle;
+                        outcome.fire_steps += s.fire_steps;
+                        outcome.minimizations += s.minimizations;
+                        saddle_escapes = Some(s.rounds);
+                    }
+                    Ok(outcome)
                 })
             }
             Protocol::Phi { phi, eps, .. } => compress_to_phi(&mut scene, &mut fire, phi, eps),
@@ -388,7 +388,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                 let state = self.failed_state(&mut scene, &source, start);
                 return Err(ExperimentError::Sample {
                     sample: job.id.clone(),
-                    source,
+                    source: Box::new(source),
                     state: state.map(Box::new),
                     saved: None,
                 });

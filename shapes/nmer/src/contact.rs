@@ -37,15 +37,16 @@ use jamkit_core::{Contact, GapHessian, MAX_ROT, Matrix, RotVec, Shape, Vector};
 use rand::{Rng, RngExt};
 use std::f64::consts::PI;
 
-/// FIRE's largest time step for bodies made of spheres, 2D and 3D. Two
-/// bodies touch at up to four points, nearly parallel, so jammed dimers
-/// vibrate faster than spheres: `ω_max² ≈ 10` in 2D and ≈ 12 in 3D
-/// (α = 1.1–1.5) against 5.4 for disks and 6.2 for spheres. With the
-/// default 0.5 the step sat at 0.80 (2D) and 0.87 (3D) of the stability
-/// limit `2/ω_max`, and in 3D FIRE stalled for 10⁵–10⁶ steps in single
-/// minimisations (2 of 3 packings of 256 dimers at α = 1.5; 3D α = 1.1 took
-/// 1.5·10⁶ steps). 0.35 puts it at 0.5–0.6 of the limit, where the
-/// default keeps disks and spheres (docs/sanity.md, "The 3D stalls were
+/// FIRE's largest time step for bodies made of spheres in 3D. Two bodies
+/// touch at up to four points, nearly parallel, so jammed dimers vibrate
+/// faster than spheres: `ω_max² ≈ 12` in 3D (α = 1.1–1.5) against 6.2 for
+/// spheres, and the default 0.5 sat at 0.87 of the stability limit
+/// `2/ω_max`, where FIRE stalled for 10⁵–10⁶ steps in single
+/// minimisations (2 of 3 packings of 256 dimers at α = 1.5; 1.5·10⁶ steps
+/// for one of 128 at α = 1.1). 0.35 puts it at 0.6 of the limit, where
+/// the default keeps spheres. 2D keeps the default: there dimers have
+/// `ω_max² ≈ 10`, 0.5 is 0.80 of the limit, and 30 of 30 packings jammed
+/// with fewer steps than with 0.35 (docs/sanity.md, "The 3D stalls were
 /// FIRE's time step").
 pub const FIRE_DT_MAX: f64 = 0.35;
 
@@ -194,11 +195,6 @@ impl Shape<2> for Nmer<2> {
 
     fn rot_inertia(&self, size: f64) -> RotVec {
         [self.moment_of_inertia(size); 3]
-    }
-
-    /// [`FIRE_DT_MAX`].
-    fn fire_dt_max(&self) -> Option<f64> {
-        Some(FIRE_DT_MAX)
     }
 
     fn reference_orientation(&self) -> Angle {
