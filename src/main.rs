@@ -372,6 +372,16 @@ fn real_main() -> Result<()> {
     }
 }
 
+/// `x` to three decimals, or `-` when no packing had it (NaN: e.g. packing
+/// files written before the measure existed).
+fn three_places(x: f64) -> String {
+    if x.is_nan() {
+        "-".into()
+    } else {
+        format!("{x:.3}")
+    }
+}
+
 fn print_table(report: &jamkit_experiment::runner::RunReport) {
     out!(
         "{:<40} {:>7} {:>22} {:>18} {:>7} {:>7} {:>10} {:>8} {:>8}",
@@ -387,15 +397,15 @@ fn print_table(report: &jamkit_experiment::runner::RunReport) {
     );
     for s in &report.summaries {
         out!(
-            "{:<40} {:>7} {:>13.6} ± {:<7.1e} {:>9.4} ± {:<6.1e} {:>7.3} {:>7.3} {:>9.2}% {:>8} {:>8}",
+            "{:<40} {:>7} {:>13.6} ± {:<7.1e} {:>9.4} ± {:<6.1e} {:>7} {:>7} {:>9.2}% {:>8} {:>8}",
             s.label,
             s.samples,
             s.phi.0,
             s.phi.1,
             s.z_j.0,
             s.z_j.1,
-            s.z_iso.0,
-            s.z_corr.0,
+            three_places(s.z_iso.0),
+            three_places(s.z_corr.0),
             100.0 * s.rattler_fraction.0,
             s.iso_margin_min
                 .map(|m| m.to_string())
