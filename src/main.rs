@@ -234,7 +234,7 @@ fn real_main() -> Result<()> {
                 experiment.samples
             );
             for p in &points {
-                out!("  {}", p.label(&experiment.family, experiment.dim));
+                out!("  {}", p.label(&experiment.family));
             }
             Ok(())
         }

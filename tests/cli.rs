@@ -50,19 +50,69 @@ fn overrides_reach_the_grid() {
     assert!(err.contains("epz"), "{err}");
 }
 
+/// `--set dim=…` takes one dimension or a list (the outermost axis of the
+/// grid), and a bad entry of a list is named with its value.
+#[test]
+fn dim_overrides_scan_and_are_checked() {
+    let (code, out, err) = jamkit(&[
+        "validate",
+        "experiments/sanity/dimers.ron",
+        "--set",
+        "dim=3",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("3 point(s) × 10 sample(s)")
+            && out.contains("nmer_d3_N512_alpha1.5")
+            && !out.contains("nmer_d2_"),
+        "{out}"
+    );
+    let (code, out, err) = jamkit(&[
+        "validate",
+        "experiments/quickstart.ron",
+        "--set",
+        "dim=[3, 2]",
+        "--set",
+        "particles=[32, 64]",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let labels: Vec<&str> = out.lines().skip(1).map(str::trim).collect();
+    assert_eq!(
+        labels,
+        [
+            "sphere_d3_N32",
+            "sphere_d3_N64",
+            "sphere_d2_N32",
+            "sphere_d2_N64"
+        ],
+        "{out}"
+    );
+    let (code, _, err) = jamkit(&[
+        "validate",
+        "experiments/sanity/dimers.ron",
+        "--set",
+        "dim=[2, 5]",
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("dim = 5") && err.contains("supports dim 2 or 3") && !err.contains("panicked"),
+        "{err}"
+    );
+}
+
 /// A family parameter of the wrong type is named, with its value and what
 /// the family allows (serde alone names no field for an optional one).
 #[test]
 fn a_parameter_of_the_wrong_type_is_named() {
     for (file, set, field, allowed) in [
         (
-            "experiments/sanity/dimers2d.ron",
+            "experiments/sanity/dimers.ron",
             "params.inertia=heavy",
             "params.inertia",
             "moment of inertia",
         ),
         (
-            "experiments/sanity/dimers2d.ron",
+            "experiments/sanity/dimers.ron",
             "params.alpha=abc",
             "params.alpha",
             "aspect ratio",

@@ -171,3 +171,49 @@ fn exhausted_search_is_a_clear_error() {
     let msg = first_failure("minimizer.max_steps=3");
     assert!(msg.contains("FIRE did not converge in 3 steps"), "{msg}");
 }
+
+/// `dim: [2, 3]` runs both dimensions in one output directory: packings
+/// with `dim` 2 and 3, the 2D one first (`dim` is the outermost axis), one
+/// summary row per dimension. Each packing records its own `dim` as a
+/// plain number in its settings, so the 2D packing is the one a scalar
+/// `dim: 2` file makes, and a later scalar run reuses it.
+#[test]
+fn a_dim_list_runs_both_dimensions() {
+    let both = Experiment::from_ron(
+        r#"(name: "dims", dim: [2, 3], family: "sphere", particles: 64, samples: 1, seed: 11)"#,
+        "inline",
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let report = run_into(&both, dir.path(), 2);
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let got: Vec<(usize, &str, usize)> = report
+        .packings
+        .iter()
+        .map(|p| (p.dim, p.id.as_str(), p.positions[0].len()))
+        .collect();
+    assert_eq!(
+        got,
+        vec![(2, "sphere_d2_N64_s11", 2), (3, "sphere_d3_N64_s11", 3)]
+    );
+    for p in &report.packings {
+        assert_eq!(p.settings["dim"], serde_json::json!(p.dim), "{}", p.id);
+        let on_disk =
+            PackingFile::load(&dir.path().join("packings").join(format!("{}.json", p.id))).unwrap();
+        assert_eq!(on_disk.dim, p.dim);
+    }
+    let summary = std::fs::read_to_string(dir.path().join("summary.csv")).unwrap();
+    assert_eq!(summary.lines().count(), 3, "{summary}");
+    // The scalar file's run of 2D: the same packing, served from the files
+    // the list run wrote.
+    let two = jamkit_experiment::overrides::apply(&both, &["dim=2".into()]).unwrap();
+    let again = run_into(&two, dir.path(), 1);
+    assert_eq!(again.reused, 1);
+    assert_eq!(again.packings.len(), 1);
+    assert_eq!(again.packings[0], report.packings[0]);
+    let fresh = tempfile::tempdir().unwrap();
+    let alone = run_into(&two, fresh.path(), 1);
+    assert_eq!(alone.reused, 0);
+    assert_eq!(alone.packings[0].positions, report.packings[0].positions);
+    assert_eq!(alone.packings[0].settings, report.packings[0].settings);
+}

@@ -562,12 +562,17 @@ fn rot_rattlers_from_spheres(p: &jamkit_experiment::record::PackingFile) -> usiz
 #[test]
 fn small_dimer_packings_jam_near_isostatic() {
     let mut packings = run_small(
-        "experiments/sanity/dimers2d.ron",
-        &["particles=64", "samples=2", "params.alpha=[1.5, 2.0]"],
+        "experiments/sanity/dimers.ron",
+        &[
+            "dim=2",
+            "particles=64",
+            "samples=2",
+            "params.alpha=[1.5, 2.0]",
+        ],
     );
     packings.extend(run_small(
-        "experiments/sanity/dimers3d.ron",
-        &["particles=128", "samples=1", "params.alpha=2.0"],
+        "experiments/sanity/dimers.ron",
+        &["dim=3", "particles=128", "samples=1", "params.alpha=2.0"],
     ));
     assert_eq!(packings.len(), 5);
     for p in &packings {
@@ -660,8 +665,8 @@ fn small_dimer_packings_jam_near_isostatic() {
 #[test]
 fn alpha_one_is_the_sphere_family() {
     let dimers = run_small(
-        "experiments/sanity/dimers2d.ron",
-        &["particles=32", "samples=1", "params.alpha=1.0"],
+        "experiments/sanity/dimers.ron",
+        &["dim=2", "particles=32", "samples=1", "params.alpha=1.0"],
     );
     let spheres = run_small(
         "experiments/sanity/disks2d.ron",
@@ -705,11 +710,11 @@ fn random_start_is_overlap_free() {
 /// would show up here as pushes.
 #[test]
 fn saddle_escape_finds_no_saddle_on_small_dimer_packings() {
-    let sets = ["particles=64", "samples=2", "params.alpha=1.5"];
-    let off = run_small("experiments/sanity/dimers2d.ron", &sets);
+    let sets = ["dim=2", "particles=64", "samples=2", "params.alpha=1.5"];
+    let off = run_small("experiments/sanity/dimers.ron", &sets);
     let mut with = sets.to_vec();
     with.push("protocol.escape_saddles=true");
-    let on = run_small("experiments/sanity/dimers2d.ron", &with);
+    let on = run_small("experiments/sanity/dimers.ron", &with);
     assert_eq!(off.len(), 2);
     for (a, b) in off.iter().zip(&on) {
         assert_eq!(a.measures.saddle_escapes, None, "{}", a.id);

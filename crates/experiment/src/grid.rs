@@ -1,9 +1,10 @@
 //! Grid expansion: from an experiment to parameter points and samples.
 //!
 //! A family parameter given as a list (or, for a parameter that is itself a
-//! list, as a list of lists) scans; so does `particles`. The grid is the
-//! Cartesian product, `particles` outermost and parameters in the order the
-//! family declares them (the first declared varies slowest).
+//! list, as a list of lists) scans; so do `dim` and `particles`. The grid is
+//! the Cartesian product, `dim` outermost, then `particles`, then the
+//! parameters in the order the family declares them (the first declared
+//! varies slowest).
 //! Each point runs `samples` packings with seeds `seed, seed + 1, …`: the
 //! same seeds at every point, so points differ only by their parameters.
 
@@ -17,6 +18,8 @@ use jamkit_core::FamilyInfo;
 pub struct Point {
     /// Position in the grid.
     pub index: usize,
+    /// Spatial dimension.
+    pub dim: usize,
     /// Number of bodies.
     pub particles: usize,
     /// Every family parameter (defaults filled in).
@@ -25,8 +28,8 @@ pub struct Point {
 
 impl Point {
     /// A file-name-safe label: `sphere_d2_N1024`, `fourier_d2_N256_delta0.01_n2`.
-    pub fn label(&self, family: &str, dim: usize) -> String {
-        let mut s = format!("{family}_d{dim}_N{}", self.particles);
+    pub fn label(&self, family: &str) -> String {
+        let mut s = format!("{family}_d{}_N{}", self.dim, self.particles);
         // `None` (a default such as "inertia: None") says nothing: left out.
         for (k, v) in self
             .params
@@ -112,6 +115,9 @@ fn scan_values(
 
 /// The grid points of an experiment, each checked by building its shape.
 pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
+    // Also checked by `validate`; a dimension listed twice would give two
+    // points with the same label, hence the same packing ids.
+    experiment.validate_dims()?;
     let info = registry::family_info(&experiment.family)?;
     let axes = param_axes(experiment, &info)?;
     let mut combos: Vec<ParamMap> = vec![ParamMap::new()];
@@ -128,17 +134,20 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
             .collect();
     }
     let mut out = Vec::new();
-    for particles in experiment.particles.values() {
-        for params in &combos {
-            let check = CheckOnly {
-                hessian: experiment.spectrum().is_some(),
-            };
-            registry::dispatch(&experiment.family, experiment.dim, params, check)??;
-            out.push(Point {
-                index: out.len(),
-                particles,
-                params: params.clone(),
-            });
+    for dim in experiment.dim.values() {
+        for particles in experiment.particles.values() {
+            for params in &combos {
+                let check = CheckOnly {
+                    hessian: experiment.spectrum().is_some(),
+                };
+                registry::dispatch(&experiment.family, dim, params, check)??;
+                out.push(Point {
+                    index: out.len(),
+                    dim,
+                    particles,
+                    params: params.clone(),
+                });
+            }
         }
     }
     Ok(out)
@@ -148,7 +157,7 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
 pub fn jobs(experiment: &Experiment, points: &[Point]) -> Vec<Job> {
     let mut out = Vec::new();
     for p in points {
-        let label = p.label(&experiment.family, experiment.dim);
+        let label = p.label(&experiment.family);
         for sample in 0..experiment.samples {
             let seed = experiment.seed.wrapping_add(sample as u64);
             out.push(Job {
@@ -266,6 +275,123 @@ mod tests {
         let err = points(&e).unwrap_err().to_string();
         assert!(
             err.contains("params.delta") && err.contains("no parameters"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn dim_list_is_the_outermost_axis_with_the_same_seeds() {
+        let e = Experiment::from_ron(
+            r#"(name: "g", dim: [2, 3], family: "sphere", particles: [8, 16], samples: 2, seed: 5)"#,
+            "g",
+        )
+        .unwrap();
+        e.validate().unwrap();
+        let pts = points(&e).unwrap();
+        assert_eq!(
+            pts.iter()
+                .map(|p| (p.index, p.dim, p.particles))
+                .collect::<Vec<_>>(),
+            vec![(0, 2, 8), (1, 2, 16), (2, 3, 8), (3, 3, 16)]
+        );
+        let labels: Vec<String> = pts.iter().map(|p| p.label("sphere")).collect();
+        assert_eq!(
+            labels,
+            vec![
+                "sphere_d2_N8",
+                "sphere_d2_N16",
+                "sphere_d3_N8",
+                "sphere_d3_N16"
+            ]
+        );
+        let js = jobs(&e, &pts);
+        let ids: Vec<(usize, u64, &str)> = js
+            .iter()
+            .map(|j| (j.point, j.seed, j.id.as_str()))
+            .collect();
+        assert_eq!(
+            ids,
+            vec![
+                (0, 5, "sphere_d2_N8_s5"),
+                (0, 6, "sphere_d2_N8_s6"),
+                (1, 5, "sphere_d2_N16_s5"),
+                (1, 6, "sphere_d2_N16_s6"),
+                (2, 5, "sphere_d3_N8_s5"),
+                (2, 6, "sphere_d3_N8_s6"),
+                (3, 5, "sphere_d3_N16_s5"),
+                (3, 6, "sphere_d3_N16_s6"),
+            ]
+        );
+    }
+
+    #[test]
+    fn scalar_dim_keeps_its_labels_and_default() {
+        let e = Experiment::from_ron(
+            r#"(name: "g", dim: 3, family: "sphere", particles: 8)"#,
+            "g",
+        )
+        .unwrap();
+        assert_eq!(e.dim, crate::schema::OneOrMany::One(3));
+        let pts = points(&e).unwrap();
+        assert_eq!(jobs(&e, &pts)[0].id, "sphere_d3_N8_s1");
+        let e =
+            Experiment::from_ron(r#"(name: "g", family: "sphere", particles: 8)"#, "g").unwrap();
+        assert_eq!(points(&e).unwrap()[0].label("sphere"), "sphere_d2_N8");
+    }
+
+    #[test]
+    fn bad_dim_in_a_list_is_named_with_its_value() {
+        let e = Experiment::from_ron(
+            r#"(name: "g", dim: [2, 7], family: "sphere", particles: 8)"#,
+            "g",
+        )
+        .unwrap();
+        for err in [
+            e.validate().unwrap_err().to_string(),
+            points(&e).unwrap_err().to_string(),
+        ] {
+            assert!(
+                err.contains("dim = 7") && err.contains("supports dim 2 or 3 or 4"),
+                "{err}"
+            );
+        }
+        // A dimension the family lacks, in a list of otherwise good ones.
+        let e = Experiment::from_ron(
+            r#"(name: "g", dim: [3, 4], family: "nmer", particles: 8, params: {"alpha": 1.5})"#,
+            "g",
+        )
+        .unwrap();
+        let err = e.validate().unwrap_err().to_string();
+        assert!(
+            err.contains("dim = 4") && err.contains("`nmer` supports dim 2 or 3"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn duplicated_or_empty_dim_list_is_refused() {
+        let e = Experiment::from_ron(
+            r#"(name: "g", dim: [2, 3, 2], family: "sphere", particles: 8)"#,
+            "g",
+        )
+        .unwrap();
+        for err in [
+            e.validate().unwrap_err().to_string(),
+            points(&e).unwrap_err().to_string(),
+        ] {
+            assert!(
+                err.contains("dim = 2") && err.contains("listed twice"),
+                "{err}"
+            );
+        }
+        let e = Experiment::from_ron(
+            r#"(name: "g", dim: [], family: "sphere", particles: 8)"#,
+            "g",
+        )
+        .unwrap();
+        let err = e.validate().unwrap_err().to_string();
+        assert!(
+            err.contains("dim = []") && err.contains("at least one dimension"),
             "{err}"
         );
     }

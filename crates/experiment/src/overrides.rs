@@ -336,6 +336,23 @@ mod tests {
         assert_eq!(e.rattlers.min_contacts, None);
     }
 
+    /// `dim` takes a value or a list, like `particles`; a list back to one
+    /// value is the plain number again (what the settings record).
+    #[test]
+    fn dim_takes_a_value_or_a_list() {
+        use crate::schema::OneOrMany;
+        let both = apply(&base(), &["dim=[2, 3]".into()]).unwrap();
+        assert_eq!(both.dim, OneOrMany::Many(vec![2, 3]));
+        let three = apply(&both, &["dim=3".into()]).unwrap();
+        assert_eq!(three.dim, OneOrMany::One(3));
+        assert_eq!(
+            serde_json::to_value(&three.dim).unwrap(),
+            serde_json::json!(3)
+        );
+        let err = apply(&base(), &["dim=two".into()]).unwrap_err().to_string();
+        assert!(err.contains("a value or a list of values"), "{err}");
+    }
+
     #[test]
     fn unknown_key_is_named() {
         let err = apply(&base(), &["protocol.epz=1".into()])

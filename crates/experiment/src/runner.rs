@@ -211,7 +211,7 @@ fn group_by_point<'a>(
                 .iter()
                 .filter(|f| ids.contains(&f.id.as_str()))
                 .collect();
-            (p.label(&experiment.family, experiment.dim), members)
+            (p.label(&experiment.family), members)
         })
         .filter(|(_, m): &(String, Vec<&PackingFile>)| !m.is_empty())
         .collect()
@@ -222,7 +222,7 @@ pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json
     let e = experiment;
     let minimizer = minimizer_at(e, point).unwrap_or_else(|_| e.minimizer.clone());
     serde_json::json!({
-        "dim": e.dim,
+        "dim": point.dim,
         "family": e.family,
         "params": point.params,
         "particles": point.particles,
@@ -247,7 +247,7 @@ pub fn minimizer_at(e: &Experiment, point: &Point) -> Result<FireParams, Experim
             with_family_dt_max(self.0, &shape)
         }
     }
-    registry::dispatch(&e.family, e.dim, &point.params, Resolve(&e.minimizer))
+    registry::dispatch(&e.family, point.dim, &point.params, Resolve(&e.minimizer))
 }
 
 /// `m` with `dt_max` set: its own, else the family's, else 0.5.
@@ -298,7 +298,7 @@ pub fn run_job(
         point,
         job,
     };
-    registry::dispatch(&experiment.family, experiment.dim, &point.params, visitor)?
+    registry::dispatch(&experiment.family, point.dim, &point.params, visitor)?
 }
 
 struct SampleVisitor<'a> {

@@ -3,7 +3,7 @@
 //! ```ron
 //! (
 //!     name: "quickstart",
-//!     dim: 2,
+//!     dim: 2,                           // or a list: [2, 3]
 //!     family: "sphere",
 //!     params: {},                       // the family's parameters; a list scans
 //!     sizes: Binary(small: 0.5, large: 0.7),
@@ -56,9 +56,9 @@ impl<T: Clone> OneOrMany<T> {
 pub struct Experiment {
     /// Name, used in output.
     pub name: String,
-    /// Spatial dimension.
+    /// Spatial dimension `D` (a list scans; the grid's outermost axis).
     #[serde(default = "default_dim")]
-    pub dim: usize,
+    pub dim: OneOrMany<usize>,
     /// Shape family (see `jamkit shapes`).
     pub family: String,
     /// The family's parameters; a list where a scalar is expected scans.
@@ -98,8 +98,8 @@ pub struct Experiment {
     pub output: OutputParams,
 }
 
-fn default_dim() -> usize {
-    2
+fn default_dim() -> OneOrMany<usize> {
+    OneOrMany::One(2)
 }
 fn default_samples() -> usize {
     1
@@ -441,18 +441,7 @@ impl Experiment {
                 "must not be blank",
             ));
         }
-        let info = crate::registry::family_info(&self.family)?;
-        if !crate::registry::supports_dim(&info, self.dim) {
-            return Err(ExperimentError::invalid(
-                "dim",
-                self.dim,
-                format!(
-                    "family `{}` supports {}",
-                    self.family,
-                    crate::registry::describe_dims(&info)
-                ),
-            ));
-        }
+        self.validate_dims()?;
         let particles = self.particles.values();
         if particles.is_empty() {
             return Err(ExperimentError::invalid(
@@ -490,6 +479,44 @@ impl Experiment {
                 0,
                 "must be at least 1, or None for the family's default",
             ));
+        }
+        Ok(())
+    }
+
+    /// Every listed dimension is one the family supports, none twice.
+    pub(crate) fn validate_dims(&self) -> Result<(), ExperimentError> {
+        let info = crate::registry::family_info(&self.family)?;
+        let dims = self.dim.values();
+        if dims.is_empty() {
+            return Err(ExperimentError::invalid(
+                "dim",
+                "[]",
+                format!(
+                    "must list at least one dimension; family `{}` supports {}",
+                    self.family,
+                    crate::registry::describe_dims(&info)
+                ),
+            ));
+        }
+        for (k, &d) in dims.iter().enumerate() {
+            if !crate::registry::supports_dim(&info, d) {
+                return Err(ExperimentError::invalid(
+                    "dim",
+                    d,
+                    format!(
+                        "family `{}` supports {}",
+                        self.family,
+                        crate::registry::describe_dims(&info)
+                    ),
+                ));
+            }
+            if dims[..k].contains(&d) {
+                return Err(ExperimentError::invalid(
+                    "dim",
+                    d,
+                    "is listed twice; list each dimension once",
+                ));
+            }
         }
         Ok(())
     }
