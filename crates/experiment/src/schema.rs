@@ -450,12 +450,20 @@ impl Experiment {
                 "must list at least one N",
             ));
         }
-        for n in particles {
+        for (k, &n) in particles.iter().enumerate() {
             if !(2..=MAX_PARTICLES).contains(&n) {
                 return Err(ExperimentError::invalid(
                     "particles",
                     n,
                     format!("must be between 2 and {MAX_PARTICLES}"),
+                ));
+            }
+            // Two equal entries would be two jobs with one id and one file.
+            if particles[..k].contains(&n) {
+                return Err(ExperimentError::invalid(
+                    "particles",
+                    n,
+                    "is listed twice; list each N once",
                 ));
             }
         }
