@@ -114,3 +114,24 @@ fn a_failed_sample_keeps_its_configuration_until_a_rerun_succeeds() {
         "a successful rerun removes the stale failed state"
     );
 }
+
+/// A jamming search that gives up (here: too few density changes allowed)
+/// also leaves the configuration it reached, flagged with the error.
+#[test]
+fn a_failed_jamming_search_keeps_its_configuration() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = r#"(name: "steps", family: "sphere", particles: 32, samples: 1,
+        protocol: Jam(phi_start: 0.1, eps: 1e-3, energy_low: 1e-16, energy_high: 2e-16, max_density_steps: 5))"#;
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    let report = run_into(&e, dir.path(), 1);
+    assert_eq!(report.failures.len(), 1);
+    let message = report.failures[0].to_string();
+    assert!(message.contains("jamming search failed"), "{message}");
+    let path = failed_path(&dir.path().join("packings"), "sphere_d2_N32_s1");
+    assert!(message.contains(&path.display().to_string()), "{message}");
+    let failed = PackingFile::load_checked(&path).unwrap();
+    assert!(failed.measures.flag.contains("jamming search failed"));
+    assert_eq!(failed.positions.len(), 32);
+    // Five compressions of ε = 10⁻³ from φ = 0.1 (none reversed: V = 0).
+    assert!((failed.phi - 0.105).abs() < 1e-9, "φ = {}", failed.phi);
+}

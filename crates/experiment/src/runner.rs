@@ -464,16 +464,20 @@ impl SampleVisitor<'_> {
     }
 
     /// The configuration a failed protocol stopped at, as a packing file
-    /// whose `flag` is the error (`None` for errors with nothing to look
-    /// at: a bad start, a non-finite energy).
+    /// whose `flag` is the error: a minimisation that hit its step cap
+    /// (`fire_steps` its steps) or a jamming search that gave up
+    /// (`fire_steps` 0). `None` for errors with nothing to look at: a bad
+    /// start, a box too small, a non-finite energy.
     fn failed_state<const D: usize, S: Shape<D>>(
         &self,
         scene: &mut Scene<D, S>,
         error: &jamkit_core::Error,
         start: Instant,
     ) -> Option<PackingFile> {
-        let jamkit_core::Error::NotConverged { steps, .. } = error else {
-            return None;
+        let steps = match error {
+            jamkit_core::Error::NotConverged { steps, .. } => *steps,
+            jamkit_core::Error::JammingFailed { .. } => 0,
+            _ => return None,
         };
         let bodies = scene.packing().len().max(1) as f64;
         let energy = scene.energy();
@@ -487,7 +491,7 @@ impl SampleVisitor<'_> {
             n_rot_rattlers: None,
             free_rotations: None,
             pressure: None,
-            fire_steps: *steps,
+            fire_steps: steps,
             minimizations: 0,
             wall_s: start.elapsed().as_secs_f64(),
             flag: error.to_string(),
