@@ -339,17 +339,19 @@ mod tests {
         assert_eq!(points(&e).unwrap()[0].label("sphere"), "sphere_d2_N8");
     }
 
-    #[test]
-    fn bad_dim_in_a_list_is_named_with_its_value() {
-        let e = Experiment::from_ron(
-            r#"(name: "g", dim: [2, 7], family: "sphere", particles: 8)"#,
-            "g",
-        )
-        .unwrap();
-        for err in [
+    /// The errors of `validate` and of `points` for an experiment text
+    /// (both must refuse a bad `dim` list: `points` may run unvalidated).
+    fn dim_errors(text: &str) -> [String; 2] {
+        let e = Experiment::from_ron(text, "g").unwrap();
+        [
             e.validate().unwrap_err().to_string(),
             points(&e).unwrap_err().to_string(),
-        ] {
+        ]
+    }
+
+    #[test]
+    fn bad_dim_in_a_list_is_named_with_its_value() {
+        for err in dim_errors(r#"(name: "g", dim: [2, 7], family: "sphere", particles: 8)"#) {
             assert!(
                 err.contains("dim = 7") && err.contains("supports dim 2 or 3 or 4"),
                 "{err}"
@@ -370,15 +372,7 @@ mod tests {
 
     #[test]
     fn duplicated_or_empty_dim_list_is_refused() {
-        let e = Experiment::from_ron(
-            r#"(name: "g", dim: [2, 3, 2], family: "sphere", particles: 8)"#,
-            "g",
-        )
-        .unwrap();
-        for err in [
-            e.validate().unwrap_err().to_string(),
-            points(&e).unwrap_err().to_string(),
-        ] {
+        for err in dim_errors(r#"(name: "g", dim: [2, 3, 2], family: "sphere", particles: 8)"#) {
             assert!(
                 err.contains("dim = 2") && err.contains("listed twice"),
                 "{err}"
