@@ -23,6 +23,7 @@ use jamkit_engine::{Fire, FireParams, Objective, Scene};
 use jamkit_experiment::record::PackingFile;
 use jamkit_experiment::reload::{PackingVisitor, reload};
 use jamkit_observe::hessian::{Hessian, HessianOptions};
+use jamkit_observe::spectrum::omega_max_sq;
 
 struct Diagnose {
     /// `dt_max` the file was made with.
@@ -84,20 +85,10 @@ impl PackingVisitor for Diagnose {
 
         let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default()).unwrap();
         let m = h.size;
-        let inv_m = scene.inverse_masses().to_vec();
-        let mut weighted = h.dense();
-        for r in 0..m {
-            for c in 0..m {
-                weighted[(r, c)] *= (inv_m[r] * inv_m[c]).sqrt();
-            }
-        }
-        let w = weighted
-            .self_adjoint_eigenvalues(faer::Side::Lower)
-            .unwrap();
-        let omega_max = w[m - 1].max(0.0).sqrt();
+        let omega_sq = omega_max_sq(&h, scene.inverse_masses()).unwrap();
+        let omega_max = omega_sq.max(0.0).sqrt();
         print!(
-            "ω_max² = {:.3}, stability limit 2/ω_max = {:.4}",
-            w[m - 1],
+            "ω_max² = {omega_sq:.3}, stability limit 2/ω_max = {:.4}",
             2.0 / omega_max
         );
         match self.recorded_dt_max {

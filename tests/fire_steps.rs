@@ -11,6 +11,7 @@ use jamkit_experiment::record::PackingFile;
 use jamkit_experiment::reload::{PackingVisitor, reload};
 use jamkit_experiment::runner::failed_path;
 use jamkit_observe::hessian::{Hessian, HessianOptions};
+use jamkit_observe::spectrum::omega_max_sq;
 
 fn experiment(family: &str, dim: usize, params: &str, extra: &str) -> Experiment {
     let text = format!(
@@ -30,16 +31,8 @@ struct OmegaMaxSq;
 impl PackingVisitor for OmegaMaxSq {
     type Output = f64;
     fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> f64 {
-        let inv_m = scene.inverse_masses().to_vec();
         let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default()).unwrap();
-        let mut m = h.dense();
-        for r in 0..h.size {
-            for c in 0..h.size {
-                m[(r, c)] *= (inv_m[r] * inv_m[c]).sqrt();
-            }
-        }
-        let w = m.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();
-        w[h.size - 1]
+        omega_max_sq(&h, scene.inverse_masses()).unwrap()
     }
 }
 

@@ -124,6 +124,30 @@ pub fn eigenvalues(h: &Hessian) -> Result<Vec<f64>> {
         .map_err(|e| Error::Unsupported(format!("eigensolver failed: {e:?}")))
 }
 
+/// `ω_max²`, the largest eigenvalue of `M^{-1/2} H M^{-1/2}`: the fastest
+/// vibration of the dynamics FIRE runs (`inverse_masses` per row of `h`,
+/// e.g. `Packing::inverse_masses` when no rows were removed). FIRE's Euler
+/// step is stable below `Δt = 2/ω_max`.
+pub fn omega_max_sq(h: &Hessian, inverse_masses: &[f64]) -> Result<f64> {
+    if inverse_masses.len() != h.size {
+        return Err(Error::Unsupported(format!(
+            "{} inverse masses for a Hessian of {} rows",
+            inverse_masses.len(),
+            h.size
+        )));
+    }
+    let mut m = h.dense();
+    for r in 0..h.size {
+        for c in 0..h.size {
+            m[(r, c)] *= (inverse_masses[r] * inverse_masses[c]).sqrt();
+        }
+    }
+    let w = m
+        .self_adjoint_eigenvalues(faer::Side::Lower)
+        .map_err(|e| Error::Unsupported(format!("eigensolver failed: {e:?}")))?;
+    Ok(w.last().copied().unwrap_or(0.0))
+}
+
 /// Eigenvalues (ascending) and the shape of each mode.
 pub fn eigenmodes(h: &Hessian) -> Result<(Vec<f64>, Vec<ModeShape>)> {
     if h.size == 0 {
@@ -406,5 +430,18 @@ mod tests {
         };
         let e = p.validate("spectrum").unwrap_err().to_string();
         assert!(e.contains("spectrum.omega_max"), "{e}");
+    }
+
+    #[test]
+    fn omega_max_weights_rows_by_their_masses() {
+        // diag(4, 9) with masses 1 and 4: ω² = 4 and 9/4, so 4 (not 9).
+        let h = Hessian {
+            size: 2,
+            body: vec![0, 0],
+            rotational: vec![false, true],
+            entries: vec![(0, 0, 4.0), (1, 1, 9.0)],
+        };
+        assert_eq!(omega_max_sq(&h, &[1.0, 0.25]).unwrap(), 4.0);
+        assert!(omega_max_sq(&h, &[1.0]).is_err());
     }
 }
