@@ -16,7 +16,9 @@ use anyhow::Result;
 use clap::{Subcommand, ValueEnum};
 use jamkit_core::gap2d::GapModel;
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
-use jamkit_engine::{Fire, FireParams, JamParams, Objective, Scene, jam};
+use jamkit_engine::{
+    Fire, FireParams, FireVariant, ForceCriterion, JamParams, Objective, Scene, jam,
+};
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_observe::summarize;
 use jamkit_sphere::Sphere;
@@ -42,6 +44,61 @@ impl From<GapArg> for GapModel {
             GapArg::SecondOrder => GapModel::SecondOrder,
             GapArg::Exact => GapModel::Exact,
         }
+    }
+}
+
+/// The minimiser of `bench packing`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum MinimizerArg {
+    /// The paper's FIRE, as jamkit ran it before the Newton finish
+    /// (`FireParams::paper()`, bit for bit).
+    Paper,
+    /// FIRE 2.0 (Guénolé et al. 2020).
+    Fire2,
+    /// FIRE with the Newton finish.
+    #[default]
+    Newton,
+    /// FIRE 2.0 with the Newton finish.
+    Fire2Newton,
+}
+
+/// The force criterion of `bench packing`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum CriterionArg {
+    /// Σ g² (the paper as written).
+    Sum,
+    /// Σ g² / N (the author's code).
+    PerBody,
+    /// max g².
+    Max,
+}
+
+impl MinimizerArg {
+    /// The parameters, with `criterion` and the Newton interval `after`.
+    pub fn params(self, criterion: Option<CriterionArg>, after: Option<u64>) -> FireParams {
+        let mut p = match self {
+            MinimizerArg::Paper => FireParams::paper(),
+            MinimizerArg::Fire2 => FireParams {
+                variant: FireVariant::Fire2,
+                ..FireParams::paper()
+            },
+            MinimizerArg::Newton => FireParams::fire_newton(),
+            MinimizerArg::Fire2Newton => FireParams {
+                variant: FireVariant::Fire2,
+                ..FireParams::fire_newton()
+            },
+        };
+        if let Some(c) = criterion {
+            p.force_criterion = match c {
+                CriterionArg::Sum => ForceCriterion::Sum,
+                CriterionArg::PerBody => ForceCriterion::PerBody,
+                CriterionArg::Max => ForceCriterion::Max,
+            };
+        }
+        if let (Some(a), Some(nw)) = (after, p.newton.as_mut()) {
+            nw.after = a;
+        }
+        p
     }
 }
 
@@ -86,6 +143,15 @@ pub enum BenchCommand {
         /// `engine.skin` in an experiment file).
         #[arg(long, default_value_t = 0.4)]
         skin: f64,
+        /// Minimiser.
+        #[arg(long, value_enum, default_value_t = MinimizerArg::Paper)]
+        minimizer: MinimizerArg,
+        /// Force criterion [default: the minimiser's].
+        #[arg(long, value_enum)]
+        force_criterion: Option<CriterionArg>,
+        /// FIRE steps before the Newton finish [default: the minimiser's].
+        #[arg(long)]
+        newton_after: Option<u64>,
     },
     /// Time one energy+gradient evaluation of binary disks at phi = 0.84.
     Eval {
@@ -164,17 +230,21 @@ pub fn run(what: BenchCommand) -> Result<()> {
             inertia,
             gap,
             skin,
+            minimizer,
+            force_criterion,
+            newton_after,
         } => {
+            let fire = minimizer.params(force_criterion, newton_after);
             out!(
-                "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash"
+                "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s"
             );
             for seed in seeds {
                 match (family, dim) {
                     (BenchFamily::Sphere, 2) => {
-                        bench_packing::<2, _>(Sphere, particles, seed, skin)?
+                        bench_packing::<2, _>(Sphere, particles, seed, skin, &fire)?
                     }
                     (BenchFamily::Sphere, 3) => {
-                        bench_packing::<3, _>(Sphere, particles, seed, skin)?
+                        bench_packing::<3, _>(Sphere, particles, seed, skin, &fire)?
                     }
                     (BenchFamily::Fourier, 2) => {
                         let shape = NearDisk::fourier(&FourierParams {
@@ -184,7 +254,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
                             gap: gap.into(),
                         })
                         .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))?;
-                        bench_packing::<2, _>(shape, particles, seed, skin)?
+                        bench_packing::<2, _>(shape, particles, seed, skin, &fire)?
                     }
                     _ => anyhow::bail!("--dim {dim}: must be 2 or 3 (2 for near-disks)"),
                 }
@@ -256,23 +326,45 @@ fn bench_packing<const D: usize, S: Shape<D>>(
     n: usize,
     seed: u64,
     skin: f64,
+    params: &FireParams,
 ) -> Result<()> {
     let family = shape.family();
     let mut scene = random_scene::<D, S>(shape, n, seed, 0.1, skin)?;
-    let mut fire = Fire::new(FireParams::default());
+    let mut fire = Fire::new(params.clone());
+    let cpu = cpu_seconds();
     let t = Instant::now();
     let out = jam(&mut scene, &mut fire, &JamParams::default())?;
     let wall = t.elapsed().as_secs_f64();
+    let cpu = cpu_seconds() - cpu;
     let threshold = scene.packing().shape.rattler_threshold();
     let s = summarize(&mut scene, threshold);
     out!(
-        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x}",
+        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2}",
         out.phi,
         s.z_j,
         s.iso_margin,
         out.fire_steps,
-        wall * 1e6 / out.fire_steps as f64,
-        packing_hash(scene.packing())
+        wall * 1e6 / out.fire_steps.max(1) as f64,
+        packing_hash(scene.packing()),
+        out.newton_iterations
     );
     Ok(())
+}
+
+/// CPU time of this thread so far (user + system), in seconds; NaN where
+/// it cannot be read.
+fn cpu_seconds() -> f64 {
+    // /proc/thread-self/stat fields 14 and 15: utime and stime in clock ticks.
+    let Ok(stat) = std::fs::read_to_string("/proc/thread-self/stat") else {
+        return f64::NAN;
+    };
+    let Some(after) = stat.rsplit_once(')').map(|(_, a)| a) else {
+        return f64::NAN;
+    };
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok());
+    match (ticks(11), ticks(12)) {
+        (Some(u), Some(s)) => (u + s) / 100.0,
+        _ => f64::NAN,
+    }
 }

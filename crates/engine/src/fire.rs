@@ -18,8 +18,24 @@
 //! `force_tol_per_body` the force sum is divided by `N` first, as in the
 //! paper author's public code.
 
+use crate::newton::{NewtonEnd, NewtonParams, NewtonWork};
 use jamkit_core::{Error, Result};
 use serde::{Deserialize, Serialize};
+
+/// Which force measure the stopping rule compares with `force_tol`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ForceCriterion {
+    /// `Σ_a (∂V/∂q_a)²`, the paper's rule as written: `N` times stricter per
+    /// body at `N` bodies than at one.
+    #[default]
+    Sum,
+    /// `Σ_a (∂V/∂q_a)² / N`, the paper author's public code (also
+    /// `force_tol_per_body: true`).
+    PerBody,
+    /// `max_a (∂V/∂q_a)²`: every coordinate's residual force below
+    /// `√force_tol`, whatever `N`.
+    Max,
+}
 
 /// Something FIRE can minimise: an energy of flat generalised coordinates.
 pub trait Objective {
@@ -40,6 +56,18 @@ pub trait Objective {
     fn translations_per_body(&self) -> usize {
         self.dof() / self.bodies().max(1)
     }
+    /// Append the Hessian `∂²V/∂q∂q` as `(row, column, value)` entries (both
+    /// triangles; repeated index pairs add up) and return `Ok(true)`, or
+    /// return `Ok(false)` when the objective has none (then the Newton
+    /// finish is never tried). Default: none.
+    fn hessian_entries(&mut self, _entries: &mut Vec<(u32, u32, f64)>) -> Result<bool> {
+        Ok(false)
+    }
+    /// Remember the current coordinates, for [`Objective::restore`] (used by
+    /// the Newton finish's line search; needed only with a Hessian).
+    fn save(&mut self) {}
+    /// Go back to the coordinates of the last [`Objective::save`].
+    fn restore(&mut self) {}
 }
 
 /// Where the residual force of an unconverged minimisation sits: the body
@@ -117,10 +145,17 @@ pub struct FireParams {
     /// Stop when `Σ (∂V/∂q)²` (or that sum divided by `N`, see
     /// `force_tol_per_body`) falls below this.
     pub force_tol: f64,
-    /// Divide the force sum by `N` before comparing (the author's public code).
+    /// Divide the force sum by `N` before comparing (the author's public
+    /// code; the same as `force_criterion: PerBody`).
     pub force_tol_per_body: bool,
+    /// The force measure of the stopping rule (`Sum`, `PerBody`, `Max`).
+    pub force_criterion: ForceCriterion,
     /// Give up (with an error) after this many steps in one minimisation.
     pub max_steps: u64,
+    /// The Newton finish ([`crate::newton`]): after `after` FIRE steps
+    /// without convergence, Newton iterations with the analytic Hessian.
+    /// `None`: FIRE all the way, as in the paper.
+    pub newton: Option<NewtonParams>,
 }
 
 impl Default for FireParams {
@@ -138,7 +173,9 @@ impl Default for FireParams {
             energy_tol: 1e-16,
             force_tol: 1e-25,
             force_tol_per_body: false,
+            force_criterion: ForceCriterion::Sum,
             max_steps: 20_000_000,
+            newton: Some(NewtonParams::default()),
         }
     }
 }
@@ -150,6 +187,56 @@ impl FireParams {
             variant: FireVariant::Fire2,
             ..Self::default()
         }
+    }
+
+    /// The paper's FIRE as jamkit ran it before the Newton finish: FIRE
+    /// (Bitzek et al.) all the way, `Σ (∂V/∂q)² < 10⁻²⁵`. Bit for bit the
+    /// packings of earlier versions.
+    pub fn paper() -> Self {
+        Self {
+            variant: FireVariant::Fire,
+            force_tol_per_body: false,
+            force_criterion: ForceCriterion::Sum,
+            newton: None,
+            ..Self::default()
+        }
+    }
+
+    /// FIRE with the Newton finish at its default settings.
+    pub fn fire_newton() -> Self {
+        Self {
+            newton: Some(NewtonParams::default()),
+            ..Self::paper()
+        }
+    }
+
+    /// The force criterion in force (`force_tol_per_body` means `PerBody`).
+    pub fn criterion(&self) -> ForceCriterion {
+        if self.force_tol_per_body {
+            ForceCriterion::PerBody
+        } else {
+            self.force_criterion
+        }
+    }
+
+    /// The stopping rule: `Energy` when `V/N < energy_tol`, `Force` when the
+    /// force measure of [`FireParams::criterion`] is below `force_tol`.
+    /// `force_sq` is `Σ g²` of the gradient `g`.
+    #[inline(always)]
+    pub fn stop(&self, energy: f64, force_sq: f64, g: &[f64], bodies: f64) -> Option<StopReason> {
+        if energy / bodies < self.energy_tol {
+            return Some(StopReason::Energy);
+        }
+        let converged = match self.criterion() {
+            ForceCriterion::Sum => force_sq < self.force_tol,
+            ForceCriterion::PerBody => force_sq / bodies < self.force_tol,
+            // max g² ≤ Σ g²: the pass over g only when the sum cannot decide.
+            ForceCriterion::Max => {
+                force_sq < self.force_tol
+                    || (force_sq < self.force_tol * g.len() as f64 && max_sq(g) < self.force_tol)
+            }
+        };
+        converged.then_some(StopReason::Force)
     }
 
     /// `Δt_max` in force (`dt_max`, or 0.5 when no family chose it).
@@ -226,6 +313,19 @@ impl FireParams {
                 "must be at least 1",
             ));
         }
+        if self.force_tol_per_body && self.force_criterion != ForceCriterion::Sum {
+            return Err(Error::invalid(
+                format!("{prefix}.force_tol_per_body"),
+                true,
+                format!(
+                    "must be false with force_criterion: {:?} (force_tol_per_body: true is force_criterion: PerBody; give one of the two)",
+                    self.force_criterion
+                ),
+            ));
+        }
+        if let Some(newton) = &self.newton {
+            newton.validate(&format!("{prefix}.newton"))?;
+        }
         Ok(())
     }
 }
@@ -250,6 +350,8 @@ pub struct MinimizeOutcome {
     pub force_sq: f64,
     /// Which criterion stopped it.
     pub reason: StopReason,
+    /// Newton iterations of the finish (0 without it).
+    pub newton_iterations: u64,
 }
 
 /// A FIRE minimiser with its work buffers (reused across minimisations).
@@ -262,6 +364,7 @@ pub struct Fire {
     step: Vec<f64>,
     inv_mass: Vec<f64>,
     mass: Vec<f64>,
+    newton_work: NewtonWork,
 }
 
 impl Fire {
@@ -315,6 +418,9 @@ impl Fire {
         let mut positive_steps: u32 = 0;
         let mut energy = obj.energy_gradient(g);
         let mut steps: u64 = 0;
+        let mut newton_iterations: u64 = 0;
+        let mut newton_interval = p.newton.as_ref().map_or(u64::MAX, |nw| nw.after);
+        let mut next_newton = newton_interval;
         loop {
             let [force_sq, minus_power, v_norm_sq, f_norm_sq] = step_sums(g, v, inv_m, mass, unit);
             if !(energy.is_finite() && force_sq.is_finite()) {
@@ -323,25 +429,13 @@ impl Fire {
                     what: format!("V = {energy}, sum |dV/dq|^2 = {force_sq}"),
                 });
             }
-            if energy / bodies < p.energy_tol {
+            if let Some(reason) = p.stop(energy, force_sq, g, bodies) {
                 return Ok(MinimizeOutcome {
                     steps,
                     energy,
                     force_sq,
-                    reason: StopReason::Energy,
-                });
-            }
-            let force_measure = if p.force_tol_per_body {
-                force_sq / bodies
-            } else {
-                force_sq
-            };
-            if force_measure < p.force_tol {
-                return Ok(MinimizeOutcome {
-                    steps,
-                    energy,
-                    force_sq,
-                    reason: StopReason::Force,
+                    reason,
+                    newton_iterations,
                 });
             }
             if steps >= p.max_steps {
@@ -357,6 +451,33 @@ impl Fire {
                     worst_share,
                     rotational_share,
                 });
+            }
+            if steps >= next_newton
+                && let Some(nw) = &p.newton
+            {
+                let run =
+                    crate::newton::attempt(obj, g, energy, nw, &mut self.newton_work, |e, g| {
+                        p.stop(e, g.iter().map(|x| x * x).sum(), g, bodies)
+                    })?;
+                newton_iterations += run.iterations;
+                energy = run.energy;
+                if let NewtonEnd::Converged(reason) = run.end {
+                    return Ok(MinimizeOutcome {
+                        steps,
+                        energy,
+                        force_sq: g.iter().map(|x| x * x).sum(),
+                        reason,
+                        newton_iterations,
+                    });
+                }
+                // Back to FIRE, from rest; the next attempt comes later.
+                newton_interval = newton_interval.saturating_mul(2);
+                next_newton = steps.saturating_add(newton_interval);
+                v.fill(0.0);
+                dt = p.dt_init;
+                alpha = alpha_start;
+                positive_steps = 0;
+                continue;
             }
             // Power P = F·v with F = −g.
             let power = -minus_power;
@@ -447,6 +568,13 @@ impl Fire {
             steps += 1;
         }
     }
+}
+
+/// `max_a g_a²`.
+#[cold]
+#[inline(never)]
+fn max_sq(g: &[f64]) -> f64 {
+    g.iter().fold(0.0, |m, x| if x * x > m { x * x } else { m })
 }
 
 /// Independent partial sums per reduction: floating-point addition is not

@@ -9,6 +9,8 @@
 //!   coordinates, in one fused pass over the neighbour list;
 //! * [`fire`]: the FIRE minimiser (Bitzek et al. 2006) and FIRE 2.0
 //!   (Guénolé et al. 2020), with a mass per coordinate;
+//! * [`newton`]: a second-order finish for FIRE (Newton steps with the
+//!   analytic [`hessian`], assembled sparse and factorised by faer);
 //! * [`protocol`]: the paper's compress/decompress bisection to the jamming
 //!   point, and compression to a packing fraction or a pressure.
 //!
@@ -18,14 +20,19 @@
 mod balls;
 pub mod check;
 pub mod fire;
+pub mod hessian;
 mod lanes;
 pub mod neighbors;
+pub mod newton;
 pub mod protocol;
 pub mod scene;
 pub mod simd;
 
-pub use fire::{Fire, FireParams, FireVariant, MinimizeOutcome, Objective, StopReason};
+pub use fire::{
+    Fire, FireParams, FireVariant, ForceCriterion, MinimizeOutcome, Objective, StopReason,
+};
 pub use neighbors::NeighborList;
+pub use newton::NewtonParams;
 pub use protocol::{
     JamParams, PressureParams, ProtocolOutcome, compress_to_phi, compress_to_pressure, jam,
 };

@@ -117,12 +117,16 @@ pub struct ProtocolOutcome {
     pub fire_steps: u64,
     /// Number of minimisations (changes of `φ` plus one).
     pub minimizations: u64,
+    /// Newton iterations of the finish over all minimisations.
+    pub newton_iterations: u64,
 }
 
 /// Bookkeeping shared by the protocols.
+#[derive(Default)]
 struct Tally {
     fire_steps: u64,
     minimizations: u64,
+    newton_iterations: u64,
 }
 
 impl Tally {
@@ -135,6 +139,7 @@ impl Tally {
         let out = fire.minimize(scene)?;
         self.fire_steps += out.steps;
         self.minimizations += 1;
+        self.newton_iterations += out.newton_iterations;
         Ok(out.energy / scene.bodies() as f64)
     }
 
@@ -144,6 +149,7 @@ impl Tally {
             energy_per_particle,
             fire_steps: self.fire_steps,
             minimizations: self.minimizations,
+            newton_iterations: self.newton_iterations,
         }
     }
 }
@@ -191,10 +197,7 @@ fn bisect<const D: usize, S: Shape<D>>(
     max_steps: u64,
     mut judge: impl FnMut(&mut Scene<D, S>, f64) -> (Verdict, String),
 ) -> Result<ProtocolOutcome> {
-    let mut tally = Tally {
-        fire_steps: 0,
-        minimizations: 0,
-    };
+    let mut tally = Tally::default();
     let mut eps = eps;
     let mut steps = 0;
     loop {
@@ -249,10 +252,7 @@ pub fn compress_to_phi<const D: usize, S: Shape<D>>(
     target: f64,
     eps: f64,
 ) -> Result<ProtocolOutcome> {
-    let mut tally = Tally {
-        fire_steps: 0,
-        minimizations: 0,
-    };
+    let mut tally = Tally::default();
     let mut e = tally.relax(scene, fire)?;
     // NOTE: φ is recomputed from the box volume, so it may miss `target` by an
     // ulp after the last rescale; count the steps instead of comparing φ.

@@ -25,6 +25,8 @@ pub struct Scene<const D: usize, S: Shape<D>> {
     evaluations: u64,
     /// Scratch: the contacts of one chunk of the list, `(pair, contact)`.
     found: Vec<(u32, Contact<D>)>,
+    /// Centres and orientations of the last [`Objective::save`].
+    saved: (Vec<Vector<D>>, Vec<S::Orientation>),
 }
 
 impl<const D: usize, S: Shape<D>> Scene<D, S> {
@@ -45,6 +47,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             inverse_masses,
             evaluations: 0,
             found: Vec::new(),
+            saved: (Vec::new(), Vec::new()),
         };
         scene.rebuild_neighbors();
         scene
@@ -445,5 +448,24 @@ impl<const D: usize, S: Shape<D>> Objective for Scene<D, S> {
 
     fn translations_per_body(&self) -> usize {
         D
+    }
+
+    fn hessian_entries(&mut self, entries: &mut Vec<(u32, u32, f64)>) -> jamkit_core::Result<bool> {
+        let h = crate::hessian::Hessian::of_scene(self, &[], Default::default())?;
+        entries.extend_from_slice(&h.entries);
+        Ok(true)
+    }
+
+    fn save(&mut self) {
+        let (positions, orientations) = &mut self.saved;
+        positions.clone_from(&self.packing.positions);
+        orientations.clone_from(&self.packing.orientations);
+    }
+
+    fn restore(&mut self) {
+        let (positions, orientations) = &self.saved;
+        self.packing.positions.clone_from(positions);
+        self.packing.orientations.clone_from(orientations);
+        self.rebuild_neighbors();
     }
 }

@@ -15,7 +15,7 @@
 
 pub mod contacts;
 pub mod gaps;
-pub mod hessian;
+pub use jamkit_engine::hessian;
 pub mod saddle;
 pub mod spectrum;
 pub mod summary;

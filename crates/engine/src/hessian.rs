@@ -28,8 +28,8 @@
 //! mass-weighted, as in the paper: its eigenvalues are `λ = ω²` with unit
 //! masses and unit moments of inertia.
 
+use crate::scene::Scene;
 use jamkit_core::{GapHessian, Potential, Result, Shape};
-use jamkit_engine::Scene;
 
 /// What to assemble.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -196,7 +196,7 @@ pub fn finite_difference<const D: usize, S: Shape<D>>(
     scene: &Scene<D, S>,
     step: f64,
 ) -> Vec<Vec<f64>> {
-    use jamkit_engine::Objective;
+    use crate::fire::Objective;
     let n = scene.dof();
     let mut columns = Vec::with_capacity(n);
     let mut dq = vec![0.0; n];

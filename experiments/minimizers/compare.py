@@ -1,0 +1,106 @@
+#!/usr/bin/env python3
+"""Compare two ensembles of jammed packings point by point (standard library only).
+
+    python3 experiments/minimizers/compare.py NEW_DIR OLD_DIR [--csv OUT.csv]
+
+NEW_DIR and OLD_DIR are `jamkit run` output directories (their results.csv)
+of the same experiment file run with two minimisers. For every grid point
+(the id without its `_s<seed>` suffix) and every quantity (phi_j, z_j, the
+rattler fraction n_rattlers/N, and, for the cost, fire_steps and wall_s) it
+prints the two means with their standard errors, the difference in units of
+its standard error, and the two-sample Kolmogorov-Smirnov statistic with its
+asymptotic p-value. The packings need not be paired one by one.
+"""
+
+import csv
+import math
+import sys
+from collections import defaultdict
+
+
+def load(directory):
+    points = defaultdict(list)
+    with open(f"{directory}/results.csv", newline="") as f:
+        for row in csv.DictReader(f):
+            if row.get("flag"):
+                continue
+            point = row["id"].rsplit("_s", 1)[0]
+            n = float(row["particles"])
+            points[point].append(
+                {
+                    "phi_j": float(row["phi_j"]),
+                    "z_j": float(row["z_j"]),
+                    "rattler_fraction": float(row["n_rattlers"]) / n,
+                    "fire_steps": float(row["fire_steps"]),
+                    "wall_s": float(row["wall_s"]),
+                }
+            )
+    return points
+
+
+def mean_sem(xs):
+    m = sum(xs) / len(xs)
+    if len(xs) < 2:
+        return m, float("nan")
+    var = sum((x - m) ** 2 for x in xs) / (len(xs) - 1)
+    return m, math.sqrt(var / len(xs))
+
+
+def ks(a, b):
+    """Two-sample KS statistic D and its asymptotic p-value
+    (Kolmogorov distribution with the Stephens small-sample correction)."""
+    a, b = sorted(a), sorted(b)
+    i = j = 0
+    d = 0.0
+    while i < len(a) and j < len(b):
+        x = min(a[i], b[j])
+        while i < len(a) and a[i] <= x:
+            i += 1
+        while j < len(b) and b[j] <= x:
+            j += 1
+        d = max(d, abs(i / len(a) - j / len(b)))
+    ne = len(a) * len(b) / (len(a) + len(b))
+    lam = (math.sqrt(ne) + 0.12 + 0.11 / math.sqrt(ne)) * d
+    if lam < 1e-3:
+        return d, 1.0
+    p = 2 * sum((-1) ** (k - 1) * math.exp(-2 * k * k * lam * lam) for k in range(1, 101))
+    return d, min(1.0, max(0.0, p))
+
+
+def main():
+    args = sys.argv[1:]
+    out = None
+    if "--csv" in args:
+        k = args.index("--csv")
+        out = args[k + 1]
+        args = args[:k] + args[k + 2 :]
+    if len(args) != 2:
+        sys.exit(__doc__)
+    new, old = load(args[0]), load(args[1])
+    rows = []
+    for point in sorted(set(new) & set(old)):
+        for q in ["phi_j", "z_j", "rattler_fraction", "fire_steps", "wall_s"]:
+            a = [p[q] for p in new[point]]
+            b = [p[q] for p in old[point]]
+            (ma, sa), (mb, sb) = mean_sem(a), mean_sem(b)
+            se = math.sqrt(sa * sa + sb * sb)
+            z = (ma - mb) / se if se > 0 else float("nan")
+            d, p = ks(a, b)
+            rows.append([point, q, len(a), len(b), ma, sa, mb, sb, z, d, p])
+    header = ["point", "quantity", "n_new", "n_old", "mean_new", "sem_new",
+              "mean_old", "sem_old", "diff_over_se", "ks_d", "ks_p"]
+    print("| point | quantity | new (mean ± s.e.) | old (mean ± s.e.) | Δ/s.e. | KS D | KS p |")
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        fmt = "{:.0f}" if r[1] == "fire_steps" else ("{:.2f}" if r[1] == "wall_s" else "{:.5f}")
+        print(f"| {r[0]} | {r[1]} | {fmt.format(r[4])} ± {fmt.format(r[5])} (n = {r[2]}) | "
+              f"{fmt.format(r[6])} ± {fmt.format(r[7])} (n = {r[3]}) | {r[8]:+.2f} | {r[9]:.3f} | {r[10]:.3f} |")
+    if out:
+        with open(out, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(header)
+            w.writerows(rows)
+
+
+if __name__ == "__main__":
+    main()
