@@ -23,6 +23,7 @@ use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_observe::summarize;
 use jamkit_sphere::Sphere;
 use rand::SeedableRng;
+use std::io::Write;
 use std::time::Instant;
 
 /// The gap model of near-disks on the command line.
@@ -152,6 +153,10 @@ pub enum BenchCommand {
         /// FIRE steps before the Newton finish [default: the minimiser's].
         #[arg(long)]
         newton_after: Option<u64>,
+        /// Write every minimisation (φ, FIRE steps, Newton iterations, why it
+        /// stopped, V/N, Σ g²) of every packing to this CSV (a step trace).
+        #[arg(long, value_name = "FILE")]
+        trace: Option<std::path::PathBuf>,
     },
     /// Time one energy+gradient evaluation of binary disks at phi = 0.84.
     Eval {
@@ -233,19 +238,41 @@ pub fn run(what: BenchCommand) -> Result<()> {
             minimizer,
             force_criterion,
             newton_after,
+            trace,
         } => {
             let fire = minimizer.params(force_criterion, newton_after);
+            let mut trace_out = match &trace {
+                Some(path) => {
+                    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+                    writeln!(
+                        f,
+                        "seed,phi,fire_steps,newton_iterations,reason,energy_per_particle,force_sq"
+                    )?;
+                    Some(f)
+                }
+                None => None,
+            };
             out!(
                 "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s"
             );
             for seed in seeds {
                 match (family, dim) {
-                    (BenchFamily::Sphere, 2) => {
-                        bench_packing::<2, _>(Sphere, particles, seed, skin, &fire)?
-                    }
-                    (BenchFamily::Sphere, 3) => {
-                        bench_packing::<3, _>(Sphere, particles, seed, skin, &fire)?
-                    }
+                    (BenchFamily::Sphere, 2) => bench_packing::<2, _>(
+                        Sphere,
+                        particles,
+                        seed,
+                        skin,
+                        &fire,
+                        trace_out.as_mut(),
+                    )?,
+                    (BenchFamily::Sphere, 3) => bench_packing::<3, _>(
+                        Sphere,
+                        particles,
+                        seed,
+                        skin,
+                        &fire,
+                        trace_out.as_mut(),
+                    )?,
                     (BenchFamily::Fourier, 2) => {
                         let shape = NearDisk::fourier(&FourierParams {
                             n,
@@ -254,7 +281,14 @@ pub fn run(what: BenchCommand) -> Result<()> {
                             gap: gap.into(),
                         })
                         .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))?;
-                        bench_packing::<2, _>(shape, particles, seed, skin, &fire)?
+                        bench_packing::<2, _>(
+                            shape,
+                            particles,
+                            seed,
+                            skin,
+                            &fire,
+                            trace_out.as_mut(),
+                        )?
                     }
                     _ => anyhow::bail!("--dim {dim}: must be 2 or 3 (2 for near-disks)"),
                 }
@@ -327,15 +361,33 @@ fn bench_packing<const D: usize, S: Shape<D>>(
     seed: u64,
     skin: f64,
     params: &FireParams,
+    trace: Option<&mut std::io::BufWriter<std::fs::File>>,
 ) -> Result<()> {
     let family = shape.family();
     let mut scene = random_scene::<D, S>(shape, n, seed, 0.1, skin)?;
     let mut fire = Fire::new(params.clone());
+    if trace.is_some() {
+        fire.record();
+    }
     let cpu = cpu_seconds();
     let t = Instant::now();
     let out = jam(&mut scene, &mut fire, &JamParams::default())?;
     let wall = t.elapsed().as_secs_f64();
     let cpu = cpu_seconds() - cpu;
+    if let Some(f) = trace {
+        for (phi, m) in fire.take_trace() {
+            writeln!(
+                f,
+                "{seed},{phi:.15},{},{},{:?},{:e},{:e}",
+                m.steps,
+                m.newton_iterations,
+                m.reason,
+                m.energy / n as f64,
+                m.force_sq
+            )?;
+        }
+        f.flush()?;
+    }
     let threshold = scene.packing().shape.rattler_threshold();
     let s = summarize(&mut scene, threshold);
     out!(

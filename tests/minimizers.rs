@@ -302,3 +302,46 @@ fn paper_fire_gives_the_packings_it_gave_before() {
         assert_eq!(line.split(',').nth(10), Some(hash), "{args:?}: {line}");
     }
 }
+
+/// `bench packing --trace FILE`: one row per minimisation, whose FIRE steps
+/// and Newton iterations add up to the packing's totals, the last row in
+/// the paper's energy window.
+#[test]
+fn the_step_trace_adds_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("trace.csv");
+    let out = Command::new(env!("CARGO_BIN_EXE_jamkit"))
+        .args(["bench", "packing", "--particles", "64", "--seeds", "1"])
+        .args(["--minimizer", "newton", "--newton-after", "100", "--trace"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let cols: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
+    let (steps, newton): (u64, u64) = (cols[7].parse().unwrap(), cols[11].parse().unwrap());
+    let trace = std::fs::read_to_string(&path).unwrap();
+    let rows: Vec<Vec<&str>> = trace
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert!(
+        rows.len() > 100,
+        "a jamming run makes hundreds of minimisations"
+    );
+    let sum = |k: usize| {
+        rows.iter()
+            .map(|r| r[k].parse::<u64>().unwrap())
+            .sum::<u64>()
+    };
+    assert_eq!(sum(2), steps);
+    assert_eq!(sum(3), newton);
+    assert!(newton > 0, "the Newton finish was used");
+    let last_e: f64 = rows.last().unwrap()[5].parse().unwrap();
+    assert!(last_e > 1e-16 && last_e < 2e-16, "{last_e}");
+}

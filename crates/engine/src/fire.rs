@@ -365,6 +365,8 @@ pub struct Fire {
     inv_mass: Vec<f64>,
     mass: Vec<f64>,
     newton_work: NewtonWork,
+    /// With [`Fire::record`]: `(φ, outcome)` of every minimisation.
+    trace: Option<Vec<(f64, MinimizeOutcome)>>,
 }
 
 impl Fire {
@@ -376,8 +378,27 @@ impl Fire {
         }
     }
 
+    /// Keep `(φ, outcome)` of every minimisation from now on (a step trace:
+    /// where a protocol spends its steps), for [`Fire::take_trace`].
+    pub fn record(&mut self) {
+        self.trace.get_or_insert_with(Vec::new);
+    }
+
+    /// The minimisations recorded since [`Fire::record`] (empty without it).
+    pub fn take_trace(&mut self) -> Vec<(f64, MinimizeOutcome)> {
+        self.trace.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
     /// Minimise `obj` from its current state, starting at rest.
     pub fn minimize<O: Objective>(&mut self, obj: &mut O) -> Result<MinimizeOutcome> {
+        let out = self.minimize_dispatch(obj)?;
+        if let Some(trace) = self.trace.as_mut() {
+            trace.push((obj.phi(), out));
+        }
+        Ok(out)
+    }
+
+    fn minimize_dispatch<O: Objective>(&mut self, obj: &mut O) -> Result<MinimizeOutcome> {
         #[cfg(target_arch = "x86_64")]
         if crate::simd::avx2() {
             // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`);
