@@ -110,6 +110,9 @@ pub enum BenchFamily {
     Sphere,
     /// The paper's near-disks `R0 [1 + Δ sin(nθ)/n]` (2D only).
     Fourier,
+    /// Rigid dimers of aspect ratio `--alpha` (2D and 3D), FIRE's `dt_max`
+    /// the family's.
+    Nmer,
 }
 
 #[derive(Subcommand)]
@@ -134,6 +137,9 @@ pub enum BenchCommand {
         /// Δ of the near-disks.
         #[arg(long, default_value_t = 0.1)]
         delta: f64,
+        /// Aspect ratio of the dimers (`--family nmer`).
+        #[arg(long, default_value_t = 1.1)]
+        alpha: f64,
         /// Moment of inertia of the near-disks (default: the paper's I = Δ).
         #[arg(long)]
         inertia: Option<f64>,
@@ -235,6 +241,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
             inertia,
             gap,
             skin,
+            alpha,
             minimizer,
             force_criterion,
             newton_after,
@@ -290,6 +297,30 @@ pub fn run(what: BenchCommand) -> Result<()> {
                             trace_out.as_mut(),
                         )?
                     }
+                    (BenchFamily::Nmer, 2) => {
+                        let shape = dimer::<2>(alpha)?;
+                        let fire = with_family_dt_max(&fire, &shape);
+                        bench_packing::<2, _>(
+                            shape,
+                            particles,
+                            seed,
+                            skin,
+                            &fire,
+                            trace_out.as_mut(),
+                        )?
+                    }
+                    (BenchFamily::Nmer, 3) => {
+                        let shape = dimer::<3>(alpha)?;
+                        let fire = with_family_dt_max(&fire, &shape);
+                        bench_packing::<3, _>(
+                            shape,
+                            particles,
+                            seed,
+                            skin,
+                            &fire,
+                            trace_out.as_mut(),
+                        )?
+                    }
                     _ => anyhow::bail!("--dim {dim}: must be 2 or 3 (2 for near-disks)"),
                 }
             }
@@ -317,6 +348,28 @@ pub fn run(what: BenchCommand) -> Result<()> {
             }
             Ok(())
         }
+    }
+}
+
+/// A rigid dimer of aspect ratio `alpha`.
+fn dimer<const D: usize>(alpha: f64) -> Result<jamkit_nmer::Nmer<D>>
+where
+    jamkit_nmer::Nmer<D>: Shape<D>,
+{
+    jamkit_nmer::Nmer::<D>::new(&jamkit_nmer::NmerParams {
+        alpha: Some(alpha),
+        spheres: None,
+        inertia: None,
+    })
+    .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))
+}
+
+/// `fire` with the family's `dt_max` unless it sets its own, as `jamkit
+/// run` resolves it.
+fn with_family_dt_max<const D: usize, S: Shape<D>>(fire: &FireParams, shape: &S) -> FireParams {
+    FireParams {
+        dt_max: fire.dt_max.or(shape.fire_dt_max()),
+        ..fire.clone()
     }
 }
 
