@@ -345,3 +345,68 @@ fn the_step_trace_adds_up() {
     let last_e: f64 = rows.last().unwrap()[5].parse().unwrap();
     assert!(last_e > 1e-16 && last_e < 2e-16, "{last_e}");
 }
+
+/// Disks that give no second derivatives (`gap_hessians` left at the
+/// trait's default), as a new family may before its Hessian is written.
+#[derive(Clone, Debug)]
+struct DisksWithoutHessian;
+
+impl Shape<2> for DisksWithoutHessian {
+    type Orientation = ();
+    fn family(&self) -> &'static str {
+        "disks-without-hessian"
+    }
+    fn rot_dof(&self) -> usize {
+        0
+    }
+    fn volume(&self, size: f64) -> f64 {
+        Shape::<2>::volume(&Sphere, size)
+    }
+    fn bounding_radius(&self, size: f64) -> f64 {
+        Shape::<2>::bounding_radius(&Sphere, size)
+    }
+    fn reference_orientation(&self) {}
+    fn random_orientation<R: rand::Rng + ?Sized>(&self, _rng: &mut R) {}
+    fn rotate(&self, _o: &mut (), _dq: &[f64]) {}
+    fn orientation_coords(&self, _o: &()) -> Vec<f64> {
+        Vec::new()
+    }
+    fn orientation_from_coords(&self, coords: &[f64]) -> Option<()> {
+        coords.is_empty().then_some(())
+    }
+    fn contacts<F: FnMut(jamkit_core::Contact<2>)>(
+        &self,
+        size_i: f64,
+        o_i: &(),
+        size_j: f64,
+        o_j: &(),
+        r_ij: &jamkit_core::Vector<2>,
+        max_gap: f64,
+        visit: F,
+    ) {
+        Shape::<2>::contacts(&Sphere, size_i, o_i, size_j, o_j, r_ij, max_gap, visit)
+    }
+}
+
+/// A family without a Hessian is minimised by FIRE alone under the default
+/// minimiser (the Newton finish is skipped, not an error), and ends where
+/// the paper's FIRE ends: the same steps, the same energy.
+#[test]
+fn a_family_without_hessian_is_minimised_by_fire_alone() {
+    let scene = compressed::<2, _>(DisksWithoutHessian, 32, 1, 0.9);
+    let mut with_default = scene.clone();
+    let out = Fire::new(FireParams {
+        newton: Some(NewtonParams {
+            after: 10,
+            ..NewtonParams::default()
+        }),
+        ..FireParams::default()
+    })
+    .minimize(&mut with_default)
+    .unwrap();
+    assert_eq!(out.reason, StopReason::Force);
+    assert_eq!(out.newton_iterations, 0);
+    let mut paper = scene.clone();
+    let reference = Fire::new(FireParams::paper()).minimize(&mut paper).unwrap();
+    assert_eq!((out.steps, out.energy), (reference.steps, reference.energy));
+}

@@ -491,6 +491,11 @@ impl Fire {
                         newton_iterations,
                     });
                 }
+                if run.end == NewtonEnd::Unavailable {
+                    // No Hessian (the state is untouched): FIRE alone.
+                    next_newton = u64::MAX;
+                    continue;
+                }
                 // Back to FIRE, from rest; the next attempt comes later.
                 newton_interval = newton_interval.saturating_mul(2);
                 next_newton = steps.saturating_add(newton_interval);

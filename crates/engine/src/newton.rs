@@ -122,6 +122,8 @@ pub(crate) enum NewtonEnd {
     Converged(StopReason),
     /// Back to FIRE.
     GaveUp,
+    /// The objective has no Hessian: FIRE alone, untouched.
+    Unavailable,
 }
 
 /// Work buffers of the Newton finish, kept across minimisations.
@@ -169,7 +171,11 @@ pub(crate) fn attempt<O: Objective>(
     while iterations < newton.max_iterations as u64 {
         w.entries.clear();
         if !obj.hessian_entries(&mut w.entries)? {
-            return gave_up(iterations, energy);
+            return Ok(NewtonRun {
+                end: NewtonEnd::Unavailable,
+                iterations,
+                energy,
+            });
         }
         // Not positive definite at the base shift: a saddle or an unjammed
         // state, where FIRE does better than shifted Newton steps.

@@ -451,9 +451,15 @@ impl<const D: usize, S: Shape<D>> Objective for Scene<D, S> {
     }
 
     fn hessian_entries(&mut self, entries: &mut Vec<(u32, u32, f64)>) -> jamkit_core::Result<bool> {
-        let h = crate::hessian::Hessian::of_scene(self, &[], Default::default())?;
-        entries.extend_from_slice(&h.entries);
-        Ok(true)
+        // A family without second derivatives is minimised by FIRE alone.
+        match crate::hessian::Hessian::of_scene(self, &[], Default::default()) {
+            Ok(h) => {
+                entries.extend_from_slice(&h.entries);
+                Ok(true)
+            }
+            Err(jamkit_core::Error::Unsupported(_)) => Ok(false),
+            Err(e) => Err(e),
+        }
     }
 
     fn save(&mut self) {
