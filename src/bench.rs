@@ -110,8 +110,7 @@ pub enum BenchFamily {
     Sphere,
     /// The paper's near-disks `R0 [1 + Δ sin(nθ)/n]` (2D only).
     Fourier,
-    /// Rigid dimers of aspect ratio `--alpha` (2D and 3D), FIRE's `dt_max`
-    /// the family's.
+    /// Rigid dimers of aspect ratio `--alpha` (2D and 3D).
     Nmer,
 }
 
@@ -299,7 +298,6 @@ pub fn run(what: BenchCommand) -> Result<()> {
                     }
                     (BenchFamily::Nmer, 2) => {
                         let shape = dimer::<2>(alpha)?;
-                        let fire = with_family_dt_max(&fire, &shape);
                         bench_packing::<2, _>(
                             shape,
                             particles,
@@ -311,7 +309,6 @@ pub fn run(what: BenchCommand) -> Result<()> {
                     }
                     (BenchFamily::Nmer, 3) => {
                         let shape = dimer::<3>(alpha)?;
-                        let fire = with_family_dt_max(&fire, &shape);
                         bench_packing::<3, _>(
                             shape,
                             particles,
@@ -364,15 +361,6 @@ where
     .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))
 }
 
-/// `fire` with the family's `dt_max` unless it sets its own, as `jamkit
-/// run` resolves it.
-fn with_family_dt_max<const D: usize, S: Shape<D>>(fire: &FireParams, shape: &S) -> FireParams {
-    FireParams {
-        dt_max: fire.dt_max.or(shape.fire_dt_max()),
-        ..fire.clone()
-    }
-}
-
 /// A random scene as `jamkit run` builds it: sizes, then centres, then
 /// orientations from one stream, skin `skin` × the smallest bounding radius.
 pub(crate) fn random_scene<const D: usize, S: Shape<D>>(
@@ -417,8 +405,9 @@ fn bench_packing<const D: usize, S: Shape<D>>(
     trace: Option<&mut std::io::BufWriter<std::fs::File>>,
 ) -> Result<()> {
     let family = shape.family();
+    // The family's time step, as `jamkit run` resolves it.
+    let mut fire = Fire::new(params.for_family(&shape));
     let mut scene = random_scene::<D, S>(shape, n, seed, 0.1, skin)?;
-    let mut fire = Fire::new(params.clone());
     if trace.is_some() {
         fire.record();
     }

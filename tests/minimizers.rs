@@ -14,7 +14,6 @@ use jamkit_nmer::{Nmer, NmerParams};
 use jamkit_sphere::Sphere;
 use rand::{RngExt, SeedableRng};
 use std::collections::BTreeSet;
-use std::process::Command;
 
 mod common;
 
@@ -78,10 +77,7 @@ fn minimise<const D: usize, S: Shape<D>>(scene: &Scene<D, S>, params: FireParams
 /// contact.
 fn same_minimum<const D: usize, S: Shape<D>>(shape: S, n: usize, phi: f64, seeds: &[u64]) {
     // The family's time step, as `jamkit run` resolves it.
-    let paper = FireParams {
-        dt_max: shape.fire_dt_max(),
-        ..FireParams::paper()
-    };
+    let paper = FireParams::paper().for_family(&shape);
     let newton_first = FireParams {
         newton: Some(NewtonParams {
             after: 1,
@@ -93,10 +89,7 @@ fn same_minimum<const D: usize, S: Shape<D>>(shape: S, n: usize, phi: f64, seeds
         variant: FireVariant::Fire2,
         ..paper.clone()
     };
-    let default = FireParams {
-        dt_max: shape.fire_dt_max(),
-        ..FireParams::default()
-    };
+    let default = FireParams::default().for_family(&shape);
     let mut newton_used = 0;
     for &seed in seeds {
         let scene = compressed::<D, S>(shape.clone(), n, seed, phi);
@@ -287,17 +280,9 @@ fn paper_fire_gives_the_packings_it_gave_before() {
         ),
     ];
     for (args, hash) in cases {
-        let out = Command::new(env!("CARGO_BIN_EXE_jamkit"))
-            .args(["bench", "packing", "--minimizer", "paper"])
-            .args(args)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8_lossy(&out.stdout);
+        let args = [&["bench", "packing", "--minimizer", "paper"][..], args].concat();
+        let (code, text, err) = common::jamkit(&args);
+        assert_eq!(code, 0, "{err}");
         let line = text.lines().nth(1).unwrap();
         assert_eq!(line.split(',').nth(10), Some(hash), "{args:?}: {line}");
     }
@@ -310,18 +295,21 @@ fn paper_fire_gives_the_packings_it_gave_before() {
 fn the_step_trace_adds_up() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("trace.csv");
-    let out = Command::new(env!("CARGO_BIN_EXE_jamkit"))
-        .args(["bench", "packing", "--particles", "64", "--seeds", "1"])
-        .args(["--minimizer", "newton", "--newton-after", "100", "--trace"])
-        .arg(&path)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
+    let (code, text, err) = common::jamkit(&[
+        "bench",
+        "packing",
+        "--particles",
+        "64",
+        "--seeds",
+        "1",
+        "--minimizer",
+        "newton",
+        "--newton-after",
+        "100",
+        "--trace",
+        path.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
     let cols: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
     let (steps, newton): (u64, u64) = (cols[7].parse().unwrap(), cols[11].parse().unwrap());
     let trace = std::fs::read_to_string(&path).unwrap();

@@ -239,6 +239,20 @@ impl FireParams {
         converged.then_some(StopReason::Force)
     }
 
+    /// These parameters with `dt_max` set: their own, else the family's
+    /// ([`jamkit_core::Shape::fire_dt_max`]), else 0.5, so that the settings
+    /// a packing records hold the time step it was made with.
+    pub fn for_family<const D: usize, S: jamkit_core::Shape<D>>(&self, shape: &S) -> Self {
+        Self {
+            dt_max: Some(
+                self.dt_max
+                    .or(shape.fire_dt_max())
+                    .unwrap_or(DEFAULT_DT_MAX),
+            ),
+            ..self.clone()
+        }
+    }
+
     /// `Δt_max` in force (`dt_max`, or 0.5 when no family chose it).
     pub fn dt_max(&self) -> f64 {
         self.dt_max.unwrap_or(DEFAULT_DT_MAX)
@@ -476,17 +490,21 @@ impl Fire {
             if steps >= next_newton
                 && let Some(nw) = &p.newton
             {
-                let run =
-                    crate::newton::attempt(obj, g, energy, nw, &mut self.newton_work, |e, g| {
-                        p.stop(e, g.iter().map(|x| x * x).sum(), g, bodies)
-                    })?;
+                let run = crate::newton::attempt(
+                    obj,
+                    g,
+                    energy,
+                    nw,
+                    &mut self.newton_work,
+                    |e, f, g| p.stop(e, f, g, bodies),
+                )?;
                 newton_iterations += run.iterations;
                 energy = run.energy;
                 if let NewtonEnd::Converged(reason) = run.end {
                     return Ok(MinimizeOutcome {
                         steps,
                         energy,
-                        force_sq: g.iter().map(|x| x * x).sum(),
+                        force_sq: run.force_sq,
                         reason,
                         newton_iterations,
                     });

@@ -138,49 +138,47 @@ pub(crate) struct NewtonWork {
 }
 
 /// The result of one attempt: how it ended, iterations made, and the
-/// energy of the state it leaves (whose gradient is in `g`).
+/// energy and `Σ g²` of the state it leaves (whose gradient is in `g`).
 pub(crate) struct NewtonRun {
     pub end: NewtonEnd,
     pub iterations: u64,
     pub energy: f64,
+    pub force_sq: f64,
 }
 
 /// Newton iterations from the current state of `obj` (energy `energy`,
-/// gradient `g`) until `stop` holds or the attempt gives up. On return `g`
-/// holds the gradient of the state `obj` is left in.
+/// gradient `g`) until `stop(V, Σ g², g)` holds or the attempt gives up.
+/// On return `g` holds the gradient of the state `obj` is left in.
 pub(crate) fn attempt<O: Objective>(
     obj: &mut O,
     g: &mut [f64],
     mut energy: f64,
     newton: &NewtonParams,
     w: &mut NewtonWork,
-    stop: impl Fn(f64, &[f64]) -> Option<StopReason>,
+    stop: impl Fn(f64, f64, &[f64]) -> Option<StopReason>,
 ) -> Result<NewtonRun> {
     let n = g.len();
     let mut iterations = 0;
     let mut force_sq: f64 = g.iter().map(|x| x * x).sum();
     // Squared force and energy three iterations back, for the progress test.
     let mut history = [(f64::INFINITY, f64::INFINITY); 3];
-    let gave_up = |iterations, energy| {
+    let run = |end, iterations, energy, force_sq| {
         Ok(NewtonRun {
-            end: NewtonEnd::GaveUp,
+            end,
             iterations,
             energy,
+            force_sq,
         })
     };
     while iterations < newton.max_iterations as u64 {
         w.entries.clear();
         if !obj.hessian_entries(&mut w.entries)? {
-            return Ok(NewtonRun {
-                end: NewtonEnd::Unavailable,
-                iterations,
-                energy,
-            });
+            return run(NewtonEnd::Unavailable, iterations, energy, force_sq);
         }
         // Not positive definite at the base shift: a saddle or an unjammed
         // state, where FIRE does better than shifted Newton steps.
         if !solve_shifted(n, g, newton.shift, w) {
-            return gave_up(iterations + 1, energy);
+            return run(NewtonEnd::GaveUp, iterations + 1, energy, force_sq);
         }
         // δ = −(H + μI)⁻¹ g, capped.
         let largest = w.delta.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -194,7 +192,7 @@ pub(crate) fn attempt<O: Objective>(
         }
         let slope: f64 = g.iter().zip(&w.delta).map(|(a, b)| a * b).sum();
         if !(slope < 0.0) {
-            return gave_up(iterations, energy);
+            return run(NewtonEnd::GaveUp, iterations, energy, force_sq);
         }
         obj.save();
         w.trial.resize(n, 0.0);
@@ -225,28 +223,24 @@ pub(crate) fn attempt<O: Objective>(
         let Some((e, f)) = accepted else {
             obj.restore();
             energy = obj.energy_gradient(g);
-            return gave_up(iterations, energy);
+            return run(NewtonEnd::GaveUp, iterations, energy, force_sq);
         };
         g.copy_from_slice(&w.trial);
         energy = e;
         force_sq = f;
-        if let Some(reason) = stop(energy, g) {
-            return Ok(NewtonRun {
-                end: NewtonEnd::Converged(reason),
-                iterations,
-                energy,
-            });
+        if let Some(reason) = stop(energy, force_sq, g) {
+            return run(NewtonEnd::Converged(reason), iterations, energy, force_sq);
         }
         // Progress: the force halved, or the energy fell (leaving a saddle,
         // or an unjammed state on its way to V = 0), over three iterations.
         let (f_back, e_back) = history[0];
         if iterations >= 3 && force_sq > 0.5 * f_back && energy > e_back - 1e-9 * e_back.abs() {
-            return gave_up(iterations, energy);
+            return run(NewtonEnd::GaveUp, iterations, energy, force_sq);
         }
         history.rotate_left(1);
         history[2] = (force_sq, energy);
     }
-    gave_up(iterations, energy)
+    run(NewtonEnd::GaveUp, iterations, energy, force_sq)
 }
 
 /// Solve `(H + μI) x = g` into `w.delta` for the Hessian in `w.entries`,

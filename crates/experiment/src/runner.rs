@@ -13,7 +13,6 @@ use crate::reload::{PackingVisitor, reload};
 use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use jamkit_core::{Packing, Shape};
-use jamkit_engine::fire::DEFAULT_DT_MAX;
 use jamkit_engine::{
     Fire, FireParams, JamParams, PressureParams, Scene, compress_to_phi, compress_to_pressure, jam,
 };
@@ -244,17 +243,10 @@ pub fn minimizer_at(e: &Experiment, point: &Point) -> Result<FireParams, Experim
     impl SceneVisitor for Resolve<'_> {
         type Output = FireParams;
         fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> FireParams {
-            with_family_dt_max(self.0, &shape)
+            self.0.for_family(&shape)
         }
     }
     registry::dispatch(&e.family, point.dim, &point.params, Resolve(&e.minimizer))
-}
-
-/// `m` with `dt_max` set: its own, else the family's, else 0.5.
-fn with_family_dt_max<const D: usize, S: Shape<D>>(m: &FireParams, shape: &S) -> FireParams {
-    let mut m = m.clone();
-    m.dt_max = Some(m.dt_max.or(shape.fire_dt_max()).unwrap_or(DEFAULT_DT_MAX));
-    m
 }
 
 /// The observables of `experiment`, as stored with each packing.
@@ -314,7 +306,7 @@ impl SceneVisitor for SampleVisitor<'_> {
         let (e, job) = (self.experiment, self.job);
         let sample_err = |source| ExperimentError::sample(job.id.clone(), source);
         let start = Instant::now();
-        let minimizer = with_family_dt_max(&e.minimizer, &shape);
+        let minimizer = e.minimizer.for_family(&shape);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(job.seed);
         let sizes = e.sizes.sample(self.point.particles, &mut rng);
         let min_reach = sizes
