@@ -17,7 +17,8 @@ use clap::{Subcommand, ValueEnum};
 use jamkit_core::gap2d::GapModel;
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::{
-    Fire, FireParams, FireVariant, ForceCriterion, JamParams, Objective, Scene, jam,
+    Fire, FireParams, FireVariant, ForceCriterion, JamParams, Masses, Objective, PreconParams,
+    Scene, jam,
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_observe::summarize;
@@ -103,6 +104,17 @@ impl MinimizerArg {
     }
 }
 
+/// FIRE's masses in `bench packing`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MassesArg {
+    /// The bodies' own masses (the paper).
+    Plain,
+    /// Each body's own stiffness block (block-preconditioned FIRE).
+    Blocks,
+    /// The family's default.
+    Family,
+}
+
 /// Which bodies `bench packing` jams.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum BenchFamily {
@@ -158,6 +170,20 @@ pub enum BenchCommand {
         /// FIRE steps before the Newton finish [default: the minimiser's].
         #[arg(long)]
         newton_after: Option<u64>,
+        /// FIRE's masses (`minimizer.masses`): the bodies' own (`plain`, the
+        /// paper), each body's stiffness block (`blocks`: block-preconditioned
+        /// FIRE), or the family's default (`family`).
+        #[arg(long, value_enum, default_value_t = MassesArg::Plain)]
+        masses: MassesArg,
+        /// The block preconditioner's floor `c` [default: 0.25].
+        #[arg(long)]
+        precon_floor: Option<f64>,
+        /// FIRE steps between rebuilds of the blocks [default: 100].
+        #[arg(long)]
+        precon_refresh: Option<u64>,
+        /// FIRE's largest time step [default: the family's].
+        #[arg(long)]
+        dt_max: Option<f64>,
         /// Write every minimisation (φ, FIRE steps, Newton iterations, why it
         /// stopped, V/N, Σ g²) of every packing to this CSV (a step trace).
         #[arg(long, value_name = "FILE")]
@@ -244,9 +270,26 @@ pub fn run(what: BenchCommand) -> Result<()> {
             minimizer,
             force_criterion,
             newton_after,
+            masses,
+            precon_floor,
+            precon_refresh,
+            dt_max,
             trace,
         } => {
-            let fire = minimizer.params(force_criterion, newton_after);
+            let mut fire = minimizer.params(force_criterion, newton_after);
+            let d = PreconParams::default();
+            let blocks = PreconParams {
+                floor: precon_floor.unwrap_or(d.floor),
+                refresh: precon_refresh.unwrap_or(d.refresh),
+                ..d
+            };
+            fire.masses = match masses {
+                MassesArg::Plain => Masses::Plain,
+                MassesArg::Blocks => Masses::Blocks(blocks),
+                MassesArg::Family => Masses::Family,
+            };
+            fire.dt_max = dt_max.or(fire.dt_max);
+            fire.validate("minimizer")?;
             let mut trace_out = match &trace {
                 Some(path) => {
                     let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);

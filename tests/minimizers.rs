@@ -1,12 +1,14 @@
 //! The minimisers against the paper's FIRE: from the same start, on small
-//! scenes of every family above jamming, FIRE with the Newton finish (and
-//! FIRE 2.0) must end in the same local minimum as FIRE — the same energy
+//! scenes of every family above jamming, FIRE with the Newton finish, FIRE
+//! 2.0 and FIRE with block masses must end in the same local minimum as FIRE — the same energy
 //! and the same contacts — and the paper's FIRE (`FireParams::paper()`)
 //! must still give the packings it gave before the Newton finish existed.
 
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
+use jamkit_engine::hessian::{Hessian, HessianOptions};
 use jamkit_engine::{
-    Fire, FireParams, FireVariant, ForceCriterion, NewtonParams, Objective, Scene, StopReason,
+    Fire, FireParams, FireVariant, ForceCriterion, Masses, NewtonParams, Objective, PreconParams,
+    Scene, StopReason,
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_lobed::{Lobed, LobedParams};
@@ -90,6 +92,10 @@ fn same_minimum<const D: usize, S: Shape<D>>(shape: S, n: usize, phi: f64, seeds
         ..paper.clone()
     };
     let default = FireParams::default().for_family(&shape);
+    let blocks = FireParams {
+        masses: Masses::Blocks(PreconParams::default()),
+        ..paper.clone()
+    };
     let mut newton_used = 0;
     for &seed in seeds {
         let scene = compressed::<D, S>(shape.clone(), n, seed, phi);
@@ -116,6 +122,7 @@ fn same_minimum<const D: usize, S: Shape<D>>(shape: S, n: usize, phi: f64, seeds
             ("fire2", fire2.clone()),
             ("newton", newton_first.clone()),
             ("default", default.clone()),
+            ("block masses", blocks.clone()),
         ];
         for (name, params) in runs {
             let other = minimise(&perturbed, params);
@@ -245,6 +252,90 @@ fn conflicting_force_criteria_are_refused() {
     };
     let err = p.validate("minimizer").unwrap_err().to_string();
     assert!(err.contains("minimizer.newton.shift"), "{err}");
+    let p = FireParams {
+        variant: FireVariant::Fire2,
+        masses: Masses::Blocks(PreconParams::default()),
+        ..FireParams::default()
+    };
+    let err = p.validate("minimizer").unwrap_err().to_string();
+    assert!(
+        err.contains("minimizer.masses") && err.contains("variant: Fire"),
+        "{err}"
+    );
+    let p = FireParams {
+        masses: Masses::Blocks(PreconParams {
+            floor: 0.0,
+            ..PreconParams::default()
+        }),
+        ..FireParams::default()
+    };
+    let err = p.validate("minimizer").unwrap_err().to_string();
+    assert!(err.contains("minimizer.masses.floor"), "{err}");
+}
+
+/// Each body's stiffness block (the block-preconditioned FIRE's mass) is
+/// the body's own diagonal block of the stiffness part `K` of the Hessian,
+/// which `tests/hessian.rs` checks against finite differences; the two are
+/// assembled by separate code (first derivatives of the gaps only, against
+/// the families' gap Hessians). Tolerance 1e-12 relative to the largest
+/// entry: the same products summed in another order.
+#[test]
+fn stiffness_blocks_are_the_hessians_diagonal_blocks() {
+    fn check<const D: usize, S: Shape<D>>(shape: S, n: usize, phi: f64) {
+        let mut scene = compressed::<D, S>(shape.clone(), n, 3, phi);
+        let k = Hessian::of_scene(
+            &mut scene,
+            &[],
+            HessianOptions {
+                stiffness_only: true,
+                remove_rattlers: false,
+            },
+        )
+        .unwrap()
+        .dense();
+        let mut blocks = Vec::new();
+        assert!(scene.stiffness_blocks(&mut blocks), "{shape:?}");
+        let f = scene.dof() / n;
+        assert_eq!(blocks.len(), n * f * f);
+        let scale = blocks.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(scale > 0.0, "{shape:?}: no contact");
+        for b in 0..n {
+            for x in 0..f {
+                for y in 0..f {
+                    let want = k[(b * f + x, b * f + y)];
+                    let got = blocks[b * f * f + x * f + y];
+                    assert!(
+                        (got - want).abs() <= 1e-12 * scale,
+                        "{shape:?} D={D} body {b} ({x},{y}): {got:e} against {want:e}"
+                    );
+                }
+            }
+        }
+    }
+    let near_disk = NearDisk::fourier(&FourierParams {
+        n: 3,
+        delta: 0.2,
+        inertia: None,
+        gap: Default::default(),
+    })
+    .unwrap();
+    let dimer = NmerParams {
+        alpha: Some(1.5),
+        spheres: None,
+        inertia: None,
+    };
+    let ellipse = jamkit_ellipse::Ellipse::new(&jamkit_ellipse::EllipseParams {
+        aspect: 1.5,
+        inertia: None,
+    })
+    .unwrap();
+    check::<2, _>(Sphere, 32, 0.9);
+    check::<3, _>(Sphere, 32, 0.7);
+    check::<2, _>(near_disk, 32, 0.92);
+    check::<2, _>(common::multi_mode(), 24, 0.92);
+    check::<2, _>(Nmer::<2>::new(&dimer).unwrap(), 16, 0.92);
+    check::<3, _>(Nmer::<3>::new(&dimer).unwrap(), 32, 0.7);
+    check::<2, _>(ellipse, 16, 0.92);
 }
 
 /// `bench packing --minimizer paper` gives, bit for bit, the packings of

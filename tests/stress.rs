@@ -93,6 +93,21 @@ fn tiny_delta_1e_8_jams() {
     assert_jammed(&r, 1, (0.75, 0.90));
 }
 
+/// The same tiny-Δ near-disks with block masses (`minimizer.masses`),
+/// whose rotations are held by a stiffness `∼ Δ²` far below the stress
+/// part `∼ |h| Δ` of their Hessian: without the preconditioner's floor
+/// `κ m_a` both stalled at the step cap (docs/physics.md, "Block masses").
+#[test]
+fn tiny_deltas_jam_with_block_masses() {
+    for case in ["tiny_delta_1e-6", "tiny_delta_1e-8"] {
+        let r = run_case(
+            case,
+            &["particles=16", "samples=1", "minimizer.masses=Blocks(())"],
+        );
+        assert_jammed(&r, 1, (0.75, 0.90));
+    }
+}
+
 #[test]
 fn twelve_lobes_jam() {
     let n12 = NearDisk::fourier(&FourierParams {

@@ -19,6 +19,7 @@
 //! paper author's public code.
 
 use crate::newton::{NewtonEnd, NewtonParams, NewtonWork};
+use crate::precon::{BlockMasses, PreconParams};
 use jamkit_core::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -68,6 +69,14 @@ pub trait Objective {
     fn save(&mut self) {}
     /// Go back to the coordinates of the last [`Objective::save`].
     fn restore(&mut self) {}
+    /// Write each body's own block of the stiffness matrix (`bodies` blocks
+    /// of `f × f`, row-major, `f = dof / bodies`; see
+    /// [`crate::hessian::stiffness_blocks`]) and return `true`, or return
+    /// `false` when the objective has none (then the preconditioned FIRE
+    /// uses the plain masses). Default: none.
+    fn stiffness_blocks(&mut self, _blocks: &mut Vec<f64>) -> bool {
+        false
+    }
 }
 
 /// Where the residual force of an unconverged minimisation sits: the body
@@ -156,6 +165,36 @@ pub struct FireParams {
     /// without convergence, Newton iterations with the analytic Hessian.
     /// `None`: FIRE all the way, as in the paper.
     pub newton: Option<NewtonParams>,
+    /// The masses FIRE integrates with: the family's choice (default), the
+    /// bodies' own (`Plain`, the paper), or each body's own block of the
+    /// stiffness matrix (`Blocks`, [`crate::precon`]; FIRE only). Left out
+    /// of the recorded settings when `Plain`, so that packings made before
+    /// it existed still resume.
+    #[serde(skip_serializing_if = "Masses::is_plain")]
+    pub masses: Masses,
+}
+
+/// Which masses FIRE integrates with.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum Masses {
+    /// The family's choice ([`jamkit_core::Shape::fire_block_masses`]),
+    /// resolved by [`FireParams::for_family`]; `Plain` where nothing
+    /// resolved it, and with FIRE 2.0.
+    #[default]
+    Family,
+    /// The bodies' own masses: 1 per translation, the family's moments of
+    /// inertia per rotation (the paper).
+    Plain,
+    /// Block preconditioning: each body's own block of the stiffness
+    /// matrix as its mass ([`crate::precon`]).
+    Blocks(PreconParams),
+}
+
+impl Masses {
+    /// `Plain` (left out of recorded settings).
+    pub fn is_plain(&self) -> bool {
+        *self == Masses::Plain
+    }
 }
 
 impl Default for FireParams {
@@ -176,6 +215,7 @@ impl Default for FireParams {
             force_criterion: ForceCriterion::Sum,
             max_steps: 20_000_000,
             newton: Some(NewtonParams::default()),
+            masses: Masses::Family,
         }
     }
 }
@@ -198,6 +238,7 @@ impl FireParams {
             force_tol_per_body: false,
             force_criterion: ForceCriterion::Sum,
             newton: None,
+            masses: Masses::Plain,
             ..Self::default()
         }
     }
@@ -239,16 +280,26 @@ impl FireParams {
         converged.then_some(StopReason::Force)
     }
 
-    /// These parameters with `dt_max` set: their own, else the family's
-    /// ([`jamkit_core::Shape::fire_dt_max`]), else 0.5, so that the settings
-    /// a packing records hold the time step it was made with.
+    /// These parameters with `dt_max` and the masses set: their own, else
+    /// the family's ([`jamkit_core::Shape::fire_dt_max`], 0.5 where the
+    /// family has none; [`jamkit_core::Shape::fire_block_masses`] for FIRE,
+    /// the plain masses for FIRE 2.0), so that the settings a packing
+    /// records hold the time step and masses it was made with.
     pub fn for_family<const D: usize, S: jamkit_core::Shape<D>>(&self, shape: &S) -> Self {
+        let masses = match &self.masses {
+            Masses::Family if self.variant == FireVariant::Fire && shape.fire_block_masses() => {
+                Masses::Blocks(PreconParams::default())
+            }
+            Masses::Family => Masses::Plain,
+            chosen => chosen.clone(),
+        };
         Self {
             dt_max: Some(
                 self.dt_max
                     .or(shape.fire_dt_max())
                     .unwrap_or(DEFAULT_DT_MAX),
             ),
+            masses,
             ..self.clone()
         }
     }
@@ -340,6 +391,16 @@ impl FireParams {
         if let Some(newton) = &self.newton {
             newton.validate(&format!("{prefix}.newton"))?;
         }
+        if let Masses::Blocks(precon) = &self.masses {
+            precon.validate(&format!("{prefix}.masses"))?;
+            if self.variant != FireVariant::Fire {
+                return Err(Error::invalid(
+                    format!("{prefix}.masses"),
+                    "Blocks(…)",
+                    "needs variant: Fire (the block preconditioner is not built for FIRE 2.0); give masses: Plain or variant: Fire",
+                ));
+            }
+        }
         Ok(())
     }
 }
@@ -379,6 +440,9 @@ pub struct Fire {
     inv_mass: Vec<f64>,
     mass: Vec<f64>,
     newton_work: NewtonWork,
+    blocks: BlockMasses,
+    /// `M⁻¹ g` of the preconditioned FIRE.
+    precon_grad: Vec<f64>,
     /// With [`Fire::record`]: `(φ, outcome)` of every minimisation.
     trace: Option<Vec<(f64, MinimizeOutcome)>>,
 }
@@ -445,6 +509,14 @@ impl Fire {
         let (v, g, dq) = (&mut self.velocity, &mut self.grad, &mut self.step);
         let (inv_m, mass) = (&self.inv_mass, &self.mass);
         let unit = inv_m.iter().all(|&m| m == 1.0);
+        let precon = match &p.masses {
+            Masses::Blocks(pc) if p.variant == FireVariant::Fire => Some(pc),
+            _ => None,
+        };
+        let (blocks, w) = (&mut self.blocks, &mut self.precon_grad);
+        w.resize(n, 0.0);
+        // Whether the blocks are in use (the objective may have none).
+        let mut blocked = false;
 
         let mut dt = p.dt_init;
         let dt_max = p.dt_max();
@@ -457,7 +529,16 @@ impl Fire {
         let mut newton_interval = p.newton.as_ref().map_or(u64::MAX, |nw| nw.after);
         let mut next_newton = newton_interval;
         loop {
-            let [force_sq, minus_power, v_norm_sq, f_norm_sq] = step_sums(g, v, inv_m, mass, unit);
+            if let Some(pc) = precon
+                && steps.is_multiple_of(pc.refresh)
+            {
+                blocked = blocks.rebuild(obj, inv_m, pc);
+            }
+            let [force_sq, minus_power, v_norm_sq, f_norm_sq] = if blocked {
+                blocks.sums(g, v, w)
+            } else {
+                step_sums(g, v, inv_m, mass, unit)
+            };
             if !(energy.is_finite() && force_sq.is_finite()) {
                 return Err(Error::NonFinite {
                     phi: obj.phi(),
@@ -549,7 +630,13 @@ impl Fire {
                         (0.0, 0.0)
                     };
                     let kick = steer + dt;
-                    if unit {
+                    if blocked {
+                        // The same step in the metric of the blocks: g/m → M⁻¹g.
+                        for ((va, da), wa) in v.iter_mut().zip(dq.iter_mut()).zip(w.iter()) {
+                            *va = keep * *va - kick * wa;
+                            *da = dt * *va;
+                        }
+                    } else if unit {
                         // Bit for bit the general loop: `x · 1 = x`.
                         for ((va, da), ga) in v.iter_mut().zip(dq.iter_mut()).zip(g.iter()) {
                             *va = keep * *va - kick * ga;
@@ -752,6 +839,16 @@ mod tests {
         fn phi(&self) -> f64 {
             0.0
         }
+        fn stiffness_blocks(&mut self, blocks: &mut Vec<f64>) -> bool {
+            // One body: its block is the whole (diagonal) Hessian.
+            let f = self.x.len();
+            blocks.clear();
+            blocks.resize(f * f, 0.0);
+            for a in 0..f {
+                blocks[a * f + a] = self.k[a];
+            }
+            true
+        }
     }
 
     /// Both variants reach the force criterion on an anisotropic quadratic
@@ -774,6 +871,40 @@ mod tests {
             let g: f64 = q.x.iter().zip(&q.k).map(|(x, k)| (k * x).powi(2)).sum();
             assert!(g < 1e-20, "{g}");
         }
+    }
+
+    /// With the stiffness as its mass, FIRE sees every mode at one
+    /// frequency: on a well whose stiffnesses span four decades it must
+    /// converge in fewer than a third of the plain FIRE's steps (measured:
+    /// far fewer), to the same criterion.
+    #[test]
+    fn block_masses_relax_an_ill_conditioned_well_faster() {
+        let well = || Quadratic {
+            x: vec![1.0, -2.0, 0.5, 3.0],
+            k: vec![1.0, 1e-4, 5.0, 1e-3],
+            inv_m: vec![1.0; 4],
+        };
+        let steps = |masses: Masses| {
+            let mut q = well();
+            let out = Fire::new(FireParams {
+                energy_tol: 1e-300,
+                force_tol: 1e-20,
+                newton: None,
+                masses,
+                ..FireParams::default()
+            })
+            .minimize(&mut q)
+            .unwrap();
+            assert_eq!(out.reason, StopReason::Force);
+            let g: f64 = q.x.iter().zip(&q.k).map(|(x, k)| (k * x).powi(2)).sum();
+            assert!(g < 1e-20, "{g}");
+            out.steps
+        };
+        let (plain, blocks) = (
+            steps(Masses::Plain),
+            steps(Masses::Blocks(PreconParams::default())),
+        );
+        assert!(3 * blocks < plain, "blocks {blocks} steps, plain {plain}");
     }
 
     #[test]

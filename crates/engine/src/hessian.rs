@@ -120,6 +120,49 @@ impl Hessian {
     }
 }
 
+/// The stiffness part of each body's own diagonal block of the Hessian,
+///
+/// ```text
+/// K_bb = Σ_{c ∋ b} v''(h_c) ∇_b h_c ∇_b h_cᵀ,
+/// ```
+///
+/// with `∇_b h_c` the derivatives of contact `c`'s gap in body `b`'s
+/// `f = D + rot_dof` coordinates (`−∂h/∂r_j` then `∂h/∂q_i` for the first
+/// body of a pair, `∂h/∂r_j` then `∂h/∂q_j` for the second). Written into
+/// `blocks` as `N` row-major `f × f` blocks. It needs only the gaps' first
+/// derivatives, so every family has it; the preconditioned FIRE
+/// ([`crate::precon`]) uses it as its mass.
+pub fn stiffness_blocks<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    blocks: &mut Vec<f64>,
+) {
+    let k = scene.packing().shape.rot_dof();
+    let f = D + k;
+    let n = scene.packing().len();
+    blocks.clear();
+    blocks.resize(n * f * f, 0.0);
+    let potential = scene.potential();
+    scene.for_each_contact(0.0, |i, j, _, c| {
+        let ddv = potential.second_derivative(c.gap);
+        if ddv == 0.0 {
+            return;
+        }
+        for (body, sign, rot) in [(i, -1.0, &c.grad_rot_i), (j, 1.0, &c.grad_rot_j)] {
+            let mut g = [0.0; 6];
+            for a in 0..D {
+                g[a] = sign * c.grad_r[a];
+            }
+            g[D..f].copy_from_slice(&rot[..k]);
+            let block = &mut blocks[body * f * f..(body + 1) * f * f];
+            for a in 0..f {
+                for b in 0..f {
+                    block[a * f + b] += ddv * g[a] * g[b];
+                }
+            }
+        }
+    });
+}
+
 /// Add one contact's `v'' ∇h ∇hᵀ (+ v' ∇²h)` to the entries. Local
 /// coordinates of the pair: `(r_i, q_i, r_j, q_j)`, with `∂h/∂r_i = −∂h/∂r_j`.
 fn add_contact<const D: usize>(

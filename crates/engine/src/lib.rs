@@ -11,6 +11,8 @@
 //!   (Guénolé et al. 2020), with a mass per coordinate;
 //! * [`newton`]: a second-order finish for FIRE (Newton steps with the
 //!   analytic [`hessian`], assembled sparse and factorised by faer);
+//! * [`precon`]: FIRE with each body's own stiffness block as its mass
+//!   (block preconditioning);
 //! * [`protocol`]: the paper's compress/decompress bisection to the jamming
 //!   point, and compression to a packing fraction or a pressure.
 //!
@@ -24,15 +26,17 @@ pub mod hessian;
 mod lanes;
 pub mod neighbors;
 pub mod newton;
+pub mod precon;
 pub mod protocol;
 pub mod scene;
 pub mod simd;
 
 pub use fire::{
-    Fire, FireParams, FireVariant, ForceCriterion, MinimizeOutcome, Objective, StopReason,
+    Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Objective, StopReason,
 };
 pub use neighbors::NeighborList;
 pub use newton::NewtonParams;
+pub use precon::PreconParams;
 pub use protocol::{
     JamParams, PressureParams, ProtocolOutcome, compress_to_phi, compress_to_pressure, jam,
 };

@@ -462,6 +462,11 @@ impl<const D: usize, S: Shape<D>> Objective for Scene<D, S> {
         }
     }
 
+    fn stiffness_blocks(&mut self, blocks: &mut Vec<f64>) -> bool {
+        crate::hessian::stiffness_blocks(self, blocks);
+        true
+    }
+
     fn save(&mut self) {
         let (positions, orientations) = &mut self.saved;
         positions.clone_from(&self.packing.positions);
