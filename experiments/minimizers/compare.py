@@ -5,10 +5,10 @@
 
 NEW_DIR and OLD_DIR are `jamkit run` output directories (their results.csv)
 of the same experiment file run with two minimisers. For every grid point
-(the id without its `_s<seed>` suffix) and every quantity (phi_j, z_j, the
-rattler fraction n_rattlers/N, and, for the cost, fire_steps and wall_s) it
-prints the two means with their standard errors, the difference in units of
-its standard error, and the two-sample Kolmogorov-Smirnov statistic with its
+(the id without its `_s<seed>` suffix) and every quantity (phi_j, z_j,
+z_corr for bodies made of spheres, the rattler fraction n_rattlers/N, and,
+for the cost, fire_steps and wall_s) it prints the two means with their
+standard errors, the difference in units of its standard error, and the two-sample Kolmogorov-Smirnov statistic with its
 asymptotic p-value. The packings need not be paired one by one.
 """
 
@@ -26,15 +26,18 @@ def load(directory):
                 continue
             point = row["id"].rsplit("_s", 1)[0]
             n = float(row["particles"])
-            points[point].append(
-                {
-                    "phi_j": float(row["phi_j"]),
-                    "z_j": float(row["z_j"]),
-                    "rattler_fraction": float(row["n_rattlers"]) / n,
-                    "fire_steps": float(row["fire_steps"]),
-                    "wall_s": float(row["wall_s"]),
-                }
-            )
+            values = {
+                "phi_j": float(row["phi_j"]),
+                "z_j": float(row["z_j"]),
+                "rattler_fraction": float(row["n_rattlers"]) / n,
+                "fire_steps": float(row["fire_steps"]),
+                "wall_s": float(row["wall_s"]),
+            }
+            # Bodies made of spheres: also the contact number corrected for
+            # rotational rattlers (the same as z_j for other families).
+            if row.get("family") == "nmer" and row.get("z_corr"):
+                values["z_corr"] = float(row["z_corr"])
+            points[point].append(values)
     return points
 
 
@@ -79,7 +82,10 @@ def main():
     new, old = load(args[0]), load(args[1])
     rows = []
     for point in sorted(set(new) & set(old)):
-        for q in ["phi_j", "z_j", "rattler_fraction", "fire_steps", "wall_s"]:
+        quantities = ["phi_j", "z_j", "z_corr", "rattler_fraction", "fire_steps", "wall_s"]
+        for q in quantities:
+            if not all(q in p for p in new[point] + old[point]):
+                continue
             a = [p[q] for p in new[point]]
             b = [p[q] for p in old[point]]
             (ma, sa), (mb, sb) = mean_sem(a), mean_sem(b)
