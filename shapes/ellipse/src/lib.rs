@@ -64,7 +64,10 @@
 //! spectrally accurate for this smooth periodic integrand.
 
 use jamkit_core::gap2d::{ExactGap, SupportJet};
-use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, ParamSpec, RotVec, Shape, Vector};
+use jamkit_core::{
+    Contact, Dims, Family, FamilyInfo, GapHessian, Outline, ParamSpec, RotVec, Shape, ShapeVisitor,
+    SharedOutline, Vector,
+};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -115,6 +118,43 @@ pub struct ParamError {
 impl std::fmt::Display for ParamError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{} = {}: {}", self.field, self.value, self.allowed)
+    }
+}
+
+impl From<ParamError> for jamkit_core::Error {
+    fn from(e: ParamError) -> Self {
+        jamkit_core::Error::invalid(e.field, e.value, e.allowed)
+    }
+}
+
+/// The `ellipse` family's registration.
+pub struct EllipseFamily;
+
+impl Family for EllipseFamily {
+    const INFO: FamilyInfo = INFO;
+    const EXAMPLE: &'static str = "(aspect: 1.5)";
+    type Params = EllipseParams;
+
+    /// `α = 1` is the disk of radius `R⁰`: it runs as `sphere` (no
+    /// rotational coordinates, same random stream, hence the same packing
+    /// as `sphere` for the same seed), as near-disks with `Δ = 0`.
+    fn visit<V: ShapeVisitor>(
+        p: &EllipseParams,
+        dim: usize,
+        visitor: V,
+    ) -> jamkit_core::Result<V::Output> {
+        let shape = Ellipse::new(p)?;
+        if p.aspect == 1.0 {
+            jamkit_sphere::visit_ball(dim, visitor)
+        } else {
+            Ok(visitor.visit::<2, _>(shape))
+        }
+    }
+}
+
+impl Outline for Ellipse {
+    fn relative_radius(&self, psi: f64) -> f64 {
+        Ellipse::relative_radius(self, psi)
     }
 }
 
@@ -479,6 +519,10 @@ impl Shape<2> for Ellipse {
     /// The long semi-axis `a = R⁰ √α`.
     fn bounding_radius(&self, size: f64) -> f64 {
         size * self.root
+    }
+
+    fn outline(&self) -> Option<SharedOutline> {
+        Some(std::sync::Arc::new(self.clone()))
     }
 
     fn rot_inertia(&self, size: f64) -> RotVec {

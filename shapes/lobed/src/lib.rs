@@ -45,7 +45,10 @@
 //! does not see.
 
 use jamkit_core::first_order::{Profile, gap_hessian};
-use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, ParamSpec, RotVec, Shape, Vector};
+use jamkit_core::{
+    Contact, Dims, Family, FamilyInfo, GapHessian, Outline, ParamSpec, RotVec, Shape, ShapeVisitor,
+    SharedOutline, Vector,
+};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -101,6 +104,36 @@ pub struct ParamError {
     pub value: String,
     /// What is allowed.
     pub allowed: String,
+}
+
+impl From<ParamError> for jamkit_core::Error {
+    fn from(e: ParamError) -> Self {
+        jamkit_core::Error::invalid(e.field, e.value, e.allowed)
+    }
+}
+
+/// The `lobed` family's registration: the one line of
+/// `crates/experiment/src/registry.rs` names this type.
+pub struct LobedFamily;
+
+impl Family for LobedFamily {
+    const INFO: FamilyInfo = INFO;
+    const EXAMPLE: &'static str = "(delta: 0.2, kappa: 2.0)";
+    type Params = LobedParams;
+
+    fn visit<V: ShapeVisitor>(
+        p: &LobedParams,
+        _dim: usize,
+        visitor: V,
+    ) -> jamkit_core::Result<V::Output> {
+        Ok(visitor.visit::<2, _>(Lobed::new(p)?))
+    }
+}
+
+impl Outline for Lobed {
+    fn relative_radius(&self, psi: f64) -> f64 {
+        Lobed::relative_radius(self, psi)
+    }
 }
 
 /// Smallest and largest `κ` accepted.
@@ -312,6 +345,10 @@ impl Shape<2> for Lobed {
 
     fn rot_inertia(&self, _size: f64) -> RotVec {
         [self.inertia, 1.0, 1.0]
+    }
+
+    fn outline(&self) -> Option<SharedOutline> {
+        Some(std::sync::Arc::new(self.clone()))
     }
 
     fn reference_orientation(&self) -> Angle {

@@ -63,7 +63,7 @@ pub mod volume;
 
 pub use orientation::{Angle, Quaternion};
 
-use jamkit_core::{Dims, FamilyInfo, ParamSpec, Vector};
+use jamkit_core::{Dims, Family, FamilyInfo, ParamSpec, ShapeVisitor, Vector};
 use serde::Deserialize;
 
 /// The family's self-description.
@@ -155,6 +155,40 @@ fn err(field: impl Into<String>, value: impl ToString, allowed: impl Into<String
         field: field.into(),
         value: value.to_string(),
         allowed: allowed.into(),
+    }
+}
+
+impl From<ParamError> for jamkit_core::Error {
+    fn from(e: ParamError) -> Self {
+        jamkit_core::Error::invalid(e.field, e.value, e.allowed)
+    }
+}
+
+/// The `nmer` family's registration.
+pub struct NmerFamily;
+
+impl Family for NmerFamily {
+    const INFO: FamilyInfo = INFO;
+    const EXAMPLE: &'static str = "(alpha: 1.5)";
+    type Params = NmerParams;
+
+    /// `α = 1`: two coincident spheres are one sphere (same random stream,
+    /// hence the same packing as `sphere` for the same seed).
+    fn visit<V: ShapeVisitor>(
+        p: &NmerParams,
+        dim: usize,
+        visitor: V,
+    ) -> jamkit_core::Result<V::Output> {
+        match (dim, p.is_single_sphere()) {
+            (_, true) => jamkit_sphere::visit_ball(dim, visitor),
+            (2, false) => Ok(visitor.visit::<2, _>(Nmer::<2>::new(p)?)),
+            (3, false) => Ok(visitor.visit::<3, _>(Nmer::<3>::new(p)?)),
+            _ => Err(jamkit_core::Error::invalid(
+                "dim",
+                dim,
+                "nmer bodies exist in dim 2 or 3",
+            )),
+        }
     }
 }
 
