@@ -104,29 +104,6 @@ pub struct EllipseParams {
     pub inertia: Option<f64>,
 }
 
-/// An invalid parameter, named.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParamError {
-    /// Field path.
-    pub field: String,
-    /// Offending value.
-    pub value: String,
-    /// What is allowed.
-    pub allowed: String,
-}
-
-impl std::fmt::Display for ParamError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} = {}: {}", self.field, self.value, self.allowed)
-    }
-}
-
-impl From<ParamError> for jamkit_core::Error {
-    fn from(e: ParamError) -> Self {
-        jamkit_core::Error::invalid(e.field, e.value, e.allowed)
-    }
-}
-
 /// The `ellipse` family's registration.
 pub struct EllipseFamily;
 
@@ -169,22 +146,22 @@ pub struct Ellipse {
 
 impl Ellipse {
     /// The family for these parameters, or the first invalid one.
-    pub fn new(p: &EllipseParams) -> Result<Self, ParamError> {
+    pub fn new(p: &EllipseParams) -> jamkit_core::Result<Self> {
         if !(p.aspect >= 1.0 && p.aspect.is_finite()) {
-            return Err(ParamError {
-                field: "params.aspect".into(),
-                value: p.aspect.to_string(),
-                allowed: "must be a finite number ≥ 1 (α = a/b, long over short semi-axis)".into(),
-            });
+            return Err(jamkit_core::Error::invalid(
+                "params.aspect",
+                p.aspect.to_string(),
+                "must be a finite number ≥ 1 (α = a/b, long over short semi-axis)",
+            ));
         }
         if let Some(i) = p.inertia
             && !(i > 0.0 && i.is_finite())
         {
-            return Err(ParamError {
-                field: "params.inertia".into(),
-                value: i.to_string(),
-                allowed: "must be positive and finite, or None for (a² + b²)/4".into(),
-            });
+            return Err(jamkit_core::Error::invalid(
+                "params.inertia",
+                i.to_string(),
+                "must be positive and finite, or None for (a² + b²)/4",
+            ));
         }
         Ok(Self {
             aspect: p.aspect,
@@ -901,8 +878,8 @@ mod tests {
                 inertia: None,
             })
             .unwrap_err();
-            assert_eq!(e.field, "params.aspect");
-            assert!(e.allowed.contains("≥ 1"), "{e}");
+            assert_eq!(e.field(), Some("params.aspect"));
+            assert!(e.allowed().unwrap().contains("≥ 1"), "{e}");
         }
         for inertia in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let e = Ellipse::new(&EllipseParams {
@@ -910,7 +887,7 @@ mod tests {
                 inertia: Some(inertia),
             })
             .unwrap_err();
-            assert_eq!(e.field, "params.inertia");
+            assert_eq!(e.field(), Some("params.inertia"));
         }
         // Defaults: I = (a² + b²)/4, per size.
         let s = ellipse(2.0);

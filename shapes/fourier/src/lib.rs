@@ -192,7 +192,7 @@ impl Family for FourierSumFamily {
 /// no rotational coordinates and the same random stream, hence the same
 /// packing as `sphere` for the same seed.
 fn visit_near_disk<V: ShapeVisitor>(
-    shape: Result<NearDisk, ParamError>,
+    shape: jamkit_core::Result<NearDisk>,
     delta: f64,
     dim: usize,
     visitor: V,
@@ -202,12 +202,6 @@ fn visit_near_disk<V: ShapeVisitor>(
         jamkit_sphere::visit_ball(dim, visitor)
     } else {
         Ok(visitor.visit::<2, _>(shape))
-    }
-}
-
-impl From<ParamError> for jamkit_core::Error {
-    fn from(e: ParamError) -> Self {
-        jamkit_core::Error::invalid(e.field, e.value, e.allowed)
     }
 }
 
@@ -321,26 +315,15 @@ fn cpow(mut z: (f64, f64), mut n: u32) -> (f64, f64) {
     acc
 }
 
-/// An invalid parameter, named.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParamError {
-    /// Field path.
-    pub field: String,
-    /// Offending value.
-    pub value: String,
-    /// What is allowed.
-    pub allowed: String,
-}
-
 impl NearDisk {
     /// The `fourier` family: one mode `sin(nθ)/n`.
-    pub fn fourier(p: &FourierParams) -> Result<Self, ParamError> {
+    pub fn fourier(p: &FourierParams) -> jamkit_core::Result<Self> {
         if p.n < 1 {
-            return Err(ParamError {
-                field: "params.n".into(),
-                value: p.n.to_string(),
-                allowed: "must be an integer ≥ 1".into(),
-            });
+            return Err(jamkit_core::Error::invalid(
+                "params.n",
+                p.n.to_string(),
+                "must be an integer ≥ 1",
+            ));
         }
         Self::new(
             "fourier",
@@ -356,7 +339,7 @@ impl NearDisk {
     }
 
     /// The `fourier_sum` family.
-    pub fn fourier_sum(p: &FourierSumParams) -> Result<Self, ParamError> {
+    pub fn fourier_sum(p: &FourierSumParams) -> jamkit_core::Result<Self> {
         Self::new("fourier_sum", p.delta, p.modes.clone(), p.inertia, p.gap)
     }
 
@@ -366,11 +349,9 @@ impl NearDisk {
         modes: Vec<Mode>,
         inertia: Option<f64>,
         gap: GapModel,
-    ) -> Result<Self, ParamError> {
-        let err = |field: &str, value: String, allowed: &str| ParamError {
-            field: field.into(),
-            value,
-            allowed: allowed.into(),
+    ) -> jamkit_core::Result<Self> {
+        let err = |field: &str, value: String, allowed: &str| {
+            jamkit_core::Error::invalid(field, value, allowed)
         };
         if !delta.is_finite() || delta < 0.0 {
             return Err(err(

@@ -139,29 +139,12 @@ impl NmerParams {
     }
 }
 
-/// An invalid parameter, named.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParamError {
-    /// Field path (`params.alpha`).
-    pub field: String,
-    /// Offending value.
-    pub value: String,
-    /// What is allowed.
-    pub allowed: String,
-}
-
-fn err(field: impl Into<String>, value: impl ToString, allowed: impl Into<String>) -> ParamError {
-    ParamError {
-        field: field.into(),
-        value: value.to_string(),
-        allowed: allowed.into(),
-    }
-}
-
-impl From<ParamError> for jamkit_core::Error {
-    fn from(e: ParamError) -> Self {
-        jamkit_core::Error::invalid(e.field, e.value, e.allowed)
-    }
+fn err(
+    field: impl Into<String>,
+    value: impl ToString,
+    allowed: impl Into<String>,
+) -> jamkit_core::Error {
+    jamkit_core::Error::invalid(field, value.to_string(), allowed)
 }
 
 /// The `nmer` family's registration.
@@ -220,7 +203,7 @@ impl<const D: usize> Nmer<D> {
     /// more than [`MAX_SPHERES`] spheres; an offset of the wrong length or
     /// not finite; a radius not positive and finite; a sphere inside
     /// another; an inertia not positive and finite.
-    pub fn new(p: &NmerParams) -> Result<Self, ParamError> {
+    pub fn new(p: &NmerParams) -> jamkit_core::Result<Self> {
         if !(D == 2 || D == 3) {
             return Err(err("dim", D, "nmer bodies exist in dim 2 or 3"));
         }
