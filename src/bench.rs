@@ -329,7 +329,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
                             inertia,
                             gap: gap.into(),
                         })
-                        .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))?;
+                        .map_err(|e| anyhow::anyhow!("{e}"))?;
                         bench_packing::<2, _>(
                             shape,
                             particles,
@@ -401,7 +401,7 @@ where
         spheres: None,
         inertia: None,
     })
-    .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))
+    .map_err(|e| anyhow::anyhow!("{e}"))
 }
 
 /// A random scene as `jamkit run` builds it: sizes, then centres, then

@@ -166,7 +166,7 @@ fn shape(n: u32, delta: f64, gap: GapModel) -> Result<NearDisk> {
         inertia: None,
         gap,
     })
-    .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))
+    .map_err(|e| anyhow::anyhow!("{e}"))
 }
 
 /// One pair: orientations and separation (sizes [`SIZES`]).

@@ -26,7 +26,7 @@ pub fn run(particles: &[usize], nalgebra: bool) -> Result<()> {
             inertia: None,
             gap: Default::default(),
         })
-        .map_err(|e| anyhow::anyhow!("{} = {}: {}", e.field, e.value, e.allowed))?;
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
         let sizes = SizeDistribution::default().sample(n, &mut rng);
         let packing = Packing::<2, NearDisk>::random(shape, sizes, 0.88, &mut rng)?;

@@ -7,7 +7,7 @@
 //! * `jamkit spectrum PACKING.json [--stiffness-only] [--remove-rattlers] [--modes] -o FILE.csv`
 //! * `jamkit report DIR… -o OUT`
 //! * `jamkit draw PACKING.json -o FILE.svg|FILE.png [--size PIXELS]`
-//! * `jamkit draw-shape [fourier|fourier_sum] [--n 2,3] [--delta 0,0.1] [--modes RON …] -o FILE.svg|FILE.png`
+//! * `jamkit draw-shape [FAMILY] [--panel RON …] [--curve RON …] [--n 2,3] [--delta 0,0.1] [--modes RON …] -o FILE.svg|FILE.png`
 
 /// `println!` that ignores a closed pipe (`jamkit validate … | head`)
 /// instead of panicking.
@@ -120,19 +120,26 @@ enum Command {
         #[arg(long, value_name = "PIXELS", default_value_t = jamkit_draw::render::DEFAULT_SIZE)]
         size: u32,
     },
-    /// Polar plots R(θ)/R0 = 1 + Δ F(θ) of near-disk shapes (SVG or PNG): one
-    /// panel per n (or mode set), one curve per Δ.
+    /// Polar plots R(θ)/R0 of a family's shapes (SVG or PNG): one panel per
+    /// parameter set (--panel, --n, --modes), one curve per parameter set
+    /// (--curve, --delta); unset parameters come from the family's example.
     DrawShape {
-        /// `fourier` (one panel per --n) or `fourier_sum` (one per --modes).
+        /// Any family whose 2D bodies have an outline (`jamkit shapes`).
         #[arg(default_value = "fourier")]
         family: String,
-        /// fourier: mode numbers, comma-separated [default: 2,3,4,5].
+        /// One panel's parameters, in RON, repeatable: --panel '(n: 3)'.
+        #[arg(long, value_name = "RON")]
+        panel: Vec<String>,
+        /// One curve's parameters, in RON, repeatable: --curve '(aspect: 2.0)'.
+        #[arg(long, value_name = "RON")]
+        curve: Vec<String>,
+        /// Shorthand for one --panel '(n: N)' per value, comma-separated.
         #[arg(long, value_delimiter = ',')]
         n: Vec<u32>,
-        /// Amplitudes Δ, comma-separated [default: 0,0.1,0.3].
+        /// Shorthand for one --curve '(delta: Δ)' per value, comma-separated.
         #[arg(long, value_delimiter = ',')]
         delta: Vec<f64>,
-        /// fourier_sum: one mode set per panel, in RON, repeatable:
+        /// Shorthand for --panel '(modes: RON)', repeatable:
         /// --modes '[(n: 2, a: 0.5), (n: 3, a: 0.1, b: 1.0)]'.
         #[arg(long, value_name = "RON")]
         modes: Vec<String>,
@@ -327,44 +334,33 @@ fn real_main() -> Result<()> {
         }
         Command::DrawShape {
             family,
+            panel,
+            curve,
             n,
             delta,
             modes,
             out,
             size,
         } => {
-            let delta = if delta.is_empty() {
-                vec![0.0, 0.1, 0.3]
-            } else {
-                delta
-            };
-            let panels = match family.as_str() {
-                "fourier" => {
-                    if !modes.is_empty() {
-                        bail!("--modes belongs to fourier_sum; fourier takes --n");
-                    }
-                    let n = if n.is_empty() { vec![2, 3, 4, 5] } else { n };
-                    jamkit_draw::shapes::fourier_panels(&n, &delta)?
-                }
-                "fourier_sum" => {
-                    if !n.is_empty() {
-                        bail!("--n belongs to fourier; fourier_sum takes --modes");
-                    }
-                    if modes.is_empty() {
-                        bail!(
-                            "fourier_sum needs --modes, e.g. --modes '[(n: 2, a: 0.5), (n: 3, a: 0.1)]'"
-                        );
-                    }
-                    let sets = modes
-                        .iter()
-                        .map(|m| jamkit_draw::shapes::parse_modes(m))
-                        .collect::<Result<Vec<_>, _>>()?;
-                    jamkit_draw::shapes::fourier_sum_panels(&sets, &delta)?
-                }
-                other => bail!(
-                    "draw-shape: family `{other}`: only fourier and fourier_sum have shape plots"
-                ),
-            };
+            let parse = |text: &str| jamkit_draw::shapes::parse_params(&family, text);
+            let mut panels = panel
+                .iter()
+                .map(|p| parse(p))
+                .collect::<Result<Vec<_>, _>>()?;
+            for k in &n {
+                panels.push(parse(&format!("(n: {k})"))?);
+            }
+            for m in &modes {
+                panels.push(parse(&format!("(modes: {m})"))?);
+            }
+            let mut curves = curve
+                .iter()
+                .map(|c| parse(c))
+                .collect::<Result<Vec<_>, _>>()?;
+            for d in &delta {
+                curves.push(parse(&format!("(delta: {d:?})"))?);
+            }
+            let panels = jamkit_draw::shapes::panels(&family, &panels, &curves)?;
             jamkit_draw::draw_shapes(&panels, &out, size)?;
             out!("{} panel(s) drawn to {}", panels.len(), out.display());
             Ok(())

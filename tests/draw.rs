@@ -82,6 +82,22 @@ fn draw_near_disks_to_svg_and_png() {
 }
 
 #[test]
+fn draw_the_tutorial_family() {
+    // `lobed` (docs/adding-a-shape.md) draws through the registry alone.
+    let dir = tempfile::tempdir().unwrap();
+    let packing = jam(
+        &dir.path().join("run"),
+        &[
+            "--set",
+            "family=lobed",
+            "--set",
+            r#"params={"delta": 0.2, "kappa": 2.0}"#,
+        ],
+    );
+    draw_both(&packing, dir.path());
+}
+
+#[test]
 fn draw_refuses_what_it_cannot_draw() {
     let dir = tempfile::tempdir().unwrap();
     let packing = jam(&dir.path().join("run"), &[]);
@@ -149,7 +165,25 @@ fn draw_shape_writes_one_panel_per_n() {
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..4], b"\x89PNG");
     assert!(bytes.len() > 10_000, "{} bytes", bytes.len());
-    let (code, _, err) = jamkit(&["draw-shape", "sphere", "-o", svg.to_str().unwrap()]);
+    // Any family with an outline plots through the registry, the
+    // tutorial's `lobed` included; bodies made of spheres have no R(θ).
+    let (code, _, err) = jamkit(&[
+        "draw-shape",
+        "lobed",
+        "--curve",
+        "(kappa: 1.0)",
+        "--curve",
+        "(kappa: 4.0)",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.contains("κ = 4"), "legend missing");
+    let (code, _, err) = jamkit(&["draw-shape", "nmer", "-o", svg.to_str().unwrap()]);
     assert_eq!(code, 1);
-    assert!(err.contains("sphere"), "{err}");
+    assert!(err.contains("nmer") && err.contains("spheres"), "{err}");
+    let (code, _, err) = jamkit(&["draw-shape", "dimer", "-o", svg.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(err.contains("must be one of"), "{err}");
 }

@@ -53,6 +53,22 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// The field of an [`Error::InvalidParameter`] (`params.delta`).
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            Error::InvalidParameter { field, .. } => Some(field),
+            _ => None,
+        }
+    }
+
+    /// What an [`Error::InvalidParameter`] says is allowed.
+    pub fn allowed(&self) -> Option<&str> {
+        match self {
+            Error::InvalidParameter { allowed, .. } => Some(allowed),
+            _ => None,
+        }
+    }
+
     /// Shorthand for [`Error::InvalidParameter`].
     pub fn invalid(
         field: impl Into<String>,

@@ -6,6 +6,23 @@
 //! [`ParamSpec`]s say which are scalars and which are lists, so that the
 //! experiment layer knows when a list in the file means "scan these values"
 //! (a list given for a scalar, or a list of lists for a list parameter).
+//!
+//! A family registers itself once, through one implementation of [`Family`]:
+//! its [`FamilyInfo`], its typed parameters, and how those parameters become
+//! a shape in a given dimension ([`Family::visit`], where the degenerate
+//! cases live: a near-disk with `Δ = 0` is the disk, a dimer with `α = 1`
+//! the sphere). Everything that needs a shape from a name (the runner,
+//! `jamkit draw`, `draw-shape`, `report`) asks the registry, an explicit
+//! list of these implementations, and is handed the typed shape through a
+//! [`ShapeVisitor`], after which all is statically dispatched. What a
+//! family can do beyond the [`Shape`] contract is an optional ability of
+//! its shape: a planar [`Outline`] for drawing
+//! ([`Shape::outline`]), a sphere decomposition, second derivatives.
+
+use crate::Shape;
+use serde::de::DeserializeOwned;
+use std::fmt::Debug;
+use std::sync::Arc;
 
 /// One parameter of a family.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,6 +58,69 @@ pub struct FamilyInfo {
     /// Parameters.
     pub params: &'static [ParamSpec],
 }
+
+/// Something to do with a typed shape: run a sample, draw it, analyse it.
+///
+/// The registry calls [`ShapeVisitor::visit`] once per job, with the
+/// family's shape in the dimension the job asks for.
+pub trait ShapeVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Called with the family's shape in dimension `D`.
+    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Self::Output;
+}
+
+/// A shape family's one registration: everything the registry needs to turn
+/// `(name, dim, params)` into a typed shape.
+///
+/// Per-family defaults that depend on the parameters (the rotational
+/// inertia, FIRE's largest time step) are methods of the shape
+/// ([`Shape::rot_inertia`], [`Shape::fire_dt_max`]), so that they travel
+/// with it.
+pub trait Family {
+    /// Name, description, dimensions and parameters (`jamkit shapes`).
+    const INFO: FamilyInfo;
+    /// A small valid parameter set in RON (`"(n: 2, delta: 0.1)"`): the
+    /// default panel of `jamkit draw-shape` and the example the docs' and
+    /// tests' checks run.
+    const EXAMPLE: &'static str;
+    /// The typed parameters, read by serde from the experiment file.
+    type Params: DeserializeOwned;
+    /// Build the shape of `params` in dimension `dim` (one of
+    /// [`FamilyInfo::dims`], checked by the caller) and hand it to
+    /// `visitor`. A parameter out of range is
+    /// [`Error::InvalidParameter`](crate::Error::InvalidParameter), never a
+    /// panic.
+    fn visit<V: ShapeVisitor>(
+        params: &Self::Params,
+        dim: usize,
+        visitor: V,
+    ) -> crate::Result<V::Output>;
+}
+
+/// The outline of a planar body, for drawing: its radius in the direction
+/// at angle `ψ` from its body frame, in units of its size `R⁰`. A body of
+/// size `R⁰` and orientation `θ` reaches `R⁰ ρ(θ − φ)` in the lab direction
+/// `φ` (the convention of the near-disks, `R(φ) = R⁰ [1 + Δ F(θ − φ)]`).
+/// Only star-shaped bodies have one; a body made of spheres is drawn from
+/// its [`Shape::sphere_decomposition`] instead.
+pub trait Outline: Debug + Send + Sync {
+    /// `ρ(ψ) = R(ψ)/R⁰`.
+    fn relative_radius(&self, psi: f64) -> f64;
+}
+
+/// A disk's outline: `ρ = 1`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RoundOutline;
+
+impl Outline for RoundOutline {
+    fn relative_radius(&self, _psi: f64) -> f64 {
+        1.0
+    }
+}
+
+/// A shared outline (what [`Shape::outline`] returns).
+pub type SharedOutline = Arc<dyn Outline>;
 
 impl FamilyInfo {
     /// The spec of parameter `name`, if the family has one.

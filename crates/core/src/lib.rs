@@ -33,7 +33,9 @@ pub mod shape;
 pub mod sizes;
 
 pub use error::{Error, Result};
-pub use family::{Dims, FamilyInfo, ParamSpec};
+pub use family::{
+    Dims, Family, FamilyInfo, Outline, ParamSpec, RoundOutline, ShapeVisitor, SharedOutline,
+};
 pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use packing::Packing;
 pub use periodic::PeriodicBox;

@@ -388,6 +388,13 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         None
     }
 
+    /// The planar outline of the family's bodies, for drawing (an optional
+    /// ability: `None` where the family has none, e.g. bodies made of
+    /// spheres, which are drawn from [`Shape::sphere_decomposition`]).
+    fn outline(&self) -> Option<crate::family::SharedOutline> {
+        None
+    }
+
     /// Whether the random start must be free of overlaps. Non-convex
     /// bodies (bodies made of spheres) can interpenetrate into a *locked*
     /// pair at a random start (two dimers crossed at their centres feel no

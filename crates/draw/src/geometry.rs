@@ -10,136 +10,128 @@
 //! `e(θ)`.
 
 use crate::DrawError;
-use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
+use jamkit_core::{RoundOutline, Shape, SharedOutline};
+use jamkit_experiment::registry::{self, ParamMap, SceneVisitor};
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// A point of the plane, `[x, y]`.
 pub type Point = [f64; 2];
 
-/// The families [`Outline::from_family`] knows how to draw.
-pub const DRAWABLE_FAMILIES: &[&str] = &["sphere", "fourier", "fourier_sum", "nmer", "ellipse"];
-
-/// The outline law of a family, shared by all bodies of a packing.
+/// The outline law of a family, shared by all bodies of a packing. It comes
+/// from the family's shape through the registry ([`Outline::of`]): a
+/// family draws if its 2D shape has an outline
+/// ([`Shape::outline`](jamkit_core::Shape::outline)) or is made of spheres
+/// ([`Shape::sphere_decomposition`](jamkit_core::Shape::sphere_decomposition)).
 #[derive(Clone, Debug)]
 pub enum Outline {
-    /// A disk: `R(φ) = R⁰`.
-    Disk,
-    /// A near-disk: `R(φ) = R⁰ [1 + Δ F(θ − φ)]`.
-    NearDisk(NearDisk),
-    /// An ellipse of aspect ratio `α` and the area of the disk `R⁰`.
-    Ellipse(jamkit_ellipse::Ellipse),
+    /// A star-shaped body: `R(φ) = R⁰ ρ(θ − φ)`.
+    Polar {
+        /// `ρ(ψ) = R(ψ)/R⁰`.
+        shape: SharedOutline,
+        /// Whether the bodies have an orientation (false for disks, and for
+        /// the degenerate members of a family that run as disks: a
+        /// near-disk with `Δ = 0`, an ellipse with `α = 1`).
+        turns: bool,
+    },
     /// A body made of spheres (`nmer`), drawn from the packing file's
     /// `spheres` rows as the union of its disks ([`union_outlines`]); a
     /// body without rows (α = 1 runs as disks) is the disk of radius `R⁰`.
     Spheres,
 }
 
+/// The registry's visitor that asks a 2D shape for its outline.
+struct OutlineOf;
+
+impl SceneVisitor for OutlineOf {
+    type Output = Option<Outline>;
+
+    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Option<Outline> {
+        if D != 2 {
+            return None;
+        }
+        if let Some(o) = shape.outline() {
+            return Some(Outline::Polar {
+                shape: o,
+                turns: shape.rot_dof() > 0,
+            });
+        }
+        let o = shape.reference_orientation();
+        shape
+            .sphere_decomposition(1.0, &o)
+            .map(|_| Outline::Spheres)
+    }
+}
+
 impl Outline {
-    /// The outline of a registered family from its parameters as stored in
-    /// a packing file (`{}` for spheres, `{"n": 3, "delta": 0.2, …}` for
-    /// `fourier`, `{"modes": [...], "delta": …}` for `fourier_sum`).
-    pub fn from_family(family: &str, params: &serde_json::Value) -> Result<Self, DrawError> {
+    /// The disk: `R(φ) = R⁰`.
+    pub fn disk() -> Self {
+        Outline::Polar {
+            shape: Arc::new(RoundOutline),
+            turns: false,
+        }
+    }
+
+    /// The outline of a registered family in 2D, from its parameters as an
+    /// experiment file gives them (`(n: 3, delta: 0.2)` for `fourier`;
+    /// defaults filled in).
+    pub fn of(family: &str, params: &ParamMap) -> Result<Self, DrawError> {
         let bad = |message: String| DrawError::Params {
             family: family.to_string(),
             message,
         };
-        // `null` is an absent optional (e.g. `gap`, `inertia`): drop it so
-        // that the family's default applies.
-        let mut params = params.clone();
-        if let Some(map) = params.as_object_mut() {
-            map.retain(|_, v| !v.is_null());
+        let info = registry::family_info(family).map_err(|e| bad(e.to_string()))?;
+        if !registry::supports_dim(&info, 2) {
+            return Err(DrawError::UnknownFamily(family.to_string()));
         }
-        match family {
-            "sphere" => Ok(Outline::Disk),
-            "nmer" => Ok(Outline::Spheres),
-            "fourier" => {
-                let p: FourierParams =
-                    serde_json::from_value(params).map_err(|e| bad(e.to_string()))?;
-                Self::fourier(p.n, p.delta)
-            }
-            "ellipse" => {
-                let p: jamkit_ellipse::EllipseParams =
-                    serde_json::from_value(params.clone()).map_err(|e| bad(e.to_string()))?;
-                Self::ellipse(p.aspect)
-            }
-            "fourier_sum" => {
-                let p: FourierSumParams =
-                    serde_json::from_value(params).map_err(|e| bad(e.to_string()))?;
-                Self::fourier_sum(p.modes, p.delta)
-            }
-            other => Err(DrawError::UnknownFamily(other.to_string())),
-        }
+        let params = registry::with_defaults(&info, params);
+        registry::dispatch(family, 2, &params, OutlineOf)
+            .map_err(|e| bad(e.to_string()))?
+            .ok_or_else(|| DrawError::UnknownFamily(family.to_string()))
     }
 
-    /// The `fourier` outline: one mode `F(φ) = sin(nφ)/n`.
-    pub fn fourier(n: u32, delta: f64) -> Result<Self, DrawError> {
-        // NOTE: the moment of inertia plays no part in the outline; giving it
-        // keeps Δ = 0 (whose default inertia Δ is refused) drawable.
-        let shape = NearDisk::fourier(&FourierParams {
-            n,
-            delta,
-            inertia: Some(1.0),
-            gap: Default::default(),
-        })
-        .map_err(|e| param_error("fourier", e))?;
-        Ok(Outline::NearDisk(shape))
-    }
-
-    /// The `fourier_sum` outline: `F(φ) = Σ_k a_k sin(n_k φ + b_k)`.
-    pub fn fourier_sum(modes: Vec<Mode>, delta: f64) -> Result<Self, DrawError> {
-        let shape = NearDisk::fourier_sum(&FourierSumParams {
-            modes,
-            delta,
-            inertia: Some(1.0),
-            gap: Default::default(),
-        })
-        .map_err(|e| param_error("fourier_sum", e))?;
-        Ok(Outline::NearDisk(shape))
-    }
-
-    /// The `ellipse` outline of aspect ratio `aspect`.
-    pub fn ellipse(aspect: f64) -> Result<Self, DrawError> {
-        let shape = jamkit_ellipse::Ellipse::new(&jamkit_ellipse::EllipseParams {
-            aspect,
-            inertia: None,
-        })
-        .map_err(|e| DrawError::Params {
-            family: "ellipse".to_string(),
+    /// The outline of a registered family from its parameters as stored in
+    /// a packing file (`{}` for spheres, `{"n": 3, "delta": 0.2, …}` for
+    /// `fourier`, `{"modes": [...], "delta": …}` for `fourier_sum`).
+    pub fn from_family(family: &str, params: &serde_json::Value) -> Result<Self, DrawError> {
+        let params = registry::params_from_json(params).map_err(|e| DrawError::Params {
+            family: family.to_string(),
             message: e.to_string(),
         })?;
-        Ok(Outline::Ellipse(shape))
+        Self::of(family, &params)
     }
 
-    /// `R/R⁰` as a function of the body-frame angle `ψ`: `1 + Δ F(ψ)`
-    /// (near-disks), `1/√(α⁻¹cos²ψ + α sin²ψ)` (ellipses).
+    /// The outline of a registered family from its parameters written in
+    /// RON as in an experiment file: `(n: 3, delta: 0.2)`.
+    pub fn from_ron(family: &str, text: &str) -> Result<Self, DrawError> {
+        let params = registry::params_from_ron(text).map_err(|e| DrawError::Params {
+            family: family.to_string(),
+            message: format!("{text}: {e} (write the parameters as in an experiment file, e.g. (n: 3, delta: 0.2))"),
+        })?;
+        Self::of(family, &params)
+    }
+
+    /// `R/R⁰` as a function of the body-frame angle `ψ` (1 for bodies made
+    /// of spheres, drawn from their spheres instead).
     pub fn relative_radius(&self, psi: f64) -> f64 {
         match self {
-            Outline::Disk | Outline::Spheres => 1.0,
-            Outline::NearDisk(s) => s.relative_radius(psi),
-            Outline::Ellipse(s) => s.relative_radius(psi),
+            Outline::Polar { shape, .. } => shape.relative_radius(psi),
+            Outline::Spheres => 1.0,
         }
     }
 
-    /// `Δ` (0 for disks and ellipses).
-    pub fn delta(&self) -> f64 {
-        match self {
-            Outline::Disk | Outline::Spheres | Outline::Ellipse(_) => 0.0,
-            Outline::NearDisk(s) => s.delta(),
-        }
+    /// Whether the bodies carry an angle `θ` in the packing file.
+    pub fn turns(&self) -> bool {
+        matches!(self, Outline::Polar { turns: true, .. })
     }
 
     /// True for outlines that are disks (a near-disk with `Δ = 0`, an
     /// ellipse with `α = 1`): they are jammed as disks and store no angles.
     pub fn is_round(&self) -> bool {
-        match self {
-            Outline::Disk => true,
-            Outline::Spheres => false,
-            Outline::NearDisk(s) => s.delta() == 0.0,
-            Outline::Ellipse(s) => s.aspect() == 1.0,
-        }
+        matches!(self, Outline::Polar { turns: false, .. })
     }
 
-    /// The radius `R(φ) = R⁰ [1 + Δ F(θ − φ)]` of a body of size `size` and
+    /// The radius `R(φ) = R⁰ ρ(θ − φ)` of a body of size `size` and
     /// orientation `theta` in the lab direction `phi`.
     pub fn radius(&self, size: f64, theta: f64, phi: f64) -> f64 {
         size * self.relative_radius(theta - phi)
@@ -157,9 +149,8 @@ impl Outline {
             .collect()
     }
 
-    /// The closed polar curve `(1 + Δ F(θ)) (cos θ, sin θ)` on `m + 1`
-    /// points (`θ = 0 … 2π`), in units of `R⁰`: the shape plot of
-    /// `draw-shape`.
+    /// The closed polar curve `ρ(θ) (cos θ, sin θ)` on `m + 1` points
+    /// (`θ = 0 … 2π`), in units of `R⁰`: the shape plot of `draw-shape`.
     pub fn polar_curve(&self, m: usize) -> Vec<Point> {
         (0..=m)
             .map(|k| {
@@ -210,13 +201,6 @@ pub fn union_outlines(center: Point, disks: &[(Point, f64)], m: usize) -> Vec<Ve
     }
     points.sort_by(|x, y| x.0.total_cmp(&y.0));
     vec![points.into_iter().map(|(_, p)| p).collect()]
-}
-
-fn param_error(family: &str, e: jamkit_fourier::ParamError) -> DrawError {
-    DrawError::Params {
-        family: family.to_string(),
-        message: format!("{} = {}: {}", e.field, e.value, e.allowed),
-    }
 }
 
 /// Signed area of a polygon (shoelace; positive when counter-clockwise).
@@ -322,10 +306,14 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
+    fn fourier(n: u32, delta: f64) -> Result<Outline, DrawError> {
+        Outline::from_ron("fourier", &format!("(n: {n}, delta: {delta:?})"))
+    }
+
     #[test]
     fn disk_outline_points_lie_at_distance_r() {
         let c = [1.5, 2.0];
-        for p in Outline::Disk.body_points(c, 0.7, 0.3, 200) {
+        for p in Outline::disk().body_points(c, 0.7, 0.3, 200) {
             assert_relative_eq!((p[0] - c[0]).hypot(p[1] - c[1]), 0.7, epsilon = 1e-12);
         }
     }
@@ -333,16 +321,15 @@ mod tests {
     #[test]
     fn near_disk_radius_at_its_orientation_is_one_plus_delta_f0() {
         // fourier: F(0) = sin(0)/n = 0, so R(θ_i) = R⁰.
-        let o = Outline::fourier(3, 0.2).unwrap();
+        let o = fourier(3, 0.2).unwrap();
         let (size, theta) = (0.6, 1.1);
         assert_relative_eq!(o.radius(size, theta, theta), size, epsilon = 1e-12);
         // fourier_sum with a phase: F(0) = a sin(b).
-        let modes = vec![Mode {
-            n: 2,
-            a: 0.5,
-            b: 0.7,
-        }];
-        let o = Outline::fourier_sum(modes, 0.3).unwrap();
+        let o = Outline::from_ron(
+            "fourier_sum",
+            "(modes: [(n: 2, a: 0.5, b: 0.7)], delta: 0.3)",
+        )
+        .unwrap();
         let expected = size * (1.0 + 0.3 * 0.5 * 0.7f64.sin());
         assert_relative_eq!(o.radius(size, theta, theta), expected, epsilon = 1e-12);
         // And the outline point in the direction θ_i sits at that radius.
@@ -357,7 +344,7 @@ mod tests {
     fn near_disk_follows_the_outline_convention() {
         // R(φ) = R⁰ [1 + Δ sin(n(θ − φ))/n]: at φ = θ − π/(2n) it is maximal.
         let (n, delta, size, theta) = (2, 0.3, 1.0, 0.4);
-        let o = Outline::fourier(n, delta).unwrap();
+        let o = fourier(n, delta).unwrap();
         let phi = theta - PI / (2.0 * n as f64);
         assert_relative_eq!(
             o.radius(size, theta, phi),
@@ -385,12 +372,16 @@ mod tests {
         let t = far[1].atan2(far[0]);
         assert!((t - 0.7).abs() < 2e-3 || (t - 0.7 + PI).abs() < 2e-3, "{t}");
         assert!(Outline::from_family("ellipse", &serde_json::json!({"aspect": 0.5})).is_err());
-        assert!(Outline::ellipse(1.0).unwrap().is_round());
+        assert!(
+            Outline::from_ron("ellipse", "(aspect: 1.0)")
+                .unwrap()
+                .is_round()
+        );
     }
 
     #[test]
     fn polar_curve_is_closed_and_matches_relative_radius() {
-        let o = Outline::fourier(4, 0.1).unwrap();
+        let o = fourier(4, 0.1).unwrap();
         let c = o.polar_curve(100);
         assert_eq!(c.len(), 101);
         assert_relative_eq!(c[0][0], c[100][0], epsilon = 1e-12);
@@ -405,7 +396,7 @@ mod tests {
 
     #[test]
     fn a_body_inside_the_box_has_one_piece() {
-        let poly = Outline::Disk.body_points([2.0, 2.0], 0.5, 0.0, 64);
+        let poly = Outline::disk().body_points([2.0, 2.0], 0.5, 0.0, 64);
         let pieces = periodic_pieces(&poly, [4.0, 4.0]);
         assert_eq!(pieces.len(), 1);
         assert_eq!(pieces[0].0, [0.0, 0.0]);
@@ -419,7 +410,7 @@ mod tests {
     #[test]
     fn a_body_crossing_an_edge_gets_an_image_and_keeps_its_area() {
         let box_edges = [4.0, 5.0];
-        let poly = Outline::Disk.body_points([0.2, 2.5], 0.5, 0.0, 200);
+        let poly = Outline::disk().body_points([0.2, 2.5], 0.5, 0.0, 200);
         let pieces = periodic_pieces(&poly, box_edges);
         assert_eq!(pieces.len(), 2);
         assert_eq!(pieces[1].0, [4.0, 0.0]);
@@ -437,7 +428,7 @@ mod tests {
     #[test]
     fn a_body_on_a_corner_gets_three_images() {
         let box_edges = [4.0, 4.0];
-        let poly = Outline::fourier(3, 0.2)
+        let poly = fourier(3, 0.2)
             .unwrap()
             .body_points([3.9, 0.1], 0.5, 0.8, 200);
         let pieces = periodic_pieces(&poly, box_edges);
@@ -449,22 +440,36 @@ mod tests {
     #[test]
     fn families_and_parameters_are_checked() {
         let p = serde_json::json!({"n": 3, "delta": 0.2, "inertia": null});
-        assert!(matches!(
-            Outline::from_family("fourier", &p),
-            Ok(Outline::NearDisk(_))
-        ));
+        assert!(Outline::from_family("fourier", &p).unwrap().turns());
         let p = serde_json::json!({"modes": [{"n": 2, "a": 0.5, "b": 0.0}], "delta": 0.1});
         assert!(Outline::from_family("fourier_sum", &p).is_ok());
+        assert!(
+            Outline::from_family("sphere", &serde_json::json!({}))
+                .unwrap()
+                .is_round()
+        );
+        // Every registered 2D family draws from its example parameters.
+        for (info, example) in registry::FAMILIES.iter().zip(registry::EXAMPLES) {
+            if registry::supports_dim(info, 2) {
+                assert!(
+                    Outline::from_ron(info.name, example).is_ok(),
+                    "{}",
+                    info.name
+                );
+            }
+        }
         assert!(matches!(
-            Outline::from_family("sphere", &serde_json::json!({})),
-            Ok(Outline::Disk)
+            Outline::from_ron("nmer", "(alpha: 1.5)"),
+            Ok(Outline::Spheres)
         ));
+        let lobed = Outline::from_ron("lobed", "(delta: 0.2)").unwrap();
+        assert_relative_eq!(lobed.relative_radius(0.0), 1.2, epsilon = 1e-12);
         let e = Outline::from_family("dimer", &serde_json::json!({})).unwrap_err();
         assert!(e.to_string().contains("dimer"), "{e}");
         let e = Outline::from_family("fourier", &serde_json::json!({"n": 2})).unwrap_err();
         assert!(e.to_string().contains("delta"), "{e}");
-        let e = Outline::fourier(1, 5.0).unwrap_err();
+        let e = fourier(1, 5.0).unwrap_err();
         assert!(e.to_string().contains("params.delta"), "{e}");
-        assert!(Outline::fourier(2, 0.0).is_ok());
+        assert!(fourier(2, 0.0).is_ok());
     }
 }

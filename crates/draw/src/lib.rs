@@ -50,8 +50,7 @@ pub enum DrawError {
     Dimension(usize),
     /// A family this crate does not know how to outline.
     #[error(
-        "family `{0}`: cannot draw it (drawable families: {families})",
-        families = geometry::DRAWABLE_FAMILIES.join(", ")
+        "family `{0}`: cannot draw it (only families with a 2D shape that has an outline, or is made of spheres, can be drawn; see `jamkit shapes`)"
     )]
     UnknownFamily(String),
     /// The family's parameters do not describe a valid shape.

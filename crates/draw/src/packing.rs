@@ -111,17 +111,15 @@ impl Packing2d {
                 file.rattler.len()
             )));
         }
-        let needs_angles = matches!(outline, Outline::NearDisk(_) | Outline::Ellipse(_));
+        let needs_angles = outline.turns();
+        // A Δ = 0 near-disk (α = 1 ellipse) is jammed as a disk and stores
+        // no angles: its outline does not turn.
         if needs_angles && file.orientations.len() != n {
-            // A Δ = 0 near-disk (α = 1 ellipse) is jammed as a disk and
-            // stores no angles.
-            if !(file.orientations.is_empty() && outline.is_round()) {
-                return Err(bad(format!(
-                    "orientations has {} entries for {n} positions (family `{}` needs one angle per body)",
-                    file.orientations.len(),
-                    file.family
-                )));
-            }
+            return Err(bad(format!(
+                "orientations has {} entries for {n} positions (family `{}` needs one angle per body)",
+                file.orientations.len(),
+                file.family
+            )));
         }
         let mut bodies = Vec::with_capacity(n);
         for i in 0..n {

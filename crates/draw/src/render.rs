@@ -382,7 +382,7 @@ pub fn draw_shapes(panels: &[ShapePanel], path: &Path, panel_size: u32) -> Resul
 mod tests {
     use super::*;
     use crate::packing::tests::three_disks;
-    use crate::shapes::fourier_panels;
+    use crate::shapes::tests::fourier_panels;
 
     #[test]
     fn a_small_packing_gives_one_filled_polygon_per_piece() {
@@ -421,7 +421,7 @@ mod tests {
 
     #[test]
     fn shape_panels_have_titles_curves_and_legends() {
-        let panels = fourier_panels(&[2, 3], &[0.0, 0.1, 0.3]).unwrap();
+        let panels = fourier_panels(&[2, 3], &[0.0, 0.1, 0.3]);
         let svg = shapes_svg(&panels, 300).unwrap();
         assert!(svg.contains("n = 2") && svg.contains("n = 3"));
         assert!(svg.contains("Δ = 0.3") && svg.contains("x / R⁰"));

@@ -1,11 +1,13 @@
-//! The curves of a shape plot (`jamkit draw-shape`): one panel per shape
-//! (a mode number `n`, or a set of modes), one curve per `Δ`, each the
-//! closed polar curve `R(θ)/R⁰ = 1 + Δ F(θ)` in units of `R⁰` (the paper's
-//! Fig. 2 for `fourier` with `n = 2 … 5` and `Δ = 0, 0.1, 0.3`).
+//! The curves of a shape plot (`jamkit draw-shape`): one panel per
+//! parameter set (a mode number `n`, a set of modes), one curve per
+//! parameter set (`Δ`), each the closed polar curve `ρ(θ) = R(θ)/R⁰` in
+//! units of `R⁰` (the paper's Fig. 2 for `fourier` with `n = 2 … 5` and
+//! `Δ = 0, 0.1, 0.3`). Any registered family whose 2D shape has an outline
+//! can be plotted; the outline comes through the registry.
 
 use crate::DrawError;
 use crate::geometry::{Outline, Point};
-use jamkit_fourier::Mode;
+use jamkit_experiment::registry::{self, ParamMap};
 
 /// Points on each polar curve.
 pub const CURVE_POINTS: usize = 720;
@@ -29,121 +31,158 @@ pub struct ShapePanel {
     pub curves: Vec<ShapeCurve>,
 }
 
-fn curves(
-    deltas: &[f64],
-    outline: impl Fn(f64) -> Result<Outline, DrawError>,
-) -> Result<Vec<ShapeCurve>, DrawError> {
-    deltas
-        .iter()
-        .map(|&d| {
-            Ok(ShapeCurve {
-                label: format!("Δ = {d}"),
-                points: outline(d)?.polar_curve(CURVE_POINTS),
-            })
-        })
-        .collect()
-}
+/// A parameter set of a shape plot: its parameters, by name.
+pub type Params = ParamMap;
 
-fn check_lists(panels: usize, what: &str, deltas: &[f64]) -> Result<(), DrawError> {
-    let bad = |message: String| DrawError::Params {
-        family: "draw-shape".into(),
-        message,
-    };
-    if panels == 0 {
-        return Err(bad(format!("{what}: give at least one")));
-    }
-    if deltas.is_empty() {
-        return Err(bad("delta: give at least one value".into()));
-    }
-    Ok(())
-}
-
-/// The `fourier` panels: one per `n`, one curve per `Δ`.
-pub fn fourier_panels(ns: &[u32], deltas: &[f64]) -> Result<Vec<ShapePanel>, DrawError> {
-    check_lists(ns.len(), "n", deltas)?;
-    ns.iter()
-        .map(|&n| {
-            Ok(ShapePanel {
-                title: format!("n = {n}"),
-                curves: curves(deltas, |d| Outline::fourier(n, d))?,
-            })
-        })
-        .collect()
-}
-
-/// A readable form of `F`: `0.5 sin(2θ) + 0.1 sin(3θ + 1)`.
-pub fn describe_modes(modes: &[Mode]) -> String {
-    modes
-        .iter()
-        .map(|m| {
-            let phase = if m.b == 0.0 {
-                String::new()
-            } else {
-                format!(" + {}", m.b)
-            };
-            format!("{} sin({}θ{phase})", m.a, m.n)
-        })
-        .collect::<Vec<_>>()
-        .join(" + ")
-}
-
-/// The `fourier_sum` panels: one per mode set, one curve per `Δ`.
-pub fn fourier_sum_panels(
-    mode_sets: &[Vec<Mode>],
-    deltas: &[f64],
-) -> Result<Vec<ShapePanel>, DrawError> {
-    check_lists(mode_sets.len(), "modes", deltas)?;
-    mode_sets
-        .iter()
-        .map(|modes| {
-            Ok(ShapePanel {
-                title: format!("F = {}", describe_modes(modes)),
-                curves: curves(deltas, |d| Outline::fourier_sum(modes.clone(), d))?,
-            })
-        })
-        .collect()
-}
-
-/// Read a mode set written in RON as in experiment files:
-/// `[(n: 2, a: 0.5), (n: 3, a: 0.1, b: 1.0)]`.
-pub fn parse_modes(text: &str) -> Result<Vec<Mode>, DrawError> {
-    ron::from_str(text).map_err(|e| DrawError::Params {
-        family: "fourier_sum".into(),
+/// Read a parameter set written in RON as in an experiment file,
+/// `(n: 3)` or `(modes: [(n: 2, a: 0.5)])`.
+pub fn parse_params(family: &str, text: &str) -> Result<Params, DrawError> {
+    registry::params_from_ron(text).map_err(|e| DrawError::Params {
+        family: family.into(),
         message: format!(
-            "modes = {text}: {e} (write e.g. [(n: 2, a: 0.5), (n: 3, a: 0.1, b: 1.0)])"
+            "{text}: {e} (write the parameters as in an experiment file, e.g. (n: 3, delta: 0.2))"
         ),
     })
 }
 
+/// The symbol of a parameter in titles and legends (`delta` → `Δ`).
+fn symbol(name: &str) -> &str {
+    match name {
+        "delta" => "Δ",
+        "kappa" => "κ",
+        "alpha" | "aspect" => "α",
+        other => other,
+    }
+}
+
+/// `Δ = 0.1, n = 3`: a parameter set for a title or a legend.
+pub fn describe(params: &Params) -> String {
+    params
+        .iter()
+        .map(|(name, value)| {
+            let shown = match value {
+                ron::Value::Number(x) => x.into_f64().to_string(),
+                other => ron::to_string(other).unwrap_or_default(),
+            };
+            format!("{} = {shown}", symbol(name))
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The panels of a shape plot of `family`: one per parameter set of
+/// `panels`, one curve per set of `curves`. A curve's parameters are the
+/// family's example ([`jamkit_core::Family::EXAMPLE`]), overridden by its
+/// panel's, overridden by its own; so `panels = [(n: 2), (n: 3)]`,
+/// `curves = [(delta: 0), (delta: 0.1)]` is the paper's Fig. 2 for
+/// `fourier`. An empty list stands for one set with nothing to override.
+pub fn panels(
+    family: &str,
+    panels: &[Params],
+    curves: &[Params],
+) -> Result<Vec<ShapePanel>, DrawError> {
+    let info = registry::family_info(family).map_err(|e| DrawError::Params {
+        family: family.into(),
+        message: e.to_string(),
+    })?;
+    let example = registry::FAMILIES
+        .iter()
+        .position(|f| f.name == info.name)
+        .map(|k| registry::EXAMPLES[k])
+        .unwrap_or("()");
+    let example = parse_params(family, example)?;
+    let one = [Params::new()];
+    let panels = if panels.is_empty() { &one[..] } else { panels };
+    let curves = if curves.is_empty() { &one[..] } else { curves };
+    panels
+        .iter()
+        .map(|panel| {
+            let curves = curves
+                .iter()
+                .map(|curve| {
+                    let mut params = example.clone();
+                    params.extend(panel.clone());
+                    params.extend(curve.clone());
+                    let outline = Outline::of(family, &params)?;
+                    if !matches!(outline, Outline::Polar { .. }) {
+                        return Err(DrawError::Params {
+                            family: family.into(),
+                            message: "its bodies are made of spheres and have no polar outline R(θ) to plot; draw a packing instead (jamkit draw)".into(),
+                        });
+                    }
+                    let label = if curve.is_empty() {
+                        describe(&params)
+                    } else {
+                        describe(curve)
+                    };
+                    Ok(ShapeCurve {
+                        label,
+                        points: outline.polar_curve(CURVE_POINTS),
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok(ShapePanel {
+                title: if panel.is_empty() {
+                    family.to_string()
+                } else {
+                    describe(panel)
+                },
+                curves,
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
-    #[test]
-    fn one_panel_per_n_and_one_curve_per_delta() {
-        let panels = fourier_panels(&[2, 3, 4, 5], &[0.0, 0.1, 0.3]).unwrap();
-        assert_eq!(panels.len(), 4);
-        assert_eq!(panels[1].title, "n = 3");
-        assert!(panels.iter().all(|p| p.curves.len() == 3));
-        assert_eq!(panels[0].curves[2].label, "Δ = 0.3");
-        // Δ = 0 is the unit circle.
-        for p in &panels[0].curves[0].points {
-            assert_relative_eq!(p[0].hypot(p[1]), 1.0, epsilon = 1e-12);
-        }
-        assert!(fourier_panels(&[], &[0.1]).is_err());
-        assert!(fourier_panels(&[2], &[]).is_err());
-        assert!(fourier_panels(&[1], &[2.0]).is_err());
+    pub(crate) fn fourier_panels(ns: &[u32], deltas: &[f64]) -> Vec<ShapePanel> {
+        let sets = |name: &str, xs: Vec<String>| -> Vec<Params> {
+            xs.iter()
+                .map(|x| parse_params("fourier", &format!("({name}: {x})")).unwrap())
+                .collect()
+        };
+        let ns = sets("n", ns.iter().map(|n| n.to_string()).collect());
+        let deltas = sets("delta", deltas.iter().map(|d| format!("{d:?}")).collect());
+        panels("fourier", &ns, &deltas).unwrap()
     }
 
     #[test]
-    fn mode_sets_parse_from_ron() {
-        let modes = parse_modes("[(n: 2, a: 0.5), (n: 3, a: 0.1, b: 1.0)]").unwrap();
-        assert_eq!(modes.len(), 2);
-        assert_eq!((modes[1].n, modes[1].b), (3, 1.0));
-        assert_eq!(describe_modes(&modes), "0.5 sin(2θ) + 0.1 sin(3θ + 1)");
-        assert!(parse_modes("[(n: 2)]").is_err());
-        let panels = fourier_sum_panels(&[modes], &[0.0, 0.2]).unwrap();
-        assert_eq!(panels[0].curves.len(), 2);
+    fn one_panel_per_n_and_one_curve_per_delta() {
+        let p = fourier_panels(&[2, 3, 4, 5], &[0.0, 0.1, 0.3]);
+        assert_eq!(p.len(), 4);
+        assert_eq!(p[1].title, "n = 3");
+        assert!(p.iter().all(|p| p.curves.len() == 3));
+        assert_eq!(p[0].curves[2].label, "Δ = 0.3");
+        // Δ = 0 is the unit circle.
+        for q in &p[0].curves[0].points {
+            assert_relative_eq!(q[0].hypot(q[1]), 1.0, epsilon = 1e-12);
+        }
+        let n1 = parse_params("fourier", "(n: 1, delta: 2.0)").unwrap();
+        assert!(panels("fourier", &[n1], &[]).is_err());
+        assert!(panels("no_such", &[], &[]).is_err());
+        assert!(panels("nmer", &[], &[]).is_err());
+        assert!(parse_params("fourier", "(n: ").is_err());
+    }
+
+    #[test]
+    fn every_planar_family_has_a_default_panel() {
+        for info in registry::FAMILIES {
+            if registry::supports_dim(info, 2) && info.name != "nmer" {
+                let p = panels(info.name, &[], &[]).unwrap();
+                assert_eq!((p.len(), p[0].curves.len()), (1, 1), "{}", info.name);
+            }
+        }
+        let modes = parse_params(
+            "fourier_sum",
+            "(modes: [(n: 2, a: 0.5), (n: 3, a: 0.1, b: 1.0)])",
+        )
+        .unwrap();
+        let delta = parse_params("fourier_sum", "(delta: 0.2)").unwrap();
+        let p = panels("fourier_sum", &[modes], &[delta.clone(), delta]).unwrap();
+        assert_eq!(p[0].curves.len(), 2);
+        assert!(p[0].title.starts_with("modes = "), "{}", p[0].title);
     }
 }

@@ -1,38 +1,65 @@
 //! The registry: every shape family jamkit knows, in one readable list.
 //!
-//! Adding a family means one entry in [`FAMILIES`] and one arm in
-//! [`dispatch`]; nothing else in the engine changes. `dispatch` is the one
-//! place where a family name from a file becomes a typed shape `S` in a
-//! const dimension `D`, after which everything is statically dispatched.
+//! A family registers itself once, in its own crate, by implementing
+//! [`jamkit_core::Family`]: its info, its typed parameters, and how they
+//! become a shape in a dimension (with the degenerate cases, `Δ = 0` → the
+//! disk). Adding a family to jamkit is one line in the [`families!`] list
+//! below (plus the crate in the manifests); the runner, `jamkit draw`,
+//! `draw-shape`, `report` and `jamkit shapes` all go through [`dispatch`],
+//! the one place where a family name from a file becomes a typed shape `S`
+//! in a const dimension `D`, after which everything is statically
+//! dispatched.
 
 use crate::error::ExperimentError;
-use jamkit_core::{Dims, FamilyInfo, Shape};
+use jamkit_core::{Dims, Family, FamilyInfo};
 use serde::de::DeserializeOwned;
 use std::collections::BTreeMap;
+
+pub use jamkit_core::ShapeVisitor as SceneVisitor;
 
 /// Parameters of one grid point, by name.
 pub type ParamMap = BTreeMap<String, ron::Value>;
 
-/// Every registered family.
-pub const FAMILIES: &[FamilyInfo] = &[
-    jamkit_sphere::INFO,
-    jamkit_fourier::FOURIER_INFO,
-    jamkit_fourier::FOURIER_SUM_INFO,
-    jamkit_lobed::INFO,
-    jamkit_nmer::INFO,
-    jamkit_ellipse::INFO,
+/// The list of families: each line names a type implementing
+/// [`jamkit_core::Family`]. It defines [`FAMILIES`], [`EXAMPLES`] and the
+/// dispatch by name.
+macro_rules! families {
+    ($($family:ty),+ $(,)?) => {
+        /// Every registered family.
+        pub const FAMILIES: &[FamilyInfo] = &[$(<$family as Family>::INFO),+];
+
+        /// Every registered family's example parameters (RON), in the order
+        /// of [`FAMILIES`].
+        pub const EXAMPLES: &[&str] = &[$(<$family as Family>::EXAMPLE),+];
+
+        fn dispatch_by_name<V: SceneVisitor>(
+            family: &str,
+            dim: usize,
+            params: &ParamMap,
+            visitor: V,
+        ) -> Result<V::Output, ExperimentError> {
+            $(
+                if family == <$family as Family>::INFO.name {
+                    let p: <$family as Family>::Params = parse_params(family, params)?;
+                    return Ok(<$family as Family>::visit(&p, dim, visitor)?);
+                }
+            )+
+            Err(unknown_family(family))
+        }
+    };
+}
+
+families![
+    jamkit_sphere::SphereFamily,
+    jamkit_fourier::FourierFamily,
+    jamkit_fourier::FourierSumFamily,
+    jamkit_lobed::LobedFamily,
+    jamkit_nmer::NmerFamily,
+    jamkit_ellipse::EllipseFamily,
 ];
 
 /// Dimensions the engine is compiled for (families with `Dims::Any`).
 pub const COMPILED_DIMS: &[usize] = &[2, 3, 4];
-
-/// Something to do with a typed shape: run a sample, draw, analyse, …
-pub trait SceneVisitor {
-    /// What the visit returns.
-    type Output;
-    /// Called with the family's shape in dimension `D`.
-    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Self::Output;
-}
 
 /// The family called `name`.
 pub fn family_info(name: &str) -> Result<FamilyInfo, ExperimentError> {
@@ -40,14 +67,64 @@ pub fn family_info(name: &str) -> Result<FamilyInfo, ExperimentError> {
         .iter()
         .copied()
         .find(|f| f.name == name)
-        .ok_or_else(|| {
-            let known: Vec<&str> = FAMILIES.iter().map(|f| f.name).collect();
-            ExperimentError::invalid(
-                "family",
-                format!("\"{name}\""),
-                format!("must be one of: {}", known.join(", ")),
-            )
-        })
+        .ok_or_else(|| unknown_family(name))
+}
+
+fn unknown_family(name: &str) -> ExperimentError {
+    let known: Vec<&str> = FAMILIES.iter().map(|f| f.name).collect();
+    ExperimentError::invalid(
+        "family",
+        format!("\"{name}\""),
+        format!("must be one of: {}", known.join(", ")),
+    )
+}
+
+/// `params` with the defaults of `info` filled in for the parameters it
+/// does not give (a `None` default is left out: serde fills it).
+pub fn with_defaults(info: &FamilyInfo, params: &ParamMap) -> ParamMap {
+    let mut out = params.clone();
+    for spec in info.params {
+        if let Some(default) = spec.default
+            && !out.contains_key(spec.name)
+            && default != "None"
+        {
+            let value = ron::from_str(default).expect("family defaults are valid RON");
+            out.insert(spec.name.to_string(), value);
+        }
+    }
+    out
+}
+
+/// A parameter map written in RON, as a struct `(n: 3, delta: 0.2)` or as a
+/// map `{"n": 3, "delta": 0.2}` (the form of experiment files).
+pub fn params_from_ron(text: &str) -> Result<ParamMap, String> {
+    let value: ron::Value = ron::from_str(text).map_err(|e| e.to_string())?;
+    if value == ron::Value::Unit {
+        // `()`: the empty struct.
+        return Ok(ParamMap::new());
+    }
+    value
+        .into_rust()
+        .map_err(|e| format!("not a parameter map: {e}"))
+}
+
+/// A family's parameters as a packing file stores them (JSON) back as a
+/// parameter map. JSON `null` arrives as RON's unit `()`; in a packing file
+/// it is always an absent optional (`None`), never a bare RON name.
+pub fn params_from_json(params: &serde_json::Value) -> Result<ParamMap, ExperimentError> {
+    let mut map: ParamMap = serde_json::from_value(params.clone()).map_err(|e| {
+        ExperimentError::invalid(
+            "params",
+            params.to_string(),
+            format!("not a family parameter map: {e}"),
+        )
+    })?;
+    for v in map.values_mut() {
+        if *v == ron::Value::Unit {
+            *v = ron::Value::Option(None);
+        }
+    }
+    Ok(map)
 }
 
 /// Whether `info` can run in dimension `dim`.
@@ -126,89 +203,5 @@ pub fn dispatch<V: SceneVisitor>(
             format!("family `{family}` supports {}", describe_dims(&info)),
         ));
     }
-    // One arm per family; `any_dim!` expands a family that works in every
-    // compiled dimension.
-    macro_rules! any_dim {
-        ($shape:expr) => {
-            match dim {
-                2 => Ok(visitor.visit::<2, _>($shape)),
-                3 => Ok(visitor.visit::<3, _>($shape)),
-                4 => Ok(visitor.visit::<4, _>($shape)),
-                _ => unreachable!("checked by supports_dim"),
-            }
-        };
-    }
-    match family {
-        "sphere" => {
-            let _: NoParams = parse_params(family, params)?;
-            any_dim!(jamkit_sphere::Sphere)
-        }
-        "fourier" => {
-            let p: jamkit_fourier::FourierParams = parse_params(family, params)?;
-            near_disk(visitor, p.delta, jamkit_fourier::NearDisk::fourier(&p))
-        }
-        "fourier_sum" => {
-            let p: jamkit_fourier::FourierSumParams = parse_params(family, params)?;
-            near_disk(visitor, p.delta, jamkit_fourier::NearDisk::fourier_sum(&p))
-        }
-        "lobed" => {
-            let p: jamkit_lobed::LobedParams = parse_params(family, params)?;
-            let shape = jamkit_lobed::Lobed::new(&p)
-                .map_err(|e| ExperimentError::invalid(e.field, e.value, e.allowed))?;
-            Ok(visitor.visit::<2, _>(shape))
-        }
-        "nmer" => {
-            let p: jamkit_nmer::NmerParams = parse_params(family, params)?;
-            let invalid =
-                |e: jamkit_nmer::ParamError| ExperimentError::invalid(e.field, e.value, e.allowed);
-            // α = 1: two coincident spheres are one sphere (same random
-            // stream, hence the same packing as `sphere` for the same seed).
-            match (dim, p.is_single_sphere()) {
-                (2, true) => Ok(visitor.visit::<2, _>(jamkit_sphere::Sphere)),
-                (3, true) => Ok(visitor.visit::<3, _>(jamkit_sphere::Sphere)),
-                (2, false) => {
-                    Ok(visitor.visit::<2, _>(jamkit_nmer::Nmer::<2>::new(&p).map_err(invalid)?))
-                }
-                (3, false) => {
-                    Ok(visitor.visit::<3, _>(jamkit_nmer::Nmer::<3>::new(&p).map_err(invalid)?))
-                }
-                _ => unreachable!("checked by supports_dim"),
-            }
-        }
-        "ellipse" => {
-            let p: jamkit_ellipse::EllipseParams = parse_params(family, params)?;
-            let shape = jamkit_ellipse::Ellipse::new(&p)
-                .map_err(|e| ExperimentError::invalid(e.field, e.value, e.allowed))?;
-            // α = 1 is the disk of radius R⁰: run it as `sphere` (no
-            // rotational coordinates, same random stream, hence the same
-            // packing as `sphere` for the same seed), as near-disks with Δ = 0.
-            Ok(if p.aspect == 1.0 {
-                visitor.visit::<2, _>(jamkit_sphere::Sphere)
-            } else {
-                visitor.visit::<2, _>(shape)
-            })
-        }
-        other => unreachable!("family `{other}` is in FAMILIES but has no dispatch arm"),
-    }
+    dispatch_by_name(family, dim, params, visitor)
 }
-
-/// Near-disks with Δ = 0 are disks: they run as the sphere family, with no
-/// rotational coordinates and the same random stream, hence the same
-/// packing as `sphere` for the same seed.
-fn near_disk<V: SceneVisitor>(
-    visitor: V,
-    delta: f64,
-    shape: Result<jamkit_fourier::NearDisk, jamkit_fourier::ParamError>,
-) -> Result<V::Output, ExperimentError> {
-    let shape = shape.map_err(|e| ExperimentError::invalid(e.field, e.value, e.allowed))?;
-    Ok(if delta == 0.0 {
-        visitor.visit::<2, _>(jamkit_sphere::Sphere)
-    } else {
-        visitor.visit::<2, _>(shape)
-    })
-}
-
-/// The parameters of a family that has none.
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct NoParams {}

@@ -10,7 +10,7 @@
 
 use crate::error::ExperimentError;
 use crate::record::PackingFile;
-use crate::registry::{self, ParamMap, SceneVisitor};
+use crate::registry::{self, SceneVisitor};
 use crate::schema::EngineParams;
 use jamkit_core::{Packing, PeriodicBox, Potential, Shape, Vector};
 use jamkit_engine::Scene;
@@ -40,15 +40,8 @@ pub fn reload<V: PackingVisitor>(
             ),
         ));
     }
-    let mut params: ParamMap = serde_json::from_value(file.params.clone())
+    let params = registry::params_from_json(&file.params)
         .map_err(|e| bad("params", format!("not a family parameter map: {e}")))?;
-    // JSON `null` arrives as RON's unit `()`; in a packing file it is
-    // always an absent optional (`None`), never a bare RON name.
-    for v in params.values_mut() {
-        if *v == ron::Value::Unit {
-            *v = ron::Value::Option(None);
-        }
-    }
     let setting = |key: &str| file.settings.get(key).cloned().unwrap_or_default();
     let potential: Potential = serde_json::from_value(setting("potential")).unwrap_or_default();
     let engine: EngineParams = serde_json::from_value(setting("engine")).unwrap_or_default();

@@ -64,7 +64,10 @@
 //! spectrally accurate for this smooth periodic integrand.
 
 use jamkit_core::gap2d::{ExactGap, SupportJet};
-use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, ParamSpec, RotVec, Shape, Vector};
+use jamkit_core::{
+    Contact, Dims, Family, FamilyInfo, GapHessian, Outline, ParamSpec, RotVec, Shape, ShapeVisitor,
+    SharedOutline, Vector,
+};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -101,20 +104,34 @@ pub struct EllipseParams {
     pub inertia: Option<f64>,
 }
 
-/// An invalid parameter, named.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParamError {
-    /// Field path.
-    pub field: String,
-    /// Offending value.
-    pub value: String,
-    /// What is allowed.
-    pub allowed: String,
+/// The `ellipse` family's registration.
+pub struct EllipseFamily;
+
+impl Family for EllipseFamily {
+    const INFO: FamilyInfo = INFO;
+    const EXAMPLE: &'static str = "(aspect: 1.5)";
+    type Params = EllipseParams;
+
+    /// `α = 1` is the disk of radius `R⁰`: it runs as `sphere` (no
+    /// rotational coordinates, same random stream, hence the same packing
+    /// as `sphere` for the same seed), as near-disks with `Δ = 0`.
+    fn visit<V: ShapeVisitor>(
+        p: &EllipseParams,
+        dim: usize,
+        visitor: V,
+    ) -> jamkit_core::Result<V::Output> {
+        let shape = Ellipse::new(p)?;
+        if p.aspect == 1.0 {
+            jamkit_sphere::visit_ball(dim, visitor)
+        } else {
+            Ok(visitor.visit::<2, _>(shape))
+        }
+    }
 }
 
-impl std::fmt::Display for ParamError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} = {}: {}", self.field, self.value, self.allowed)
+impl Outline for Ellipse {
+    fn relative_radius(&self, psi: f64) -> f64 {
+        Ellipse::relative_radius(self, psi)
     }
 }
 
@@ -129,22 +146,22 @@ pub struct Ellipse {
 
 impl Ellipse {
     /// The family for these parameters, or the first invalid one.
-    pub fn new(p: &EllipseParams) -> Result<Self, ParamError> {
+    pub fn new(p: &EllipseParams) -> jamkit_core::Result<Self> {
         if !(p.aspect >= 1.0 && p.aspect.is_finite()) {
-            return Err(ParamError {
-                field: "params.aspect".into(),
-                value: p.aspect.to_string(),
-                allowed: "must be a finite number ≥ 1 (α = a/b, long over short semi-axis)".into(),
-            });
+            return Err(jamkit_core::Error::invalid(
+                "params.aspect",
+                p.aspect.to_string(),
+                "must be a finite number ≥ 1 (α = a/b, long over short semi-axis)",
+            ));
         }
         if let Some(i) = p.inertia
             && !(i > 0.0 && i.is_finite())
         {
-            return Err(ParamError {
-                field: "params.inertia".into(),
-                value: i.to_string(),
-                allowed: "must be positive and finite, or None for (a² + b²)/4".into(),
-            });
+            return Err(jamkit_core::Error::invalid(
+                "params.inertia",
+                i.to_string(),
+                "must be positive and finite, or None for (a² + b²)/4",
+            ));
         }
         Ok(Self {
             aspect: p.aspect,
@@ -479,6 +496,10 @@ impl Shape<2> for Ellipse {
     /// The long semi-axis `a = R⁰ √α`.
     fn bounding_radius(&self, size: f64) -> f64 {
         size * self.root
+    }
+
+    fn outline(&self) -> Option<SharedOutline> {
+        Some(std::sync::Arc::new(self.clone()))
     }
 
     fn rot_inertia(&self, size: f64) -> RotVec {
@@ -857,8 +878,8 @@ mod tests {
                 inertia: None,
             })
             .unwrap_err();
-            assert_eq!(e.field, "params.aspect");
-            assert!(e.allowed.contains("≥ 1"), "{e}");
+            assert_eq!(e.field(), Some("params.aspect"));
+            assert!(e.allowed().unwrap().contains("≥ 1"), "{e}");
         }
         for inertia in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let e = Ellipse::new(&EllipseParams {
@@ -866,7 +887,7 @@ mod tests {
                 inertia: Some(inertia),
             })
             .unwrap_err();
-            assert_eq!(e.field, "params.inertia");
+            assert_eq!(e.field(), Some("params.inertia"));
         }
         // Defaults: I = (a² + b²)/4, per size.
         let s = ellipse(2.0);

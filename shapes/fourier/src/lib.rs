@@ -38,8 +38,8 @@ use jamkit_core::first_order::{Profile, gap_hessian};
 use jamkit_core::gap2d::{self, GapModel, Jet3, SupportJet};
 use jamkit_core::math::{Unit, cmul, turn_unit, unit_of_angle};
 use jamkit_core::{
-    Contact, ContactLanes, Dims, FamilyInfo, GapHessian, PairLanes, ParamSpec, Shape, Vector,
-    contacts_one_by_one,
+    Contact, ContactLanes, Dims, Family, FamilyInfo, GapHessian, Outline, PairLanes, ParamSpec,
+    Shape, ShapeVisitor, SharedOutline, Vector, contacts_one_by_one,
 };
 use rand::{Rng, RngExt};
 use serde::Deserialize;
@@ -154,6 +154,63 @@ pub struct FourierSumParams {
     pub gap: GapModel,
 }
 
+/// The `fourier` family's registration.
+pub struct FourierFamily;
+
+impl Family for FourierFamily {
+    const INFO: FamilyInfo = FOURIER_INFO;
+    const EXAMPLE: &'static str = "(n: 3, delta: 0.2)";
+    type Params = FourierParams;
+
+    fn visit<V: ShapeVisitor>(
+        p: &FourierParams,
+        dim: usize,
+        visitor: V,
+    ) -> jamkit_core::Result<V::Output> {
+        visit_near_disk(NearDisk::fourier(p), p.delta, dim, visitor)
+    }
+}
+
+/// The `fourier_sum` family's registration.
+pub struct FourierSumFamily;
+
+impl Family for FourierSumFamily {
+    const INFO: FamilyInfo = FOURIER_SUM_INFO;
+    const EXAMPLE: &'static str = "(modes: [(n: 2, a: 0.5), (n: 3, a: 0.1, b: 1.0)], delta: 0.2)";
+    type Params = FourierSumParams;
+
+    fn visit<V: ShapeVisitor>(
+        p: &FourierSumParams,
+        dim: usize,
+        visitor: V,
+    ) -> jamkit_core::Result<V::Output> {
+        visit_near_disk(NearDisk::fourier_sum(p), p.delta, dim, visitor)
+    }
+}
+
+/// Near-disks with `Δ = 0` are disks: they run as the sphere family, with
+/// no rotational coordinates and the same random stream, hence the same
+/// packing as `sphere` for the same seed.
+fn visit_near_disk<V: ShapeVisitor>(
+    shape: jamkit_core::Result<NearDisk>,
+    delta: f64,
+    dim: usize,
+    visitor: V,
+) -> jamkit_core::Result<V::Output> {
+    let shape = shape?;
+    if delta == 0.0 {
+        jamkit_sphere::visit_ball(dim, visitor)
+    } else {
+        Ok(visitor.visit::<2, _>(shape))
+    }
+}
+
+impl Outline for NearDisk {
+    fn relative_radius(&self, psi: f64) -> f64 {
+        NearDisk::relative_radius(self, psi)
+    }
+}
+
 /// A near-disk family: `Δ`, the modes of `F`, and the moment of inertia.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NearDisk {
@@ -258,26 +315,15 @@ fn cpow(mut z: (f64, f64), mut n: u32) -> (f64, f64) {
     acc
 }
 
-/// An invalid parameter, named.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParamError {
-    /// Field path.
-    pub field: String,
-    /// Offending value.
-    pub value: String,
-    /// What is allowed.
-    pub allowed: String,
-}
-
 impl NearDisk {
     /// The `fourier` family: one mode `sin(nθ)/n`.
-    pub fn fourier(p: &FourierParams) -> Result<Self, ParamError> {
+    pub fn fourier(p: &FourierParams) -> jamkit_core::Result<Self> {
         if p.n < 1 {
-            return Err(ParamError {
-                field: "params.n".into(),
-                value: p.n.to_string(),
-                allowed: "must be an integer ≥ 1".into(),
-            });
+            return Err(jamkit_core::Error::invalid(
+                "params.n",
+                p.n.to_string(),
+                "must be an integer ≥ 1",
+            ));
         }
         Self::new(
             "fourier",
@@ -293,7 +339,7 @@ impl NearDisk {
     }
 
     /// The `fourier_sum` family.
-    pub fn fourier_sum(p: &FourierSumParams) -> Result<Self, ParamError> {
+    pub fn fourier_sum(p: &FourierSumParams) -> jamkit_core::Result<Self> {
         Self::new("fourier_sum", p.delta, p.modes.clone(), p.inertia, p.gap)
     }
 
@@ -303,11 +349,9 @@ impl NearDisk {
         modes: Vec<Mode>,
         inertia: Option<f64>,
         gap: GapModel,
-    ) -> Result<Self, ParamError> {
-        let err = |field: &str, value: String, allowed: &str| ParamError {
-            field: field.into(),
-            value,
-            allowed: allowed.into(),
+    ) -> jamkit_core::Result<Self> {
+        let err = |field: &str, value: String, allowed: &str| {
+            jamkit_core::Error::invalid(field, value, allowed)
         };
         if !delta.is_finite() || delta < 0.0 {
             return Err(err(
@@ -785,6 +829,10 @@ impl Shape<2> for NearDisk {
 
     fn rot_inertia(&self, _size: f64) -> jamkit_core::RotVec {
         [self.inertia, 1.0, 1.0]
+    }
+
+    fn outline(&self) -> Option<SharedOutline> {
+        Some(std::sync::Arc::new(self.clone()))
     }
 
     fn reference_orientation(&self) -> Angle {

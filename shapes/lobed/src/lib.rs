@@ -45,7 +45,10 @@
 //! does not see.
 
 use jamkit_core::first_order::{Profile, gap_hessian};
-use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, ParamSpec, RotVec, Shape, Vector};
+use jamkit_core::{
+    Contact, Dims, Family, FamilyInfo, GapHessian, Outline, ParamSpec, RotVec, Shape, ShapeVisitor,
+    SharedOutline, Vector,
+};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -92,15 +95,28 @@ pub struct LobedParams {
     pub inertia: Option<f64>,
 }
 
-/// An invalid parameter: the field, its value, and what is allowed.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ParamError {
-    /// Field path (`params.delta`).
-    pub field: String,
-    /// Offending value.
-    pub value: String,
-    /// What is allowed.
-    pub allowed: String,
+/// The `lobed` family's registration: the one line of
+/// `crates/experiment/src/registry.rs` names this type.
+pub struct LobedFamily;
+
+impl Family for LobedFamily {
+    const INFO: FamilyInfo = INFO;
+    const EXAMPLE: &'static str = "(delta: 0.2, kappa: 2.0)";
+    type Params = LobedParams;
+
+    fn visit<V: ShapeVisitor>(
+        p: &LobedParams,
+        _dim: usize,
+        visitor: V,
+    ) -> jamkit_core::Result<V::Output> {
+        Ok(visitor.visit::<2, _>(Lobed::new(p)?))
+    }
+}
+
+impl Outline for Lobed {
+    fn relative_radius(&self, psi: f64) -> f64 {
+        Lobed::relative_radius(self, psi)
+    }
 }
 
 /// Smallest and largest `κ` accepted.
@@ -164,11 +180,9 @@ fn scaled_bessel_i0(x: f64) -> f64 {
 
 impl Lobed {
     /// Build the family, checking every parameter.
-    pub fn new(p: &LobedParams) -> Result<Self, ParamError> {
-        let err = |field: &str, value: f64, allowed: String| ParamError {
-            field: field.into(),
-            value: value.to_string(),
-            allowed,
+    pub fn new(p: &LobedParams) -> jamkit_core::Result<Self> {
+        let err = |field: &str, value: f64, allowed: String| {
+            jamkit_core::Error::invalid(field, value, allowed)
         };
         if !(p.delta.is_finite() && p.delta >= 0.0) {
             return Err(err(
@@ -312,6 +326,10 @@ impl Shape<2> for Lobed {
 
     fn rot_inertia(&self, _size: f64) -> RotVec {
         [self.inertia, 1.0, 1.0]
+    }
+
+    fn outline(&self) -> Option<SharedOutline> {
+        Some(std::sync::Arc::new(self.clone()))
     }
 
     fn reference_orientation(&self) -> Angle {
@@ -609,17 +627,32 @@ mod tests {
                 inertia,
             })
         };
-        assert_eq!(try_new(-0.1, 1.0, None).unwrap_err().field, "params.delta");
         assert_eq!(
-            try_new(f64::NAN, 1.0, None).unwrap_err().field,
-            "params.delta"
+            try_new(-0.1, 1.0, None).unwrap_err().field(),
+            Some("params.delta")
         );
-        assert_eq!(try_new(0.1, 0.0, None).unwrap_err().field, "params.kappa");
-        assert_eq!(try_new(0.1, 50.0, None).unwrap_err().field, "params.kappa");
-        assert_eq!(try_new(0.0, 1.0, None).unwrap_err().field, "params.inertia");
+        assert_eq!(
+            try_new(f64::NAN, 1.0, None).unwrap_err().field(),
+            Some("params.delta")
+        );
+        assert_eq!(
+            try_new(0.1, 0.0, None).unwrap_err().field(),
+            Some("params.kappa")
+        );
+        assert_eq!(
+            try_new(0.1, 50.0, None).unwrap_err().field(),
+            Some("params.kappa")
+        );
+        assert_eq!(
+            try_new(0.0, 1.0, None).unwrap_err().field(),
+            Some("params.inertia")
+        );
         assert!(try_new(0.0, 1.0, Some(1.0)).is_ok());
         // κ = 1: min G ≈ −0.619, so R > 0 needs Δ < 1.62.
-        assert_eq!(try_new(1.7, 1.0, None).unwrap_err().field, "params.delta");
+        assert_eq!(
+            try_new(1.7, 1.0, None).unwrap_err().field(),
+            Some("params.delta")
+        );
         assert!(lobed(0.2, 1.0).is_convex());
         assert!(Shape::<2>::warnings(&lobed(0.2, 1.0)).is_empty());
         // The waist turns concave near Δ ≈ 0.61 at κ = 1.

@@ -63,7 +63,7 @@ pub mod volume;
 
 pub use orientation::{Angle, Quaternion};
 
-use jamkit_core::{Dims, FamilyInfo, ParamSpec, Vector};
+use jamkit_core::{Dims, Family, FamilyInfo, ParamSpec, ShapeVisitor, Vector};
 use serde::Deserialize;
 
 /// The family's self-description.
@@ -139,22 +139,39 @@ impl NmerParams {
     }
 }
 
-/// An invalid parameter, named.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParamError {
-    /// Field path (`params.alpha`).
-    pub field: String,
-    /// Offending value.
-    pub value: String,
-    /// What is allowed.
-    pub allowed: String,
+fn err(
+    field: impl Into<String>,
+    value: impl ToString,
+    allowed: impl Into<String>,
+) -> jamkit_core::Error {
+    jamkit_core::Error::invalid(field, value.to_string(), allowed)
 }
 
-fn err(field: impl Into<String>, value: impl ToString, allowed: impl Into<String>) -> ParamError {
-    ParamError {
-        field: field.into(),
-        value: value.to_string(),
-        allowed: allowed.into(),
+/// The `nmer` family's registration.
+pub struct NmerFamily;
+
+impl Family for NmerFamily {
+    const INFO: FamilyInfo = INFO;
+    const EXAMPLE: &'static str = "(alpha: 1.5)";
+    type Params = NmerParams;
+
+    /// `α = 1`: two coincident spheres are one sphere (same random stream,
+    /// hence the same packing as `sphere` for the same seed).
+    fn visit<V: ShapeVisitor>(
+        p: &NmerParams,
+        dim: usize,
+        visitor: V,
+    ) -> jamkit_core::Result<V::Output> {
+        match (dim, p.is_single_sphere()) {
+            (_, true) => jamkit_sphere::visit_ball(dim, visitor),
+            (2, false) => Ok(visitor.visit::<2, _>(Nmer::<2>::new(p)?)),
+            (3, false) => Ok(visitor.visit::<3, _>(Nmer::<3>::new(p)?)),
+            _ => Err(jamkit_core::Error::invalid(
+                "dim",
+                dim,
+                "nmer bodies exist in dim 2 or 3",
+            )),
+        }
     }
 }
 
@@ -186,7 +203,7 @@ impl<const D: usize> Nmer<D> {
     /// more than [`MAX_SPHERES`] spheres; an offset of the wrong length or
     /// not finite; a radius not positive and finite; a sphere inside
     /// another; an inertia not positive and finite.
-    pub fn new(p: &NmerParams) -> Result<Self, ParamError> {
+    pub fn new(p: &NmerParams) -> jamkit_core::Result<Self> {
         if !(D == 2 || D == 3) {
             return Err(err("dim", D, "nmer bodies exist in dim 2 or 3"));
         }

@@ -13,7 +13,10 @@
 //! `D` coordinates per body.
 
 use jamkit_core::math::unit_ball_volume;
-use jamkit_core::{Contact, Dims, FamilyInfo, GapHessian, Matrix, Shape, Vector};
+use jamkit_core::{
+    Contact, Dims, Family, FamilyInfo, GapHessian, Matrix, RoundOutline, Shape, ShapeVisitor,
+    SharedOutline, Vector,
+};
 use rand::Rng;
 
 /// The family's self-description for the registry.
@@ -23,6 +26,46 @@ pub const INFO: FamilyInfo = FamilyInfo {
     dims: Dims::Any,
     params: &[],
 };
+
+/// The family's registration.
+pub struct SphereFamily;
+
+/// The parameters of a family that has none.
+#[derive(Clone, Copy, Debug, Default, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoParams {}
+
+impl Family for SphereFamily {
+    const INFO: FamilyInfo = INFO;
+    const EXAMPLE: &'static str = "()";
+    type Params = NoParams;
+
+    fn visit<V: ShapeVisitor>(
+        _params: &NoParams,
+        dim: usize,
+        visitor: V,
+    ) -> jamkit_core::Result<V::Output> {
+        visit_ball(dim, visitor)
+    }
+}
+
+/// Hand the ball to `visitor` in dimension `dim` (2, 3 or 4, the dimensions
+/// the engine is compiled for): the sphere family, and the degenerate case
+/// of the families whose bodies become balls (a near-disk with `Δ = 0`, an
+/// ellipse with `α = 1`, a dimer with `α = 1`), which then run with no
+/// rotational coordinates and the same random stream as `sphere`.
+pub fn visit_ball<V: ShapeVisitor>(dim: usize, visitor: V) -> jamkit_core::Result<V::Output> {
+    match dim {
+        2 => Ok(visitor.visit::<2, _>(Sphere)),
+        3 => Ok(visitor.visit::<3, _>(Sphere)),
+        4 => Ok(visitor.visit::<4, _>(Sphere)),
+        _ => Err(jamkit_core::Error::invalid(
+            "dim",
+            dim,
+            "the engine is compiled for dim 2, 3 and 4",
+        )),
+    }
+}
 
 /// Balls in `D` dimensions; the family has no parameters.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -37,6 +80,10 @@ impl<const D: usize> Shape<D> for Sphere {
 
     fn rot_dof(&self) -> usize {
         0
+    }
+
+    fn outline(&self) -> Option<SharedOutline> {
+        Some(std::sync::Arc::new(RoundOutline))
     }
 
     fn volume(&self, size: f64) -> f64 {
