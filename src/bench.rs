@@ -111,8 +111,6 @@ pub enum MassesArg {
     Plain,
     /// Each body's own stiffness block (block-preconditioned FIRE).
     Blocks,
-    /// The family's default.
-    Family,
 }
 
 /// Which bodies `bench packing` jams.
@@ -171,8 +169,8 @@ pub enum BenchCommand {
         #[arg(long)]
         newton_after: Option<u64>,
         /// FIRE's masses (`minimizer.masses`): the bodies' own (`plain`, the
-        /// paper), each body's stiffness block (`blocks`: block-preconditioned
-        /// FIRE), or the family's default (`family`).
+        /// paper) or each body's stiffness block (`blocks`:
+        /// block-preconditioned FIRE).
         #[arg(long, value_enum, default_value_t = MassesArg::Plain)]
         masses: MassesArg,
         /// The block preconditioner's floor `c` [default: 0.25].
@@ -286,7 +284,6 @@ pub fn run(what: BenchCommand) -> Result<()> {
             fire.masses = match masses {
                 MassesArg::Plain => Masses::Plain,
                 MassesArg::Blocks => Masses::Blocks(blocks),
-                MassesArg::Family => Masses::Family,
             };
             fire.dt_max = dt_max.or(fire.dt_max);
             fire.validate("minimizer")?;

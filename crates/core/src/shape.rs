@@ -268,16 +268,6 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         None
     }
 
-    /// Whether FIRE should, by default, integrate packings of this family
-    /// with each body's own block of the stiffness matrix as its mass (block
-    /// preconditioning, `jamkit_engine::precon`) instead of the plain masses.
-    /// A family says yes where that was measured faster with the same
-    /// ensembles (docs/performance.md); an experiment's `minimizer.masses`
-    /// overrides it. Default: no.
-    fn fire_block_masses(&self) -> bool {
-        false
-    }
-
     /// Inertia of each rotational coordinate (the mass FIRE gives it).
     fn rot_inertia(&self, _size: f64) -> RotVec {
         [1.0; 3]

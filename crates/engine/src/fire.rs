@@ -165,11 +165,11 @@ pub struct FireParams {
     /// without convergence, Newton iterations with the analytic Hessian.
     /// `None`: FIRE all the way, as in the paper.
     pub newton: Option<NewtonParams>,
-    /// The masses FIRE integrates with: the family's choice (default), the
-    /// bodies' own (`Plain`, the paper), or each body's own block of the
-    /// stiffness matrix (`Blocks`, [`crate::precon`]; FIRE only). Left out
-    /// of the recorded settings when `Plain`, so that packings made before
-    /// it existed still resume.
+    /// The masses FIRE integrates with: the bodies' own (`Plain`, the
+    /// paper; the default) or each body's own block of the stiffness matrix
+    /// (`Blocks`, [`crate::precon`]; FIRE only). Left out of the recorded
+    /// settings when `Plain`, so that packings made before it existed still
+    /// resume.
     #[serde(skip_serializing_if = "Masses::is_plain")]
     pub masses: Masses,
 }
@@ -177,13 +177,9 @@ pub struct FireParams {
 /// Which masses FIRE integrates with.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub enum Masses {
-    /// The family's choice ([`jamkit_core::Shape::fire_block_masses`]),
-    /// resolved by [`FireParams::for_family`]; `Plain` where nothing
-    /// resolved it, and with FIRE 2.0.
-    #[default]
-    Family,
     /// The bodies' own masses: 1 per translation, the family's moments of
     /// inertia per rotation (the paper).
+    #[default]
     Plain,
     /// Block preconditioning: each body's own block of the stiffness
     /// matrix as its mass ([`crate::precon`]).
@@ -215,7 +211,7 @@ impl Default for FireParams {
             force_criterion: ForceCriterion::Sum,
             max_steps: 20_000_000,
             newton: Some(NewtonParams::default()),
-            masses: Masses::Family,
+            masses: Masses::Plain,
         }
     }
 }
@@ -280,26 +276,16 @@ impl FireParams {
         converged.then_some(StopReason::Force)
     }
 
-    /// These parameters with `dt_max` and the masses set: their own, else
-    /// the family's ([`jamkit_core::Shape::fire_dt_max`], 0.5 where the
-    /// family has none; [`jamkit_core::Shape::fire_block_masses`] for FIRE,
-    /// the plain masses for FIRE 2.0), so that the settings a packing
-    /// records hold the time step and masses it was made with.
+    /// These parameters with `dt_max` set: their own, else the family's
+    /// ([`jamkit_core::Shape::fire_dt_max`]), else 0.5, so that the settings
+    /// a packing records hold the time step it was made with.
     pub fn for_family<const D: usize, S: jamkit_core::Shape<D>>(&self, shape: &S) -> Self {
-        let masses = match &self.masses {
-            Masses::Family if self.variant == FireVariant::Fire && shape.fire_block_masses() => {
-                Masses::Blocks(PreconParams::default())
-            }
-            Masses::Family => Masses::Plain,
-            chosen => chosen.clone(),
-        };
         Self {
             dt_max: Some(
                 self.dt_max
                     .or(shape.fire_dt_max())
                     .unwrap_or(DEFAULT_DT_MAX),
             ),
-            masses,
             ..self.clone()
         }
     }

@@ -197,14 +197,6 @@ impl Shape<2> for Nmer<2> {
         [self.moment_of_inertia(size); 3]
     }
 
-    /// Yes: with each body's stiffness block as its mass, 3D dimers
-    /// (α = 1.1) jam in about half the FIRE steps and 2D dimers (α = 1.5)
-    /// in 15 % fewer, with the same ensembles (docs/performance.md, "Block
-    /// masses").
-    fn fire_block_masses(&self) -> bool {
-        true
-    }
-
     fn reference_orientation(&self) -> Angle {
         Angle::new(0.0)
     }
@@ -398,14 +390,6 @@ impl Shape<3> for Nmer<3> {
 
     fn rot_inertia(&self, size: f64) -> RotVec {
         [self.moment_of_inertia(size); 3]
-    }
-
-    /// Yes: with each body's stiffness block as its mass, 3D dimers
-    /// (α = 1.1) jam in about half the FIRE steps and 2D dimers (α = 1.5)
-    /// in 15 % fewer, with the same ensembles (docs/performance.md, "Block
-    /// masses").
-    fn fire_block_masses(&self) -> bool {
-        true
     }
 
     /// [`FIRE_DT_MAX`].
