@@ -61,6 +61,11 @@ pub fn dense<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64) -> Scen
     Scene::new(packing, Potential::Harmonic, 0.2)
 }
 
+/// `fourier in D = 2 (NearDisk { … })`, for messages.
+fn describe<const D: usize, S: Shape<D>>(shape: &S) -> String {
+    format!("{} in D = {D} ({shape:?})", shape.family())
+}
+
 fn energy<const D: usize, S: Shape<D>>(p: Packing<D, S>) -> f64 {
     let mut s = Scene::new(p, Potential::Harmonic, 0.2);
     let mut g = vec![0.0; s.dof()];
@@ -71,20 +76,19 @@ fn energy<const D: usize, S: Shape<D>>(p: Packing<D, S>) -> f64 {
 /// family, the check and the numbers on the first failure.
 pub fn check_family<const D: usize, S: Shape<D>>(shape: S) -> Checked {
     let mut done = Checked::default();
-    let name = format!("{} in D = {D} ({shape:?})", shape.family());
-    gradient(&shape, &name);
+    check_gradient(&shape);
     done.ran.push("gradient");
-    if hessian(&shape, &name) {
+    if check_hessian(&shape) {
         done.ran.push("hessian");
     } else {
         done.skipped
             .push(("hessian", "the family gives no second derivatives"));
     }
-    symmetry(&shape, &name);
+    check_symmetry(&shape);
     done.ran.push("symmetry");
-    translation(&shape, &name);
+    check_translation(&shape);
     done.ran.push("translation");
-    if rotation(&shape, &name) {
+    if check_rotation(&shape) {
         done.ran.push("rotation");
     } else {
         done.skipped.push((
@@ -93,12 +97,12 @@ pub fn check_family<const D: usize, S: Shape<D>>(shape: S) -> Checked {
         ));
     }
     if S::LANE_CONTACTS && shape.use_lanes() {
-        lanes(&shape, &name);
+        check_lanes(&shape);
         done.ran.push("lanes");
     } else {
         done.skipped.push(("lanes", "no lane kernel"));
     }
-    jams(&shape, &name);
+    check_jams(&shape);
     done.ran.push("jamming");
     done
 }
@@ -109,7 +113,8 @@ pub fn check_family<const D: usize, S: Shape<D>>(shape: S) -> Checked {
 /// round-off ~1e-16·V/ε ≲ 1e-9, and the harmonic v'' jumps at h = 0 only
 /// for a pair within ε of touching: all far below 1e-6 of gradients of
 /// order 0.1–1, which any wrong or missing term exceeds.
-fn gradient<const D: usize, S: Shape<D>>(shape: &S, name: &str) {
+pub fn check_gradient<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
     for seed in 1..=2 {
         let scene = dense(shape.clone(), BODIES, seed);
         let (err, scale) = gradient_error(&scene, 1e-6);
@@ -126,7 +131,8 @@ fn gradient<const D: usize, S: Shape<D>>(shape: &S, name: &str) {
 /// relative to entries of order 1, so 1e-6 leaves four orders of margin
 /// yet catches any wrong term, sign or factor. False when the family gives
 /// no second derivatives.
-fn hessian<const D: usize, S: Shape<D>>(shape: &S, name: &str) -> bool {
+pub fn check_hessian<const D: usize, S: Shape<D>>(shape: &S) -> bool {
+    let name = &describe(shape);
     let o = shape.reference_orientation();
     let apart = Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
     if shape
@@ -139,7 +145,7 @@ fn hessian<const D: usize, S: Shape<D>>(shape: &S, name: &str) -> bool {
     let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default())
         .unwrap_or_else(|e| panic!("{name}: Hessian: {e}"))
         .dense();
-    let fd = finite_difference(&mut scene, 1e-6);
+    let fd = finite_difference(&scene, 1e-6);
     let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
     let mut err = 0.0f64;
     for (a, row) in fd.iter().enumerate() {
@@ -162,7 +168,8 @@ fn hessian<const D: usize, S: Shape<D>>(shape: &S, name: &str) -> bool {
 /// sorted, seen from `i` (`r_ij`) and from `j` (`−r_ij`), to 1e-12 of the
 /// sizes. The two evaluations differ only by the order of floating-point
 /// operations, so any larger difference is a wrong sign or a swapped body.
-fn symmetry<const D: usize, S: Shape<D>>(shape: &S, name: &str) {
+pub fn check_symmetry<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
     let scene = dense(shape.clone(), BODIES, 4);
     let p = scene.packing();
     let mut pairs = 0;
@@ -206,7 +213,8 @@ fn symmetry<const D: usize, S: Shape<D>>(shape: &S, name: &str) {
 /// Shifting every centre by one vector (and wrapping into the box) leaves
 /// `V` unchanged to 1e-12 relative: only the last bits of the separations
 /// change with the wrapping.
-fn translation<const D: usize, S: Shape<D>>(shape: &S, name: &str) {
+pub fn check_translation<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
     let scene = dense(shape.clone(), BODIES, 5);
     let p = scene.packing().clone();
     let e0 = energy(p.clone());
@@ -231,7 +239,8 @@ fn translation<const D: usize, S: Shape<D>>(shape: &S, name: &str) {
 /// gives smooth, self-consistent derivatives that finite differences
 /// cannot catch). False where the family's coordinates cannot turn a body
 /// about a fixed world axis (linear bodies in 3D turn about body axes).
-fn rotation<const D: usize, S: Shape<D>>(shape: &S, name: &str) -> bool {
+pub fn check_rotation<const D: usize, S: Shape<D>>(shape: &S) -> bool {
+    let name = &describe(shape);
     let turn: fn(f64) -> Option<Vec<f64>> = match (D, shape.rot_dof()) {
         (_, 0) => |_| Some(Vec::new()),
         (2, 1) => |a| Some(vec![a]),
@@ -281,7 +290,8 @@ fn rotation<const D: usize, S: Shape<D>>(shape: &S, name: &str) -> bool {
 
 /// The lane kernel gives the generic pass's energy and gradient bit for
 /// bit (the same operations in the same order, several pairs at a time).
-fn lanes<const D: usize, S: Shape<D>>(shape: &S, name: &str) {
+pub fn check_lanes<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
     for seed in 1..=2 {
         let mut a = dense(shape.clone(), BODIES, seed);
         let mut b = a.clone();
@@ -307,7 +317,8 @@ fn lanes<const D: usize, S: Shape<D>>(shape: &S, name: &str) {
 /// 16 bodies or more (see above) compressed from φ = 0.1 by the paper's
 /// protocol end in its
 /// window `10⁻¹⁶ < V/N < 2·10⁻¹⁶` (the family's FIRE defaults).
-fn jams<const D: usize, S: Shape<D>>(shape: &S, name: &str) {
+pub fn check_jams<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
     // The fewest bodies (from 16) whose box at φ = 0.95 still holds twice
     // the interaction range: a body must not meet its own image.
     let reach = shape.bounding_radius(1.0);
