@@ -1,12 +1,11 @@
 //! The `ellipse` family (exact gap) in the engine: finite-difference checks
 //! of each pair's gradient and Hessian (overlapping pairs and pairs across
-//! θ_ij = ±π included), of the assembled forces, torques and Hessian,
-//! rotation invariance, the aspect ratios of the Fig. 5 experiment, a small
+//! θ_ij = ±π included), the conformance kit's checks of the assembled
+//! forces, torques and Hessian and of rotation invariance, the aspect ratios of the Fig. 5 experiment, a small
 //! jamming run, and bad input.
 
-use jamkit_core::{Contact, GapHessian, Packing, Potential, Shape, SizeDistribution, Vector};
+use jamkit_core::{Contact, GapHessian, Shape, Vector};
 use jamkit_ellipse::{Axis, Ellipse, EllipseParams};
-use jamkit_engine::{Objective, Scene, check::gradient_error};
 use jamkit_experiment::{Experiment, overrides};
 use jamkit_fourier::{FourierParams, NearDisk};
 use rand::{RngExt, SeedableRng};
@@ -167,83 +166,19 @@ fn pair_hessians_match_finite_differences() {
     }
 }
 
-fn dense(shape: Ellipse, n: usize, seed: u64) -> Scene<2, Ellipse> {
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let sizes = SizeDistribution::default().sample(n, &mut rng);
-    let packing = Packing::<2, Ellipse>::random(shape, sizes, 0.9, &mut rng).unwrap();
-    Scene::new(packing, Potential::Harmonic, 0.2)
-}
-
-/// Forces and torques of whole dense scenes (φ = 0.9, most pairs overlap)
-/// against central differences of the energy, ε = 1e-6: truncation
-/// ~ε²|V'''| ~ 1e-11, round-off ~1e-16 V/ε ~ 1e-9; relative bound 1e-6.
+/// The conformance kit's assembled checks (`crates/kit`) over the range of
+/// aspect ratios: forces and torques and the Hessian against finite
+/// differences, `h_ij = h_ji`, rotation invariance.
 #[test]
-fn forces_and_torques_match_finite_differences() {
+fn ellipses_pass_the_kit_checks() {
     for aspect in ASPECTS {
-        for seed in 1..=2 {
-            let scene = dense(ellipse(aspect), 40, seed);
-            let (err, scale) = gradient_error(&scene, 1e-6);
-            assert!(scale > 1e-2, "configuration should overlap");
-            assert!(
-                err < 1e-6 * scale,
-                "α = {aspect} seed {seed}: {err:e} vs {scale:e}"
-            );
-        }
+        let shape = ellipse(aspect);
+        jamkit_kit::check_gradient::<2, _>(&shape);
+        jamkit_kit::check_symmetry::<2, _>(&shape);
+        assert!(jamkit_kit::check_rotation::<2, _>(&shape));
     }
-}
-
-/// The assembled Hessian against central differences of the assembled
-/// gradient (tolerance as in tests/hessian.rs: 1e-6 of the largest entry).
-#[test]
-fn scene_hessian_matches_finite_differences() {
     for aspect in [1.1, 2.0] {
-        for seed in 1..=2 {
-            let mut scene = dense(ellipse(aspect), 24, seed);
-            let (err, scale) = common::hessian_fd_error(&mut scene);
-            assert!(scale > 0.5, "configuration should overlap");
-            assert!(
-                err < 1e-6 * scale,
-                "α = {aspect} seed {seed}: {err:e} vs {scale:e}"
-            );
-        }
-    }
-}
-
-/// Rotating the whole configuration (centres about the box centre and
-/// every θ_i) leaves V unchanged to 1e-12 relative (a cluster inside a
-/// large box: periodic images would break the symmetry).
-#[test]
-fn energy_is_invariant_under_global_rotation() {
-    for aspect in ASPECTS {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let sizes = SizeDistribution::default().sample(30, &mut rng);
-        let mut p = Packing::<2, Ellipse>::random(ellipse(aspect), sizes, 0.02, &mut rng).unwrap();
-        let centre = *p.bbox.edges() * 0.5;
-        for (k, r) in p.positions.iter_mut().enumerate() {
-            let a = k as f64 * 2.399;
-            *r = centre + Vector::<2>::new(a.cos(), a.sin()) * (0.55 * (k as f64).sqrt());
-        }
-        let energy = |p: Packing<2, Ellipse>| {
-            let mut s = Scene::new(p, Potential::Harmonic, 0.2);
-            let mut g = vec![0.0; s.dof()];
-            s.energy_gradient(&mut g)
-        };
-        let e0 = energy(p.clone());
-        assert!(e0 > 1e-3);
-        for alpha in [0.3, 1.7, PI, -2.9] {
-            let (sa, ca) = f64::sin_cos(alpha);
-            let mut q = p.clone();
-            for (r, o) in q.positions.iter_mut().zip(q.orientations.iter_mut()) {
-                let d = *r - centre;
-                *r = centre + Vector::<2>::new(ca * d[0] - sa * d[1], sa * d[0] + ca * d[1]);
-                *o = Axis::new(o.theta() + alpha);
-            }
-            let e1 = energy(q);
-            assert!(
-                (e1 - e0).abs() < 1e-12 * e0,
-                "α = {aspect}, rotation {alpha}: {e0} vs {e1}"
-            );
-        }
+        assert!(jamkit_kit::check_hessian::<2, _>(&ellipse(aspect)));
     }
 }
 

@@ -75,56 +75,20 @@ fn shapes_3d() -> Vec<Nmer<3>> {
     ]
 }
 
-/// `n` binary bodies at packing fraction `phi`: most pairs overlap.
-fn dense<const D: usize>(shape: Nmer<D>, n: usize, phi: f64, seed: u64) -> Scene<D, Nmer<D>>
-where
-    Nmer<D>: Shape<D>,
-{
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let sizes = SizeDistribution::default().sample(n, &mut rng);
-    // Bodies made of spheres start overlap-free; an affine compression of
-    // that start makes the overlaps.
-    let mut packing = Packing::<D, Nmer<D>>::random(shape, sizes, 0.1, &mut rng).unwrap();
-    packing.set_phi(phi);
-    Scene::new(packing, Potential::Harmonic, 0.2)
-}
-
 /// Forces and torques against central differences of the energy in every
-/// generalised coordinate (ε = 1e-6; rotations applied through `rotate`,
-/// i.e. the exact quaternion exponential in 3D). The truncation error is
-/// ~ε²|V'''| ≲ 1e-11 for gaps of curvature 1/R ~ 1; round-off ~1e-16·V/ε
-/// ≲ 1e-9; the harmonic v'' jumps at h = 0, costing ~ε only for a sphere
-/// pair within ε of touching. A relative bound of 1e-6 on gradients of
-/// order 0.1–1 sits far above these and far below any wrong or missing
-/// term (a wrong sign of one torque is an O(1) relative error).
-fn check_gradients<const D: usize>(shapes: Vec<Nmer<D>>, n: usize)
-where
-    Nmer<D>: Shape<D>,
-{
-    for shape in shapes {
-        for seed in 1..=2 {
-            let scene = dense(shape.clone(), n, 0.85, seed);
-            let (err, scale) = gradient_error(&scene, 1e-6);
-            assert!(
-                scale > 1e-2,
-                "{shape:?}: gradient {scale:e} too small to test"
-            );
-            assert!(
-                err < 1e-6 * scale,
-                "{shape:?} seed {seed}: {err:e} vs {scale:e}"
-            );
-        }
+/// generalised coordinate, by the conformance kit (`crates/kit`, where the
+/// tolerance and its reason are; rotations applied through `rotate`, i.e.
+/// the exact quaternion exponential in 3D), and `h_ij = h_ji`.
+#[test]
+fn forces_and_torques_match_finite_differences_2d_and_3d() {
+    for shape in shapes_2d() {
+        jamkit_kit::check_gradient::<2, _>(&shape);
+        jamkit_kit::check_symmetry::<2, _>(&shape);
     }
-}
-
-#[test]
-fn forces_and_torques_match_finite_differences_2d() {
-    check_gradients(shapes_2d(), 40);
-}
-
-#[test]
-fn forces_and_torques_match_finite_differences_3d() {
-    check_gradients(shapes_3d(), 40);
+    for shape in shapes_3d() {
+        jamkit_kit::check_gradient::<3, _>(&shape);
+        jamkit_kit::check_symmetry::<3, _>(&shape);
+    }
 }
 
 /// A crafted pair: two parallel 2D dimers (α = 2) side by side, slightly

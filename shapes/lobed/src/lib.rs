@@ -444,6 +444,11 @@ impl Shape<2> for Lobed {
         } else {
             Vector::<2>::new(1.0, 0.0)
         };
+        // NOTE: as in `contacts`, A_j = θ_j − θ_ij − π, whose −π flips the
+        // signs of cos A_j and sin A_j. G, G' and G'' are π-periodic and do
+        // not see it, so both bodies use A = θ − θ_ij here. A profile that
+        // is not π-periodic must pass (−cos, −sin) for body j (and
+        // atan2(−sin, −cos) for its curvature), or its Hessian is wrong.
         let profile = |o: &Angle| {
             let (cos, sin) = (o.cos * u[0] + o.sin * u[1], o.sin * u[0] - o.cos * u[1]);
             let (value, slope) = self.profile_from_phase(cos, sin);

@@ -1,0 +1,482 @@
+//! # The conformance kit: one check that a family meets the `Shape` contract
+//!
+//! Every family is tested the same way, in every dimension it claims, by
+//! one generic call, [`check_family`]. What it checks, each with the
+//! tolerance and the reason for it beside the check:
+//!
+//! * **forces and torques** against central differences of the energy in
+//!   every generalised coordinate, rotations included (through the
+//!   family's own `rotate`), on a dense overlapping configuration;
+//! * **second derivatives**, where the family gives them
+//!   (`Shape::gap_hessians`): the Hessian against central differences of
+//!   the analytic gradient;
+//! * **`h_ij = h_ji`**: the gaps of a pair seen from either body agree;
+//! * **translation invariance**: shifting every centre by one vector leaves
+//!   the energy unchanged;
+//! * **rotation invariance**: turning a compact cluster (centres about its
+//!   middle, in the plane of the first two axes, and every body's
+//!   orientation by the same angle) leaves the energy unchanged, where the
+//!   family's rotational coordinates allow turning a body about that axis
+//!   (none, one angle in 2D, three world-frame angles in 3D);
+//! * **lanes = generic pass bit for bit**, for families with lane kernels
+//!   (`Shape::LANE_CONTACTS`);
+//! * **a small jamming run**: 16 bodies or more (as many as the box
+//!   needs to hold twice the interaction range) compressed from φ = 0.1 to the
+//!   paper's window `10⁻¹⁶ < V/N < 2·10⁻¹⁶`;
+//! * and, through the registry, **bad parameters** refused with the field
+//!   named ([`check_bad_params`]).
+//!
+//! A new family's test file is one call per dimension, plus what is
+//! special to it (its gap against a formula written out, its area against
+//! quadrature).
+
+use jamkit_core::{Packing, Potential, Shape, SizeDistribution, Vector};
+use jamkit_engine::check::gradient_error;
+use jamkit_engine::hessian::{Hessian, HessianOptions, finite_difference};
+use jamkit_engine::{Fire, FireParams, JamParams, Objective, Scene, jam};
+use jamkit_experiment::registry;
+use rand::SeedableRng;
+
+/// What [`check_family`] checked: the names of the checks it ran and of
+/// those that do not apply to the family (with the reason).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Checked {
+    /// The checks that ran and passed.
+    pub ran: Vec<&'static str>,
+    /// The checks that do not apply, with why.
+    pub skipped: Vec<(&'static str, &'static str)>,
+}
+
+/// Bodies of the dense configurations.
+const BODIES: usize = 24;
+
+/// A dense configuration: `n` binary bodies placed at φ = 0.1 (overlap-free
+/// for families that need it) and compressed affinely to φ = 0.9, so that
+/// most pairs overlap.
+pub fn dense<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64) -> Scene<D, S> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let sizes = SizeDistribution::default().sample(n, &mut rng);
+    let mut packing = Packing::<D, S>::random(shape, sizes, 0.1, &mut rng).unwrap();
+    packing.set_phi(0.9);
+    Scene::new(packing, Potential::Harmonic, 0.2)
+}
+
+/// `fourier in D = 2 (NearDisk { … })`, for messages.
+fn describe<const D: usize, S: Shape<D>>(shape: &S) -> String {
+    format!("{} in D = {D} ({shape:?})", shape.family())
+}
+
+fn energy<const D: usize, S: Shape<D>>(p: Packing<D, S>) -> f64 {
+    let mut s = Scene::new(p, Potential::Harmonic, 0.2);
+    let mut g = vec![0.0; s.dof()];
+    s.energy_gradient(&mut g)
+}
+
+/// Run every check of the kit on `shape` in dimension `D`; panics with the
+/// family, the check and the numbers on the first failure.
+pub fn check_family<const D: usize, S: Shape<D>>(shape: S) -> Checked {
+    let mut done = Checked::default();
+    check_gradient(&shape);
+    done.ran.push("gradient");
+    if check_hessian(&shape) {
+        done.ran.push("hessian");
+    } else {
+        done.skipped
+            .push(("hessian", "the family gives no second derivatives"));
+    }
+    check_symmetry(&shape);
+    done.ran.push("symmetry");
+    check_translation(&shape);
+    done.ran.push("translation");
+    if check_rotation(&shape) {
+        done.ran.push("rotation");
+    } else {
+        done.skipped.push((
+            "rotation",
+            "its rotational coordinates cannot turn a body about a fixed world axis",
+        ));
+    }
+    if S::LANE_CONTACTS && shape.use_lanes() {
+        check_lanes(&shape);
+        done.ran.push("lanes");
+    } else {
+        done.skipped.push(("lanes", "no lane kernel"));
+    }
+    check_jams(&shape);
+    done.ran.push("jamming");
+    done
+}
+
+/// Forces and torques against central differences (ε = 1e-6) on two dense
+/// configurations. The truncation error is ~ε²|V'''|/6 ≲ 1e-10 for the
+/// smooth gaps of the families (V''' ≲ 10² for the sharpest profile), the
+/// round-off ~1e-16·V/ε ≲ 1e-9, and the harmonic v'' jumps at h = 0 only
+/// for a pair within ε of touching: all far below 1e-6 of gradients of
+/// order 0.1–1, which any wrong or missing term exceeds.
+pub fn check_gradient<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
+    for seed in 1..=2 {
+        let scene = dense(shape.clone(), BODIES, seed);
+        let (err, scale) = gradient_error(&scene, 1e-6);
+        assert!(scale > 1e-2, "{name}: seed {seed} barely overlaps");
+        assert!(
+            err < 1e-6 * scale,
+            "{name}: gradient, seed {seed}: error {err:e} vs scale {scale:e}"
+        );
+    }
+}
+
+/// The Hessian against central differences of the analytic gradient
+/// (ε = 1e-6): truncation ~ε²V'''' ~ 1e-12, round-off ~1e-16|∇V|/ε ~ 1e-10
+/// relative to entries of order 1, so 1e-6 leaves four orders of margin
+/// yet catches any wrong term, sign or factor. False when the family gives
+/// no second derivatives.
+pub fn check_hessian<const D: usize, S: Shape<D>>(shape: &S) -> bool {
+    let name = &describe(shape);
+    let o = shape.reference_orientation();
+    let apart = Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
+    if shape
+        .gap_hessians(1.0, &o, 1.0, &o, &apart, f64::INFINITY, |_| {})
+        .is_err()
+    {
+        return false;
+    }
+    let mut scene = dense(shape.clone(), 16, 3);
+    let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default())
+        .unwrap_or_else(|e| panic!("{name}: Hessian: {e}"))
+        .dense();
+    let fd = finite_difference(&scene, 1e-6);
+    let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    let mut err = 0.0f64;
+    for (a, row) in fd.iter().enumerate() {
+        for (b, x) in row.iter().enumerate() {
+            err = err.max((h[(a, b)] - x).abs());
+        }
+    }
+    assert!(
+        scale > 0.5,
+        "{name}: the Hessian configuration should overlap"
+    );
+    assert!(
+        err < 1e-6 * scale,
+        "{name}: Hessian: error {err:e} vs scale {scale:e}"
+    );
+    true
+}
+
+/// `h_ij = h_ji`: every pair of a dense configuration has the same gaps,
+/// sorted, seen from `i` (`r_ij`) and from `j` (`−r_ij`), to 1e-12 of the
+/// sizes. The two evaluations differ only by the order of floating-point
+/// operations, so any larger difference is a wrong sign or a swapped body.
+pub fn check_symmetry<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
+    let scene = dense(shape.clone(), BODIES, 4);
+    let p = scene.packing();
+    let mut pairs = 0;
+    for i in 0..p.positions.len() {
+        for j in i + 1..p.positions.len() {
+            let r = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
+            let reach = shape.bounding_radius(p.sizes[i]) + shape.bounding_radius(p.sizes[j]);
+            if r.norm() > reach {
+                continue;
+            }
+            let gaps = |a: usize, b: usize, r: Vector<D>| {
+                let mut g: Vec<f64> = shape
+                    .pair_contacts(
+                        p.sizes[a],
+                        &p.orientations[a],
+                        p.sizes[b],
+                        &p.orientations[b],
+                        &r,
+                        f64::INFINITY,
+                    )
+                    .iter()
+                    .map(|c| c.gap)
+                    .collect();
+                g.sort_by(f64::total_cmp);
+                g
+            };
+            let (ij, ji) = (gaps(i, j, r), gaps(j, i, -r));
+            assert_eq!(ij.len(), ji.len(), "{name}: pair ({i}, {j}): contacts");
+            for (a, b) in ij.iter().zip(&ji) {
+                assert!(
+                    (a - b).abs() < 1e-12,
+                    "{name}: h_ij = {a} but h_ji = {b} for pair ({i}, {j})"
+                );
+            }
+            pairs += 1;
+        }
+    }
+    assert!(pairs > 10, "{name}: only {pairs} pairs in reach");
+}
+
+/// Shifting every centre by one vector (and wrapping into the box) leaves
+/// `V` unchanged to 1e-12 relative: only the last bits of the separations
+/// change with the wrapping.
+pub fn check_translation<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
+    let scene = dense(shape.clone(), BODIES, 5);
+    let p = scene.packing().clone();
+    let e0 = energy(p.clone());
+    let shift = Vector::<D>::from_fn(|a, _| 0.37 + 0.21 * a as f64);
+    let mut q = p;
+    for r in q.positions.iter_mut() {
+        *r = q.bbox.wrap(*r + shift);
+    }
+    let e1 = energy(q);
+    assert!(e0 > 1e-3, "{name}: the configuration should overlap");
+    assert!(
+        (e1 - e0).abs() < 1e-12 * e0,
+        "{name}: translation changes V from {e0} to {e1}"
+    );
+}
+
+/// Turning a compact cluster well inside a large box by an angle `α` in
+/// the plane of the first two axes leaves `V` unchanged to 1e-12
+/// relative. Periodic images would break the symmetry, hence the cluster.
+/// This catches a gap that depends on the orientations other than through
+/// angles relative to the pair's axis (a sign slip such as `θ_i + θ_ij`
+/// gives smooth, self-consistent derivatives that finite differences
+/// cannot catch). False where the family's coordinates cannot turn a body
+/// about a fixed world axis (linear bodies in 3D turn about body axes).
+pub fn check_rotation<const D: usize, S: Shape<D>>(shape: &S) -> bool {
+    let name = &describe(shape);
+    let turn: fn(f64) -> Option<Vec<f64>> = match (D, shape.rot_dof()) {
+        (_, 0) => |_| Some(Vec::new()),
+        (2, 1) => |a| Some(vec![a]),
+        (3, 3) => |a| Some(vec![0.0, 0.0, a]),
+        _ => return false,
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let sizes = SizeDistribution::default().sample(30, &mut rng);
+    let mut p = Packing::<D, S>::random(shape.clone(), sizes, 0.01, &mut rng).unwrap();
+    let centre = *p.bbox.edges() * 0.5;
+    // Points of a ball about the centre, a golden-angle spiral in the first
+    // two axes and a slow drift along the others: neighbours overlap.
+    for (k, r) in p.positions.iter_mut().enumerate() {
+        let a = k as f64 * 2.399;
+        let rho = 0.55 * (k as f64).sqrt();
+        *r = centre
+            + Vector::<D>::from_fn(|d, _| match d {
+                0 => rho * a.cos(),
+                1 => rho * a.sin(),
+                _ => 0.3 * ((k * (d + 1)) as f64).sin(),
+            });
+    }
+    let e0 = energy(p.clone());
+    assert!(e0 > 1e-3, "{name}: the cluster should overlap");
+    for alpha in [0.3, 1.7, std::f64::consts::PI, -2.9] {
+        let (sa, ca) = f64::sin_cos(alpha);
+        let mut q = p.clone();
+        let dq = turn(alpha).unwrap();
+        for (r, o) in q.positions.iter_mut().zip(q.orientations.iter_mut()) {
+            let d = *r - centre;
+            let mut t = d;
+            t[0] = ca * d[0] - sa * d[1];
+            t[1] = sa * d[0] + ca * d[1];
+            *r = centre + t;
+            if !dq.is_empty() {
+                shape.rotate(o, &dq);
+            }
+        }
+        let e1 = energy(q);
+        assert!(
+            (e1 - e0).abs() < 1e-12 * e0,
+            "{name}: turning by {alpha} changes V from {e0} to {e1}"
+        );
+    }
+    true
+}
+
+/// The lane kernel gives the generic pass's energy and gradient bit for
+/// bit (the same operations in the same order, several pairs at a time).
+pub fn check_lanes<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
+    for seed in 1..=2 {
+        let mut a = dense(shape.clone(), BODIES, seed);
+        let mut b = a.clone();
+        let mut ga = vec![0.0; a.dof()];
+        let mut gb = vec![0.0; b.dof()];
+        let ea = a.energy_gradient(&mut ga);
+        let eb = b.energy_gradient_generic(&mut gb);
+        assert_eq!(
+            ea.to_bits(),
+            eb.to_bits(),
+            "{name}: lanes energy, seed {seed}"
+        );
+        for (k, (x, y)) in ga.iter().zip(&gb).enumerate() {
+            assert_eq!(
+                x.to_bits(),
+                y.to_bits(),
+                "{name}: lanes gradient [{k}], seed {seed}: {x} vs {y}"
+            );
+        }
+    }
+}
+
+/// 16 bodies or more (see above) compressed from φ = 0.1 by the paper's
+/// protocol end in its
+/// window `10⁻¹⁶ < V/N < 2·10⁻¹⁶` (the family's FIRE defaults).
+pub fn check_jams<const D: usize, S: Shape<D>>(shape: &S) {
+    let name = &describe(shape);
+    // The fewest bodies (from 16) whose box at φ = 0.95 still holds twice
+    // the interaction range: a body must not meet its own image.
+    let reach = shape.bounding_radius(1.0);
+    let mut n = 16;
+    let sizes = loop {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let sizes = SizeDistribution::default().sample(n, &mut rng);
+        let volume: f64 = sizes.iter().map(|&s| shape.volume(s)).sum();
+        let largest = sizes.iter().fold(0.0f64, |m, &s| m.max(s));
+        let edge = (volume / 0.95).powf(1.0 / D as f64);
+        if edge > 2.5 * 2.0 * reach * largest || n >= 512 {
+            break sizes;
+        }
+        n *= 2;
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let packing = Packing::<D, S>::random(shape.clone(), sizes, 0.1, &mut rng).unwrap();
+    let mut scene = Scene::new(packing, Potential::Harmonic, 0.2);
+    let mut fire = Fire::new(FireParams::default().for_family(shape));
+    let out = jam(&mut scene, &mut fire, &JamParams::default())
+        .unwrap_or_else(|e| panic!("{name}: jamming run: {e}"));
+    assert!(
+        out.energy_per_particle > 1e-16 && out.energy_per_particle < 2e-16,
+        "{name}: jammed at V/N = {}",
+        out.energy_per_particle
+    );
+}
+
+/// Each `(params, field)`: the family's parameters in RON (as in an
+/// experiment file, defaults filled in) are refused by the registry with an
+/// error that names `field`; and the family's [`jamkit_core::Family::EXAMPLE`]
+/// is accepted in `dim`.
+pub fn check_bad_params(family: &str, dim: usize, cases: &[(&str, &str)]) {
+    struct Build;
+    impl registry::SceneVisitor for Build {
+        type Output = ();
+        fn visit<const D: usize, S: Shape<D>>(self, _shape: S) {}
+    }
+    let info = registry::family_info(family).unwrap();
+    let k = registry::FAMILIES
+        .iter()
+        .position(|f| f.name == family)
+        .unwrap();
+    let parse = |text: &str| {
+        let params =
+            registry::params_from_ron(text).unwrap_or_else(|e| panic!("{family}: {text}: {e}"));
+        registry::with_defaults(&info, &params)
+    };
+    registry::dispatch(family, dim, &parse(registry::EXAMPLES[k]), Build)
+        .unwrap_or_else(|e| panic!("{family}: its example is refused: {e}"));
+    for (text, field) in cases {
+        let e = registry::dispatch(family, dim, &parse(text), Build)
+            .err()
+            .unwrap_or_else(|| panic!("{family}: {text} is accepted"))
+            .to_string();
+        assert!(
+            e.contains(field),
+            "{family}: {text}: {e} does not name {field}"
+        );
+    }
+}
+
+/// [`check_family`] on the shape the registry builds for `family` in
+/// dimension `dim` from `params` (RON, defaults filled in): the path a
+/// packing of the family takes, degenerate cases included.
+pub fn check_registered(family: &str, dim: usize, params: &str) -> Checked {
+    struct Kit;
+    impl registry::SceneVisitor for Kit {
+        type Output = Checked;
+        fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Checked {
+            check_family::<D, S>(shape)
+        }
+    }
+    let info = registry::family_info(family).unwrap();
+    let params =
+        registry::params_from_ron(params).unwrap_or_else(|e| panic!("{family}: {params}: {e}"));
+    let params = registry::with_defaults(&info, &params);
+    registry::dispatch(family, dim, &params, Kit)
+        .unwrap_or_else(|e| panic!("{family} in D = {dim}: {e}"))
+}
+
+/// The dimensions `family` claims (`Dims::Any`: every compiled one).
+pub fn claimed_dims(family: &str) -> Vec<usize> {
+    let info = registry::family_info(family).unwrap();
+    registry::COMPILED_DIMS
+        .iter()
+        .copied()
+        .filter(|&d| registry::supports_dim(&info, d))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use jamkit_core::{Contact, GapHessian, Result};
+    use rand::Rng;
+
+    /// Disks whose gap gradient is 10% too long: a wrong derivative the
+    /// kit must catch.
+    #[derive(Clone, Debug)]
+    struct WrongDisk;
+
+    impl Shape<2> for WrongDisk {
+        type Orientation = ();
+        fn family(&self) -> &'static str {
+            "wrong_disk"
+        }
+        fn rot_dof(&self) -> usize {
+            0
+        }
+        fn volume(&self, size: f64) -> f64 {
+            std::f64::consts::PI * size * size
+        }
+        fn bounding_radius(&self, size: f64) -> f64 {
+            size
+        }
+        fn reference_orientation(&self) {}
+        fn random_orientation<R: Rng + ?Sized>(&self, _rng: &mut R) {}
+        fn rotate(&self, _o: &mut (), _dq: &[f64]) {}
+        fn orientation_coords(&self, _o: &()) -> Vec<f64> {
+            Vec::new()
+        }
+        fn orientation_from_coords(&self, _c: &[f64]) -> Option<()> {
+            Some(())
+        }
+        fn contacts<F: FnMut(Contact<2>)>(
+            &self,
+            size_i: f64,
+            _o_i: &(),
+            size_j: f64,
+            _o_j: &(),
+            r_ij: &Vector<2>,
+            max_gap: f64,
+            mut visit: F,
+        ) {
+            let d = r_ij.norm();
+            let gap = d - size_i - size_j;
+            if gap <= max_gap {
+                visit(Contact::translational(gap, r_ij * (1.1 / d)));
+            }
+        }
+        fn gap_hessians<F: FnMut(GapHessian<2>)>(
+            &self,
+            _size_i: f64,
+            _o_i: &(),
+            _size_j: f64,
+            _o_j: &(),
+            _r_ij: &Vector<2>,
+            _max_gap: f64,
+            _visit: F,
+        ) -> Result<()> {
+            Err(jamkit_core::Error::invalid("test", 0, "no Hessian"))
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "gradient")]
+    fn a_wrong_gradient_fails_the_kit() {
+        check_family::<2, _>(WrongDisk);
+    }
+}
