@@ -29,6 +29,7 @@ pub mod math;
 pub mod packing;
 pub mod periodic;
 pub mod potential;
+pub mod rotation;
 pub mod shape;
 pub mod sizes;
 
@@ -40,5 +41,6 @@ pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use packing::Packing;
 pub use periodic::PeriodicBox;
 pub use potential::Potential;
+pub use rotation::Rotation2;
 pub use shape::{Contact, ContactLanes, GapHessian, PairLanes, Shape, contacts_one_by_one};
 pub use sizes::SizeDistribution;
