@@ -3,10 +3,10 @@
 //! the exact gap, and the order of each model's error (`docs/physics.md`,
 //! "The ladder of gap models").
 
-use jamkit_core::gap2d::GapModel;
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution, Vector};
 use jamkit_engine::{Scene, check::gradient_error};
 use jamkit_fourier::{Angle, FourierParams, FourierSumParams, Mode, NearDisk};
+use jamkit_planar::gap2d::GapModel;
 use rand::{RngExt, SeedableRng};
 use std::f64::consts::PI;
 

@@ -34,13 +34,13 @@
 //! printed gap. (For the odd `F_n = sin(nφ)/n` this is the mirror image of
 //! `R⁰[1 + Δ F(φ − θ_i)]`; both describe the same family of shapes.)
 
-use jamkit_core::first_order::{Profile, gap_hessian};
-use jamkit_core::gap2d::{self, GapModel, Jet3, SupportJet};
 use jamkit_core::math::{Unit, cmul, turn_unit};
 use jamkit_core::{
     Contact, ContactLanes, Dims, Family, FamilyInfo, GapHessian, Outline, PairLanes, ParamSpec,
     Shape, ShapeVisitor, SharedOutline, Vector, contacts_one_by_one,
 };
+use jamkit_planar::first_order::{Profile, gap_hessian};
+use jamkit_planar::gap2d::{self, GapModel, Jet3, SupportJet};
 use rand::Rng;
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -134,7 +134,7 @@ pub struct FourierParams {
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
     /// The gap model (default: the paper's first order).
-    #[serde(default, deserialize_with = "jamkit_core::gap2d::deserialize_gap")]
+    #[serde(default, deserialize_with = "jamkit_planar::gap2d::deserialize_gap")]
     pub gap: GapModel,
 }
 
@@ -150,7 +150,7 @@ pub struct FourierSumParams {
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
     /// The gap model (default: the paper's first order).
-    #[serde(default, deserialize_with = "jamkit_core::gap2d::deserialize_gap")]
+    #[serde(default, deserialize_with = "jamkit_planar::gap2d::deserialize_gap")]
     pub gap: GapModel,
 }
 
@@ -626,7 +626,7 @@ impl NearDisk {
         out
     }
 
-    /// The second-order gap's partials (see [`jamkit_core::gap2d`]).
+    /// The second-order gap's partials (see [`jamkit_planar::gap2d`]).
     fn second_order(
         &self,
         size_i: f64,
@@ -645,7 +645,7 @@ impl NearDisk {
         gap2d::second_order(r, size_i, size_j, self.delta, p_i, p_j)
     }
 
-    /// The exact gap (see [`jamkit_core::gap2d::exact`]), or `None` when
+    /// The exact gap (see [`jamkit_planar::gap2d::exact`]), or `None` when
     /// it certainly exceeds `max_gap`. In the body frame the outline is
     /// `R(φ)/R⁰ = 1 + Δ F(−φ)`, and orientation `θ` turns it
     /// counter-clockwise by `θ`.
@@ -917,7 +917,7 @@ impl Shape<2> for NearDisk {
     }
 
     /// Second derivatives of the first-order gap
-    /// ([`jamkit_core::first_order`], with `P = F`).
+    /// ([`jamkit_planar::first_order`], with `P = F`).
     fn gap_hessians<V: FnMut(GapHessian<2>)>(
         &self,
         size_i: f64,
