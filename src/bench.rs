@@ -14,7 +14,6 @@
 
 use anyhow::Result;
 use clap::{Subcommand, ValueEnum};
-use jamkit_core::gap2d::GapModel;
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::{
     Fire, FireParams, FireVariant, ForceCriterion, JamParams, Masses, Objective, PreconParams,
@@ -22,6 +21,7 @@ use jamkit_engine::{
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_observe::summarize;
+use jamkit_planar::gap2d::GapModel;
 use jamkit_sphere::Sphere;
 use rand::SeedableRng;
 use std::io::Write;

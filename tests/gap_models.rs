@@ -3,10 +3,10 @@
 //! the exact gap, and the order of each model's error (`docs/physics.md`,
 //! "The ladder of gap models").
 
-use jamkit_core::gap2d::GapModel;
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution, Vector};
 use jamkit_engine::{Scene, check::gradient_error};
 use jamkit_fourier::{Angle, FourierParams, FourierSumParams, Mode, NearDisk};
+use jamkit_planar::gap2d::GapModel;
 use rand::{RngExt, SeedableRng};
 use std::f64::consts::PI;
 
@@ -76,18 +76,15 @@ fn second_order_and_exact_gradients_match_finite_differences() {
 }
 
 /// The analytic Hessian against central differences of the analytic
-/// gradient (same tolerance and reasoning as `tests/hessian.rs`: 1e-6
-/// relative to the largest entry).
+/// gradient, by the conformance kit (1e-6 relative to the largest entry;
+/// the reason is in `crates/kit`).
 #[test]
 fn second_order_and_exact_hessians_match_finite_differences() {
     for gap in [GapModel::SecondOrder, GapModel::Exact] {
         for shape in shapes(gap) {
-            let mut scene = dense(shape.clone(), 24, 1);
-            let (err, scale) = common::hessian_fd_error(&mut scene);
-            assert!(scale > 0.5, "configuration should overlap");
             assert!(
-                err < 1e-6 * scale,
-                "{gap:?} {shape:?}: error {err:e} vs scale {scale:e}"
+                jamkit_kit::check_hessian_at::<2, _>(&shape, 24, 1),
+                "{gap:?}"
             );
         }
     }

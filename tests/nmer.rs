@@ -122,7 +122,7 @@ fn a_pair_touching_at_several_points_has_exact_derivatives_2d() {
             assert!(((p[k] - m[k]) / (2.0 * eps) - c.grad_r[axis]).abs() < 1e-8);
         }
     }
-    let turn = |o: Angle, d: f64| o.turned(d);
+    let turn = |o: Angle, d: f64| o.turned_exact(d);
     let (p, m) = (gaps(turn(o_i, eps), o_j, r), gaps(turn(o_i, -eps), o_j, r));
     for (k, c) in all.iter().enumerate() {
         assert!(((p[k] - m[k]) / (2.0 * eps) - c.grad_rot_i[0]).abs() < 1e-8);

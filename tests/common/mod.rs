@@ -56,28 +56,6 @@ pub fn run_ok(e: &Experiment, dir: &Path, jobs: usize) -> RunReport {
     report
 }
 
-/// Largest entry-wise difference between the analytic Hessian of `scene`
-/// (rattlers kept) and central differences of its analytic gradient (step
-/// 1e-6), and the largest finite-difference entry, the scale it is
-/// compared with.
-pub fn hessian_fd_error<const D: usize, S: jamkit_core::Shape<D>>(
-    scene: &mut jamkit_engine::Scene<D, S>,
-) -> (f64, f64) {
-    use jamkit_observe::hessian::{Hessian, HessianOptions, finite_difference};
-    let h = Hessian::of_scene(scene, &[], HessianOptions::default())
-        .unwrap()
-        .dense();
-    let fd = finite_difference(scene, 1e-6);
-    let scale = fd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-    let mut err = 0.0f64;
-    for (a, row) in fd.iter().enumerate() {
-        for (b, x) in row.iter().enumerate() {
-            err = err.max((h[(a, b)] - x).abs());
-        }
-    }
-    (err, scale)
-}
-
 /// Run the `jamkit` binary in the workspace root: exit code, stdout, stderr.
 pub fn jamkit(args: &[&str]) -> (i32, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_jamkit"))

@@ -8,10 +8,11 @@
 //! * [`shape`]: the [`Shape`] trait a shape family implements (volume,
 //!   bounding radius, rotational coordinates and the *contacts* between two
 //!   bodies, each a gap `h` with its first derivatives);
-//! * [`first_order`]: the paper's first-order near-disk gap with its second
-//!   derivatives, for any profile (shared by the near-disk families);
-//! * [`gap2d`]: the second-order near-disk gap and the exact gap of convex
-//!   outlines (support functions), with second derivatives;
+//! * [`family`]: a family's one registration ([`Family`]), the
+//!   [`ShapeVisitor`] the registry hands shapes to, and the optional
+//!   [`Outline`] ability;
+//! * [`rotation`]: [`Rotation2`], the planar orientation shared by the 2D
+//!   families (the 2D near-disk gaps live in `jamkit-planar`);
 //! * [`potential`]: scalar contact potentials `v(h)` (harmonic, Hertzian);
 //! * [`sizes`]: size distributions (binary, monodisperse, uniform);
 //! * [`packing`]: a configuration of bodies in a box, in flat generalised
@@ -23,12 +24,11 @@
 
 pub mod error;
 pub mod family;
-pub mod first_order;
-pub mod gap2d;
 pub mod math;
 pub mod packing;
 pub mod periodic;
 pub mod potential;
+pub mod rotation;
 pub mod shape;
 pub mod sizes;
 
@@ -40,5 +40,6 @@ pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use packing::Packing;
 pub use periodic::PeriodicBox;
 pub use potential::Potential;
+pub use rotation::Rotation2;
 pub use shape::{Contact, ContactLanes, GapHessian, PairLanes, Shape, contacts_one_by_one};
 pub use sizes::SizeDistribution;

@@ -132,6 +132,12 @@ pub fn check_gradient<const D: usize, S: Shape<D>>(shape: &S) {
 /// yet catches any wrong term, sign or factor. False when the family gives
 /// no second derivatives.
 pub fn check_hessian<const D: usize, S: Shape<D>>(shape: &S) -> bool {
+    check_hessian_at(shape, 16, 3)
+}
+
+/// [`check_hessian`] on the dense configuration of `n` bodies made from
+/// `seed` ([`dense`]).
+pub fn check_hessian_at<const D: usize, S: Shape<D>>(shape: &S, n: usize, seed: u64) -> bool {
     let name = &describe(shape);
     let o = shape.reference_orientation();
     let apart = Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
@@ -141,7 +147,7 @@ pub fn check_hessian<const D: usize, S: Shape<D>>(shape: &S) -> bool {
     {
         return false;
     }
-    let mut scene = dense(shape.clone(), 16, 3);
+    let mut scene = dense(shape.clone(), n, seed);
     let h = Hessian::of_scene(&mut scene, &[], HessianOptions::default())
         .unwrap_or_else(|e| panic!("{name}: Hessian: {e}"))
         .dense();

@@ -26,10 +26,10 @@
 //! and body `i` in the lab frame has `H_i(ψ − θ_i)`. Two bodies interact
 //! through the **exact** gap, the signed distance along the common normal,
 //! `h = max_ψ [r_ij·e(ψ) − H_i(ψ − θ_i) − H_j(ψ + π − θ_j)]`
-//! ([`jamkit_core::gap2d::exact`]: positive, the distance of the two
+//! ([`jamkit_planar::gap2d::exact`]: positive, the distance of the two
 //! outlines; negative, minus the depth of penetration along the normal),
 //! with its gradient by the envelope theorem and its second derivatives
-//! ([`jamkit_core::gap2d::ExactGap::hessian`]). There is no expansion in
+//! ([`jamkit_planar::gap2d::ExactGap::hessian`]). There is no expansion in
 //! `α − 1`: the gap is exact for every aspect ratio, to round-off.
 //!
 //! ## Implementation
@@ -40,7 +40,7 @@
 //! `m = (a² − b²)/2` (and the same for `−n`, so body `j` needs no `π`).
 //! [`Axis`] stores `cos 2θ` and `sin 2θ`, so that the maximisation over
 //! `ψ` — the safeguarded Newton iteration of
-//! [`jamkit_core::gap2d::exact`], run on the unit vector `n`, except that
+//! [`jamkit_planar::gap2d::exact`], run on the unit vector `n`, except that
 //! Newton steps below 10⁻⁶ rad skip the descent test (it is then decided
 //! by round-off and would halve a correct step many times) — costs two square roots and one `sin_cos` (of the step) per
 //! evaluation, and no trigonometry to set up a pair. Tests check it
@@ -63,11 +63,11 @@
 //! `P = ∫₀^{2π} √(a² sin²t + b² cos²t) dt` by the trapezoid rule, which is
 //! spectrally accurate for this smooth periodic integrand.
 
-use jamkit_core::gap2d::{ExactGap, SupportJet};
 use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, Outline, ParamSpec, RotVec, Shape, ShapeVisitor,
     SharedOutline, Vector,
 };
+use jamkit_planar::gap2d::{ExactGap, SupportJet};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -414,7 +414,7 @@ impl Solution {
     }
 
     /// The gap with its second derivatives
-    /// ([`jamkit_core::gap2d::ExactGap::hessian`]), with the same contact
+    /// ([`jamkit_planar::gap2d::ExactGap::hessian`]), with the same contact
     /// as [`Solution::contact`], bit for bit.
     pub fn hessian(&self) -> GapHessian<2> {
         let e = ExactGap {
@@ -717,7 +717,7 @@ mod tests {
                 let reach = s.bounding_radius(ri) + s.bounding_radius(rj);
                 let r = reach * (0.75 + 0.5 * (x * 0.113).sin().abs());
                 let d = Vector::<2>::new(r * phi.cos(), r * phi.sin());
-                let e = jamkit_core::gap2d::exact(&d, ti, s.support(ri), tj, s.support(rj));
+                let e = jamkit_planar::gap2d::exact(&d, ti, s.support(ri), tj, s.support(rj));
                 let m = s
                     .exact_gap(ri, &Axis::new(ti), rj, &Axis::new(tj), &d, f64::INFINITY)
                     .unwrap();

@@ -34,14 +34,14 @@
 //! printed gap. (For the odd `F_n = sin(nφ)/n` this is the mirror image of
 //! `R⁰[1 + Δ F(φ − θ_i)]`; both describe the same family of shapes.)
 
-use jamkit_core::first_order::{Profile, gap_hessian};
-use jamkit_core::gap2d::{self, GapModel, Jet3, SupportJet};
-use jamkit_core::math::{Unit, cmul, turn_unit, unit_of_angle};
+use jamkit_core::math::{Unit, cmul, turn_unit};
 use jamkit_core::{
     Contact, ContactLanes, Dims, Family, FamilyInfo, GapHessian, Outline, PairLanes, ParamSpec,
     Shape, ShapeVisitor, SharedOutline, Vector, contacts_one_by_one,
 };
-use rand::{Rng, RngExt};
+use jamkit_planar::first_order::{Profile, gap_hessian};
+use jamkit_planar::gap2d::{self, GapModel, Jet3, SupportJet};
+use rand::Rng;
 use serde::Deserialize;
 use std::f64::consts::PI;
 
@@ -134,7 +134,7 @@ pub struct FourierParams {
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
     /// The gap model (default: the paper's first order).
-    #[serde(default, deserialize_with = "jamkit_core::gap2d::deserialize_gap")]
+    #[serde(default, deserialize_with = "jamkit_planar::gap2d::deserialize_gap")]
     pub gap: GapModel,
 }
 
@@ -150,7 +150,7 @@ pub struct FourierSumParams {
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
     /// The gap model (default: the paper's first order).
-    #[serde(default, deserialize_with = "jamkit_core::gap2d::deserialize_gap")]
+    #[serde(default, deserialize_with = "jamkit_planar::gap2d::deserialize_gap")]
     pub gap: GapModel,
 }
 
@@ -229,44 +229,10 @@ pub struct NearDisk {
     exact_slack: f64,
 }
 
-/// An orientation, stored as the unit complex number `e^{iθ}`
-/// (`cos θ`, `sin θ`): the pair loop needs nothing else, and `θ` itself is
-/// `atan2(sin θ, cos θ)` in `(−π, π]`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Angle {
-    cos: f64,
-    sin: f64,
-}
-
-impl Angle {
-    /// The orientation `θ`.
-    pub fn new(theta: f64) -> Self {
-        // NOTE: wrapping first keeps sin/cos accurate for angles that have
-        // wound many turns; θ and θ + 2π are the same orientation.
-        let (cos, sin) = unit_of_angle(theta);
-        Self { cos, sin }
-    }
-
-    /// `θ` in `(−π, π]`.
-    pub fn theta(&self) -> f64 {
-        self.sin.atan2(self.cos)
-    }
-
-    /// `e^{iθ}`.
-    pub fn unit(&self) -> Unit {
-        (self.cos, self.sin)
-    }
-
-    /// Turn by `dθ` ([`jamkit_core::math::turn_unit`]). Small turns (every
-    /// FIRE step near a minimum) multiply `e^{iθ}` by `e^{i dθ}` from its
-    /// Taylor series instead of calling `sin_cos`, which cost a sixth of a
-    /// near-disk step.
-    #[inline]
-    pub fn turned(self, dtheta: f64) -> Self {
-        let (cos, sin) = turn_unit((self.cos, self.sin), dtheta);
-        Self { cos, sin }
-    }
-}
+/// An orientation: the shared planar rotation `e^{iθ}`
+/// ([`jamkit_core::Rotation2`]); near-disks turn it by
+/// [`Rotation2::turned`](jamkit_core::Rotation2::turned).
+pub type Angle = jamkit_core::Rotation2;
 
 /// `z²`, bit for bit `cmul(z, z)` (`ab + ba = 2ab` exactly).
 #[inline(always)]
@@ -543,8 +509,7 @@ impl NearDisk {
             (Vector::<2>::new(1.0, 0.0), 0.0)
         };
         let w_conj = (u[0], -u[1]);
-        let [(f_i, df_i), (f_j, df_j)] =
-            self.f_pair((o_i.cos, o_i.sin), (o_j.cos, o_j.sin), w_conj);
+        let [(f_i, df_i), (f_j, df_j)] = self.f_pair(o_i.unit(), o_j.unit(), w_conj);
         let d = self.delta;
         let gap = r - size_i - size_j - d * (size_i * f_i + size_j * f_j);
         let tangent = Vector::<2>::new(-u[1], u[0]);
@@ -661,7 +626,7 @@ impl NearDisk {
         out
     }
 
-    /// The second-order gap's partials (see [`jamkit_core::gap2d`]).
+    /// The second-order gap's partials (see [`jamkit_planar::gap2d`]).
     fn second_order(
         &self,
         size_i: f64,
@@ -676,11 +641,11 @@ impl NearDisk {
         } else {
             Vector::<2>::new(1.0, 0.0)
         };
-        let [p_i, p_j] = self.f_pair_jet3((o_i.cos, o_i.sin), (o_j.cos, o_j.sin), (u[0], -u[1]));
+        let [p_i, p_j] = self.f_pair_jet3(o_i.unit(), o_j.unit(), (u[0], -u[1]));
         gap2d::second_order(r, size_i, size_j, self.delta, p_i, p_j)
     }
 
-    /// The exact gap (see [`jamkit_core::gap2d::exact`]), or `None` when
+    /// The exact gap (see [`jamkit_planar::gap2d::exact`]), or `None` when
     /// it certainly exceeds `max_gap`. In the body frame the outline is
     /// `R(φ)/R⁰ = 1 + Δ F(−φ)`, and orientation `θ` turns it
     /// counter-clockwise by `θ`.
@@ -840,7 +805,7 @@ impl Shape<2> for NearDisk {
     }
 
     fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Angle {
-        Angle::new(2.0 * PI * rng.random::<f64>() - PI)
+        Angle::random(rng)
     }
 
     #[inline]
@@ -849,14 +814,11 @@ impl Shape<2> for NearDisk {
     }
 
     fn orientation_coords(&self, o: &Angle) -> Vec<f64> {
-        vec![o.theta()]
+        o.coords()
     }
 
     fn orientation_from_coords(&self, coords: &[f64]) -> Option<Angle> {
-        match coords {
-            [theta] if theta.is_finite() => Some(Angle::new(*theta)),
-            _ => None,
-        }
+        Angle::from_coords(coords)
     }
 
     fn rattler_threshold(&self) -> usize {
@@ -955,7 +917,7 @@ impl Shape<2> for NearDisk {
     }
 
     /// Second derivatives of the first-order gap
-    /// ([`jamkit_core::first_order`], with `P = F`).
+    /// ([`jamkit_planar::first_order`], with `P = F`).
     fn gap_hessians<V: FnMut(GapHessian<2>)>(
         &self,
         size_i: f64,
@@ -992,7 +954,7 @@ impl Shape<2> for NearDisk {
             Vector::<2>::new(1.0, 0.0)
         };
         let [p_i, p_j] = self
-            .f_pair_second((o_i.cos, o_i.sin), (o_j.cos, o_j.sin), (u[0], -u[1]))
+            .f_pair_second(o_i.unit(), o_j.unit(), (u[0], -u[1]))
             .map(|(value, slope, curvature)| Profile {
                 value,
                 slope,

@@ -44,11 +44,11 @@
 //! `cos A`. The `−π` in `A_j` flips the sign of both, which `G` (π-periodic)
 //! does not see.
 
-use jamkit_core::first_order::{Profile, gap_hessian};
 use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, Outline, ParamSpec, RotVec, Shape, ShapeVisitor,
     SharedOutline, Vector,
 };
+use jamkit_planar::first_order::{Profile, gap_hessian};
 use rand::{Rng, RngExt};
 use serde::Deserialize;
 use std::f64::consts::PI;
@@ -422,7 +422,7 @@ impl Shape<2> for Lobed {
 
     /// The same gap with its second derivatives, for the Hessian: the
     /// first-order gap is the paper's for any profile, so
-    /// [`jamkit_core::first_order::gap_hessian`] does the work once it has
+    /// [`jamkit_planar::first_order::gap_hessian`] does the work once it has
     /// `G`, `G'` and `G''` at the two angles (this path is not hot, so `A`
     /// comes from `atan2`).
     fn gap_hessians<V: FnMut(GapHessian<2>)>(

@@ -202,22 +202,19 @@ impl Shape<2> for Nmer<2> {
     }
 
     fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Angle {
-        Angle::new(2.0 * PI * rng.random::<f64>() - PI)
+        Angle::random(rng)
     }
 
     fn rotate(&self, o: &mut Angle, dq: &[f64]) {
-        *o = o.turned(dq[0]);
+        *o = o.turned_exact(dq[0]);
     }
 
     fn orientation_coords(&self, o: &Angle) -> Vec<f64> {
-        vec![o.theta()]
+        o.coords()
     }
 
     fn orientation_from_coords(&self, coords: &[f64]) -> Option<Angle> {
-        match coords {
-            [theta] if theta.is_finite() => Some(Angle::new(*theta)),
-            _ => None,
-        }
+        Angle::from_coords(coords)
     }
 
     /// `f + 1 = 4`: `f = 3` (two translations, one angle).

@@ -19,51 +19,10 @@
 
 use jamkit_core::Vector;
 
-/// A 2D orientation `θ`, stored as the unit complex number `e^{iθ}`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Angle {
-    cos: f64,
-    sin: f64,
-}
-
-impl Angle {
-    /// The orientation `θ` (radians).
-    pub fn new(theta: f64) -> Self {
-        // NOTE: wrapping first keeps sin/cos accurate for bodies that have
-        // turned many times; θ and θ + 2π are the same orientation.
-        let theta =
-            theta - 2.0 * std::f64::consts::PI * (theta / (2.0 * std::f64::consts::PI)).round();
-        let (sin, cos) = theta.sin_cos();
-        Self { cos, sin }
-    }
-
-    /// `θ` in `(−π, π]`.
-    pub fn theta(&self) -> f64 {
-        self.sin.atan2(self.cos)
-    }
-
-    /// Turn by `dθ`: `e^{iθ} e^{i dθ}`, renormalised (one Newton step for
-    /// `1/|z|`, exact to round-off since `|z| = 1 + O(10⁻¹⁶)`).
-    pub fn turned(self, dtheta: f64) -> Self {
-        let (s, c) = dtheta.sin_cos();
-        let cos = self.cos * c - self.sin * s;
-        let sin = self.cos * s + self.sin * c;
-        let fix = 1.5 - 0.5 * (cos * cos + sin * sin);
-        Self {
-            cos: cos * fix,
-            sin: sin * fix,
-        }
-    }
-
-    /// `R(θ) s`.
-    #[inline(always)]
-    pub fn apply(&self, s: &Vector<2>) -> Vector<2> {
-        Vector::<2>::new(
-            self.cos * s[0] - self.sin * s[1],
-            self.sin * s[0] + self.cos * s[1],
-        )
-    }
-}
+/// A 2D orientation: the shared planar rotation `e^{iθ}`
+/// ([`jamkit_core::Rotation2`]); bodies made of spheres turn it by
+/// [`Rotation2::turned_exact`](jamkit_core::Rotation2::turned_exact).
+pub type Angle = jamkit_core::Rotation2;
 
 /// A 3D orientation: the unit quaternion `w + x i + y j + z k`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -222,7 +181,7 @@ mod tests {
     fn angles_turn_and_wrap() {
         let mut a = Angle::new(3.0);
         for _ in 0..1000 {
-            a = a.turned(0.01);
+            a = a.turned_exact(0.01);
         }
         assert_relative_eq!(
             a.theta(),

@@ -23,8 +23,8 @@
 //! derivatives its own way; [`gap_hessian`] gives the second derivatives
 //! from the profile's value, slope and curvature at the two angles.
 
-use crate::math::{Matrix, Vector};
-use crate::shape::{Contact, GapHessian};
+use jamkit_core::math::{Matrix, Vector};
+use jamkit_core::{Contact, GapHessian};
 
 /// `P(A)`, `P'(A)` and `P''(A)` of one body at its angle `A` to the line of
 /// centres.

@@ -66,8 +66,8 @@
 //! centres; [`polar_support`] gives `H, H', H''` of any star-shaped convex
 //! outline `R(φ)` from the boundary point whose normal points along `β`.
 
-use crate::math::{Matrix, Unit, Vector, cmul, turn_unit, unit_of_angle};
-use crate::shape::{Contact, GapHessian};
+use jamkit_core::math::{Matrix, Unit, Vector, cmul, turn_unit, unit_of_angle};
+use jamkit_core::{Contact, GapHessian};
 
 /// Which gap a near-disk family uses.
 ///

@@ -1,0 +1,18 @@
+//! # jamkit-planar: the 2D near-disk toolkit
+//!
+//! What the planar families share beyond the `Shape` contract, kept out of
+//! `jamkit-core` (which neither the engine nor the observables need it):
+//!
+//! * [`first_order`]: the paper's first-order near-disk gap with its second
+//!   derivatives, for any profile `R(θ)/R⁰ = 1 + Δ P(θ)` given by `P`, `P'`
+//!   and `P''` at the two bodies' angles (used by `fourier`, `fourier_sum`
+//!   and `lobed`);
+//! * [`gap2d`]: the second-order near-disk gap and the exact gap of convex
+//!   outlines (support functions), with second derivatives (used by the
+//!   near-disks' `SecondOrder` and `Exact` gap models and by `ellipse`).
+//!
+//! The planar orientation type itself, [`jamkit_core::Rotation2`], lives in
+//! core beside the `Shape` trait.
+
+pub mod first_order;
+pub mod gap2d;
