@@ -25,6 +25,7 @@ mod spectrum;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
+use jamkit_experiment::grid::Shard;
 use jamkit_experiment::runner::{RunOptions, default_out, run};
 use jamkit_experiment::{Experiment, grid, overrides, registry};
 use std::io::IsTerminal;
@@ -59,6 +60,12 @@ enum Command {
         /// Override a field: --set particles=256 --set protocol.eps=1e-4.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
+        /// Run only part I of K of the samples (e.g. one part per task of a
+        /// cluster job array; docs/formats.md). Parts may share one output
+        /// directory; a part writes packings only, and a run without
+        /// --shard into that directory reuses them and writes the tables.
+        #[arg(long, value_name = "I/K")]
+        shard: Option<String>,
     },
     /// Check an experiment file and print its grid, without running it.
     Validate {
@@ -189,10 +196,12 @@ fn real_main() -> Result<()> {
             out,
             jobs,
             sets,
+            shard,
         } => {
             if jobs == Some(0) {
                 bail!("--jobs = 0: must be at least 1");
             }
+            let shard = shard.as_deref().map(Shard::parse).transpose()?;
             // Check every file before running any.
             let experiments = files
                 .iter()
@@ -208,17 +217,29 @@ fn real_main() -> Result<()> {
                     out: out.clone(),
                     jobs,
                     progress: std::io::stderr().is_terminal(),
+                    shard,
                 };
                 let report = run(experiment, &options)
                     .with_context(|| format!("running {}", file.display()))?;
                 print_table(&report);
-                out!(
-                    "\n{} packings ({} reused from an earlier run) in {}: {}",
-                    report.packings.len(),
-                    report.reused,
-                    out.display(),
-                    written(experiment)
-                );
+                match shard {
+                    Some(s) => out!(
+                        "\nshard {}/{}: {} packings ({} reused from an earlier run) in {}/packings; run without --shard into {} to gather every part's packings into the tables",
+                        s.index,
+                        s.count,
+                        report.packings.len(),
+                        report.reused,
+                        out.display(),
+                        out.display()
+                    ),
+                    None => out!(
+                        "\n{} packings ({} reused from an earlier run) in {}: {}",
+                        report.packings.len(),
+                        report.reused,
+                        out.display(),
+                        written(experiment)
+                    ),
+                }
                 for f in &report.failures {
                     eprintln!("error: {f}");
                 }

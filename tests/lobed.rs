@@ -54,6 +54,7 @@ fn example_experiment_jams() {
             out: dir.path().to_path_buf(),
             jobs: Some(2),
             progress: false,
+            shard: None,
         },
     )
     .unwrap();

@@ -74,6 +74,7 @@ fn delta_zero_reproduces_the_sphere_packing() {
                 out: dir.path().to_path_buf(),
                 jobs: Some(1),
                 progress: false,
+                shard: None,
             },
         )
         .unwrap()

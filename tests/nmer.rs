@@ -435,6 +435,7 @@ fn run_small(file: &str, sets: &[&str]) -> Vec<jamkit_experiment::record::Packin
             out: dir.path().to_path_buf(),
             jobs: Some(2),
             progress: false,
+            shard: None,
         },
     )
     .unwrap();

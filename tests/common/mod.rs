@@ -44,6 +44,7 @@ pub fn run_into(e: &Experiment, dir: &Path, jobs: usize) -> RunReport {
             out: dir.to_path_buf(),
             jobs: Some(jobs),
             progress: false,
+            shard: None,
         },
     )
     .unwrap()

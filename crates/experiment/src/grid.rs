@@ -171,6 +171,45 @@ pub fn jobs(experiment: &Experiment, points: &[Point]) -> Vec<Job> {
     out
 }
 
+/// One part of an experiment's jobs, for running it as `count` processes
+/// (`jamkit run --shard index/count`, e.g. one per task of a cluster job
+/// array): job `j` (in grid order) belongs to part `j mod count + 1`, so
+/// every part gets a share of every point. Packings are seeded per job, so
+/// they are the same bits whatever the split.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This part, `1 ≤ index ≤ count`.
+    pub index: usize,
+    /// Number of parts.
+    pub count: usize,
+}
+
+impl Shard {
+    /// Parse `I/K` (`1 ≤ I ≤ K`), naming `--shard` and the value when it is
+    /// not one.
+    pub fn parse(text: &str) -> Result<Self, ExperimentError> {
+        let bad = || {
+            ExperimentError::invalid(
+                "--shard",
+                text,
+                "must be I/K with whole numbers 1 ≤ I ≤ K (part I of K, e.g. 2/4)",
+            )
+        };
+        let (i, k) = text.split_once('/').ok_or_else(bad)?;
+        let index: usize = i.trim().parse().map_err(|_| bad())?;
+        let count: usize = k.trim().parse().map_err(|_| bad())?;
+        if index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Self { index, count })
+    }
+
+    /// Whether job number `j` (its place in [`jobs`]' list) is this part's.
+    pub fn owns(&self, j: usize) -> bool {
+        j % self.count + 1 == self.index
+    }
+}
+
 fn param_axes(
     experiment: &Experiment,
     info: &FamilyInfo,

@@ -34,6 +34,11 @@ pub struct RunOptions {
     pub jobs: Option<usize>,
     /// Show a progress bar (only drawn when stderr is a terminal).
     pub progress: bool,
+    /// Run only this part of the jobs (`--shard I/K`). A part writes its
+    /// packings and `experiment.ron` but no tables (they would hold only
+    /// its own packings): a run without a shard into the same directory
+    /// reuses every packing and writes them.
+    pub shard: Option<grid::Shard>,
 }
 
 /// What a run produced.
@@ -53,7 +58,15 @@ pub struct RunReport {
 pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, ExperimentError> {
     experiment.validate()?;
     let points = grid::points(experiment)?;
-    let jobs = grid::jobs(experiment, &points);
+    let mut jobs = grid::jobs(experiment, &points);
+    if let Some(shard) = options.shard {
+        jobs = jobs
+            .into_iter()
+            .enumerate()
+            .filter(|(j, _)| shard.owns(*j))
+            .map(|(_, job)| job)
+            .collect();
+    }
     let packing_dir = options.out.join("packings");
     std::fs::create_dir_all(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;
     let effective = ron::ser::to_string_pretty(experiment, ron::ser::PrettyConfig::default())
@@ -131,6 +144,15 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         }
     }
     let groups = group_by_point(experiment, &points, &jobs, &packings);
+    let summaries = record::summarize_points(&groups);
+    if options.shard.is_some() {
+        return Ok(RunReport {
+            packings,
+            reused,
+            failures,
+            summaries,
+        });
+    }
     record::write_atomic(
         &options.out.join("results.csv"),
         record::results_csv(&packings).as_bytes(),
@@ -151,7 +173,6 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             record::gaps_csv(&groups).as_bytes(),
         )?;
     }
-    let summaries = record::summarize_points(&groups);
     Ok(RunReport {
         packings,
         reused,
