@@ -16,8 +16,8 @@ use anyhow::Result;
 use clap::{Subcommand, ValueEnum};
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::{
-    Fire, FireParams, FireVariant, ForceCriterion, JamParams, Masses, Objective, PreconParams,
-    Scene, jam,
+    Fire, FireParams, FireVariant, ForceCriterion, JamParams, JamSearch, Masses, Objective,
+    PreconParams, Scene, jam,
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_observe::summarize;
@@ -104,6 +104,15 @@ impl MinimizerArg {
     }
 }
 
+/// The jamming search in `bench packing`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum SearchArg {
+    /// The paper's halved steps.
+    Bisection,
+    /// The decompression the pressure predicts.
+    Extrapolated,
+}
+
 /// FIRE's masses in `bench packing`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MassesArg {
@@ -182,6 +191,11 @@ pub enum BenchCommand {
         /// FIRE's largest time step [default: the family's].
         #[arg(long)]
         dt_max: Option<f64>,
+        /// How the bisection decompresses a jammed state
+        /// (`protocol.search`): the paper's halved steps (`bisection`) or
+        /// the step its pressure predicts (`extrapolated`).
+        #[arg(long, value_enum, default_value_t = SearchArg::Bisection)]
+        search: SearchArg,
         /// Write every minimisation (φ, FIRE steps, Newton iterations, why it
         /// stopped, V/N, Σ g²) of every packing to this CSV (a step trace).
         #[arg(long, value_name = "FILE")]
@@ -272,8 +286,16 @@ pub fn run(what: BenchCommand) -> Result<()> {
             precon_floor,
             precon_refresh,
             dt_max,
+            search,
             trace,
         } => {
+            let jam_params = JamParams {
+                search: match search {
+                    SearchArg::Bisection => JamSearch::Bisection,
+                    SearchArg::Extrapolated => JamSearch::Extrapolated,
+                },
+                ..JamParams::default()
+            };
             let mut fire = minimizer.params(force_criterion, newton_after);
             let d = PreconParams::default();
             let blocks = PreconParams {
@@ -309,6 +331,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
                         seed,
                         skin,
                         &fire,
+                        &jam_params,
                         trace_out.as_mut(),
                     )?,
                     (BenchFamily::Sphere, 3) => bench_packing::<3, _>(
@@ -317,6 +340,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
                         seed,
                         skin,
                         &fire,
+                        &jam_params,
                         trace_out.as_mut(),
                     )?,
                     (BenchFamily::Fourier, 2) => {
@@ -333,6 +357,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
                             seed,
                             skin,
                             &fire,
+                            &jam_params,
                             trace_out.as_mut(),
                         )?
                     }
@@ -344,6 +369,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
                             seed,
                             skin,
                             &fire,
+                            &jam_params,
                             trace_out.as_mut(),
                         )?
                     }
@@ -355,6 +381,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
                             seed,
                             skin,
                             &fire,
+                            &jam_params,
                             trace_out.as_mut(),
                         )?
                     }
@@ -442,6 +469,7 @@ fn bench_packing<const D: usize, S: Shape<D>>(
     seed: u64,
     skin: f64,
     params: &FireParams,
+    jam_params: &JamParams,
     trace: Option<&mut std::io::BufWriter<std::fs::File>>,
 ) -> Result<()> {
     let family = shape.family();
@@ -453,7 +481,7 @@ fn bench_packing<const D: usize, S: Shape<D>>(
     }
     let cpu = cpu_seconds();
     let t = Instant::now();
-    let out = jam(&mut scene, &mut fire, &JamParams::default())?;
+    let out = jam(&mut scene, &mut fire, jam_params)?;
     let wall = t.elapsed().as_secs_f64();
     let cpu = cpu_seconds() - cpu;
     if let Some(f) = trace {

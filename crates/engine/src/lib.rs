@@ -38,6 +38,7 @@ pub use neighbors::NeighborList;
 pub use newton::NewtonParams;
 pub use precon::PreconParams;
 pub use protocol::{
-    JamParams, PressureParams, ProtocolOutcome, compress_to_phi, compress_to_pressure, jam,
+    JamParams, JamSearch, PressureParams, ProtocolOutcome, compress_to_phi, compress_to_pressure,
+    energy_slope, extrapolated_step, jam,
 };
 pub use scene::Scene;

@@ -346,6 +346,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                 energy_high,
                 max_density_steps,
                 escape_saddles,
+                search,
                 ..
             } => {
                 let params = JamParams {
@@ -353,6 +354,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                     energy_low,
                     energy_high,
                     max_density_steps,
+                    search,
                 };
                 jam(&mut scene, &mut fire, &params).and_then(|mut outcome| {
                     if escape_saddles {

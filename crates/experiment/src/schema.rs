@@ -23,7 +23,7 @@
 
 use crate::error::ExperimentError;
 use jamkit_core::{Potential, SizeDistribution};
-use jamkit_engine::{FireParams, JamParams, PressureParams};
+use jamkit_engine::{FireParams, JamParams, JamSearch, PressureParams};
 use jamkit_observe::gaps::GapParams;
 use jamkit_observe::hessian::HessianOptions;
 use jamkit_observe::spectrum::DosParams;
@@ -140,6 +140,11 @@ pub enum Protocol {
         /// (docs/sanity.md), so the escape is a diagnostic, not a fix.
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         escape_saddles: bool,
+        /// How a jammed state is decompressed: `Bisection` (the paper's
+        /// halved steps, the default, not written out) or `Extrapolated`
+        /// (the step its pressure predicts; docs/physics.md).
+        #[serde(default, skip_serializing_if = "JamSearch::is_bisection")]
+        search: JamSearch,
     },
     /// Compress in steps of `eps` to packing fraction `phi`.
     Phi {
@@ -199,6 +204,7 @@ impl Default for Protocol {
             energy_high: default_energy_high(),
             max_density_steps: default_max_density_steps(),
             escape_saddles: false,
+            search: JamSearch::Bisection,
         }
     }
 }
@@ -544,6 +550,7 @@ impl Experiment {
                 energy_low,
                 energy_high,
                 max_density_steps,
+                search,
                 ..
             } => {
                 JamParams {
@@ -551,6 +558,7 @@ impl Experiment {
                     energy_low,
                     energy_high,
                     max_density_steps,
+                    search,
                 }
                 .validate("protocol")?;
                 // NOTE: FIRE stops at V/N < energy_tol; if that were above the

@@ -1,0 +1,188 @@
+//! The extrapolated jamming search (`protocol.search: Extrapolated`): the
+//! slope it extrapolates with is the derivative of the relaxed energy
+//! (finite differences), one leap lands where `V/N ∝ (φ − φ_J)²` says, the
+//! search ends in the paper's window, and the paper's `Bisection` stays
+//! the default, left out of recorded settings.
+
+use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
+use jamkit_engine::{
+    Fire, FireParams, JamParams, JamSearch, Objective, Scene, energy_slope, extrapolated_step, jam,
+};
+use jamkit_fourier::{FourierParams, NearDisk};
+use jamkit_sphere::Sphere;
+use rand::SeedableRng;
+
+/// `n` bodies placed at φ = 0.1 and compressed affinely to `phi`.
+fn compressed<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64, phi: f64) -> Scene<D, S> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let sizes = SizeDistribution::default().sample(n, &mut rng);
+    let mut packing = Packing::<D, S>::random(shape, sizes, 0.1, &mut rng).unwrap();
+    packing.set_phi(phi);
+    Scene::new(packing, Potential::Harmonic, 0.2)
+}
+
+fn near_disk() -> NearDisk {
+    NearDisk::fourier(&FourierParams {
+        n: 2,
+        delta: 0.1,
+        inertia: None,
+        gap: Default::default(),
+    })
+    .unwrap()
+}
+
+/// `V/N` after relaxing at `phi`, starting from `scene`'s state.
+fn relaxed_energy<const D: usize, S: Shape<D>>(scene: &Scene<D, S>, phi: f64) -> f64 {
+    let mut s = scene.clone();
+    s.set_phi(phi);
+    let out = Fire::new(FireParams::paper()).minimize(&mut s).unwrap();
+    out.energy / s.bodies() as f64
+}
+
+/// `energy_slope` of a relaxed, jammed state equals the central difference
+/// of the relaxed `V/N` at `φ ± h`.
+///
+/// Tolerance 10⁻⁴ relative: the difference's own error is
+/// `O((h / (φ − φ_J))²) ≈ 10⁻⁸` here, the minimisations' residual
+/// (`Σ g² < 10⁻²⁵`) moves `V/N ~ 10⁻⁴` by far less; a slope that left out
+/// the box's scaling or counted `V` instead of `V/N` would be off by O(1).
+fn check_slope<const D: usize, S: Shape<D>>(shape: S, phi: f64) {
+    let mut scene = compressed::<D, S>(shape, 32, 7, phi);
+    Fire::new(FireParams::paper()).minimize(&mut scene).unwrap();
+    let e = relaxed_energy(&scene, phi);
+    assert!(e > 1e-6, "the state must be jammed: V/N = {e:e}");
+    let slope = energy_slope(&mut scene);
+    let h = 1e-6;
+    let fd = (relaxed_energy(&scene, phi + h) - relaxed_energy(&scene, phi - h)) / (2.0 * h);
+    let rel = (slope - fd).abs() / fd.abs();
+    assert!(
+        rel < 1e-4,
+        "slope {slope:e} against FD {fd:e} (relative {rel:e})"
+    );
+}
+
+#[test]
+fn slope_is_the_derivative_of_the_relaxed_energy_disks() {
+    check_slope::<2, _>(Sphere, 0.9);
+}
+
+#[test]
+fn slope_is_the_derivative_of_the_relaxed_energy_3d_spheres() {
+    check_slope::<3, _>(Sphere, 0.7);
+}
+
+#[test]
+fn slope_is_the_derivative_of_the_relaxed_energy_near_disks() {
+    check_slope::<2, _>(near_disk(), 0.92);
+}
+
+/// One leap from a slightly compressed packing (`V/N ≈ 10⁻¹⁰`) to
+/// `V/N = 10⁻¹²` lands within 5 % of it, for the harmonic (`α = 2`) and
+/// the Hertzian (`α = 5/2`) potential: the model's error is
+/// `O(φ − φ_J) ≈ 10⁻⁵` relative and the contact network does not change
+/// over so short a way; the other potential's exponent, or `V` for `V/N`,
+/// would miss by 50 % or more.
+fn check_leap(potential: Potential) {
+    let mut scene = compressed::<2, _>(Sphere, 64, 3, 0.1);
+    scene = Scene::new(scene.packing().clone(), potential, 0.2);
+    let mut fire = Fire::new(FireParams::paper());
+    let params = JamParams {
+        energy_low: 1e-10,
+        energy_high: 2e-10,
+        ..JamParams::default()
+    };
+    jam(&mut scene, &mut fire, &params).unwrap();
+    let phi = scene.phi();
+    let e = relaxed_energy(&scene, phi);
+    let target = 1e-12;
+    let step = extrapolated_step(&mut scene, e, target).unwrap();
+    let landed = relaxed_energy(&scene, phi + step);
+    assert!(
+        (landed / target - 1.0).abs() < 0.05,
+        "{potential:?}: V/N {e:e} at φ = {phi}, step {step:e}: landed at {landed:e}, aimed at {target:e}"
+    );
+}
+
+#[test]
+fn one_leap_lands_where_the_model_says_harmonic() {
+    check_leap(Potential::Harmonic);
+}
+
+#[test]
+fn one_leap_lands_where_the_model_says_hertzian() {
+    check_leap(Potential::Hertzian);
+}
+
+/// Both searches end in the paper's window, on disks and near-disks; the
+/// extrapolated one with fewer minimisations in all (it replaces the
+/// bisection's halvings above φ_J by one leap per two decades of `V/N`).
+#[test]
+fn extrapolated_search_ends_in_the_window_in_fewer_minimisations() {
+    fn run<const D: usize, S: Shape<D>>(shape: S, seed: u64, search: JamSearch) -> (f64, f64, u64) {
+        let mut scene = compressed::<D, S>(shape, 64, seed, 0.1);
+        let mut fire = Fire::new(FireParams::default().for_family(&scene.packing().shape));
+        let params = JamParams {
+            search,
+            ..JamParams::default()
+        };
+        let out = jam(&mut scene, &mut fire, &params).unwrap();
+        (out.phi, out.energy_per_particle, out.minimizations)
+    }
+    let window = JamParams::default();
+    let (mut paper, mut leaps) = (0, 0);
+    for seed in 1..=4 {
+        for (phi, e, m, search) in [
+            {
+                let (p, e, m) = run::<2, _>(Sphere, seed, JamSearch::Bisection);
+                (p, e, m, "disks, bisection")
+            },
+            {
+                let (p, e, m) = run::<2, _>(Sphere, seed, JamSearch::Extrapolated);
+                (p, e, m, "disks, extrapolated")
+            },
+            {
+                let (p, e, m) = run::<2, _>(near_disk(), seed, JamSearch::Bisection);
+                (p, e, m, "near-disks, bisection")
+            },
+            {
+                let (p, e, m) = run::<2, _>(near_disk(), seed, JamSearch::Extrapolated);
+                (p, e, m, "near-disks, extrapolated")
+            },
+        ] {
+            assert!(
+                e > window.energy_low && e < window.energy_high,
+                "{search}, seed {seed}: V/N = {e:e} at φ = {phi}"
+            );
+            if search.ends_with("bisection") {
+                paper += m;
+            } else {
+                leaps += m;
+            }
+        }
+    }
+    assert!(
+        leaps < paper,
+        "minimisations: extrapolated {leaps}, bisection {paper}"
+    );
+}
+
+/// The paper's bisection is the default and is not written into recorded
+/// settings (packings made before the option existed still resume);
+/// `Extrapolated` is written and read back.
+#[test]
+fn bisection_is_the_default_and_left_out_of_settings() {
+    let default = JamParams::default();
+    assert_eq!(default.search, JamSearch::Bisection);
+    let text = ron::to_string(&default).unwrap();
+    assert!(!text.contains("search"), "{text}");
+    let leaps = JamParams {
+        search: JamSearch::Extrapolated,
+        ..default
+    };
+    let text = ron::to_string(&leaps).unwrap();
+    assert!(text.contains("search:Extrapolated"), "{text}");
+    let back: JamParams = ron::from_str(&text).unwrap();
+    assert_eq!(back, leaps);
+    let err = ron::from_str::<JamParams>("(search: Halving)").unwrap_err();
+    assert!(err.to_string().contains("Halving"), "{err}");
+}
