@@ -114,12 +114,28 @@ fn tiny_deltas_jam_with_block_masses() {
 #[test]
 fn jamming_cases_jam_with_the_extrapolated_search() {
     let cases: [(&str, &[&str], (f64, f64)); 6] = [
-        ("tiny_delta_1e-6", &["particles=16", "samples=1"], (0.75, 0.90)),
-        ("tiny_delta_1e-8", &["particles=16", "samples=1"], (0.75, 0.90)),
+        (
+            "tiny_delta_1e-6",
+            &["particles=16", "samples=1"],
+            (0.75, 0.90),
+        ),
+        (
+            "tiny_delta_1e-8",
+            &["particles=16", "samples=1"],
+            (0.75, 0.90),
+        ),
         ("n12", &["particles=16", "samples=1"], (0.75, 0.90)),
         ("n16384", &["particles=256"], (0.80, 0.88)),
-        ("size_ratio_10", &["particles=32", "samples=1"], (0.75, 0.95)),
-        ("phi_start_near_jamming", &["particles=32", "samples=1"], (0.78, 0.90)),
+        (
+            "size_ratio_10",
+            &["particles=32", "samples=1"],
+            (0.75, 0.95),
+        ),
+        (
+            "phi_start_near_jamming",
+            &["particles=32", "samples=1"],
+            (0.78, 0.90),
+        ),
     ];
     for (case, sets, range) in cases {
         let mut sets = sets.to_vec();
