@@ -27,8 +27,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use jamkit_experiment::grid::Shard;
 use jamkit_experiment::runner::{RunOptions, default_out, run};
-use jamkit_experiment::{Experiment, grid, overrides, registry};
-use std::io::IsTerminal;
+use jamkit_experiment::{Experiment, Log, grid, overrides, registry};
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -66,6 +65,14 @@ enum Command {
         /// --shard into that directory reuses them and writes the tables.
         #[arg(long, value_name = "I/K")]
         shard: Option<String>,
+        /// Write nothing on stderr while running.
+        #[arg(long, conflicts_with = "verbose")]
+        quiet: bool,
+        /// Write log lines (one per finished packing, one every 10 s per
+        /// running packing) even on a terminal. Without a terminal (a batch
+        /// job) they are the default, every 30 s.
+        #[arg(long)]
+        verbose: bool,
     },
     /// Check an experiment file and print its grid, without running it.
     Validate {
@@ -197,6 +204,8 @@ fn real_main() -> Result<()> {
             jobs,
             sets,
             shard,
+            quiet,
+            verbose,
         } => {
             if jobs == Some(0) {
                 bail!("--jobs = 0: must be at least 1");
@@ -216,7 +225,7 @@ fn real_main() -> Result<()> {
                 let options = RunOptions {
                     out: out.clone(),
                     jobs,
-                    progress: std::io::stderr().is_terminal(),
+                    log: Log::for_stderr(quiet, verbose),
                     shard,
                 };
                 let report = run(experiment, &options)

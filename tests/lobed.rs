@@ -53,7 +53,7 @@ fn example_experiment_jams() {
         &RunOptions {
             out: dir.path().to_path_buf(),
             jobs: Some(2),
-            progress: false,
+            log: jamkit_experiment::Log::Quiet,
             shard: None,
         },
     )

@@ -73,7 +73,7 @@ fn delta_zero_reproduces_the_sphere_packing() {
             &RunOptions {
                 out: dir.path().to_path_buf(),
                 jobs: Some(1),
-                progress: false,
+                log: jamkit_experiment::Log::Quiet,
                 shard: None,
             },
         )

@@ -434,7 +434,7 @@ fn run_small(file: &str, sets: &[&str]) -> Vec<jamkit_experiment::record::Packin
         &RunOptions {
             out: dir.path().to_path_buf(),
             jobs: Some(2),
-            progress: false,
+            log: jamkit_experiment::Log::Quiet,
             shard: None,
         },
     )

@@ -43,7 +43,7 @@ pub fn run_into(e: &Experiment, dir: &Path, jobs: usize) -> RunReport {
         &RunOptions {
             out: dir.to_path_buf(),
             jobs: Some(jobs),
-            progress: false,
+            log: jamkit_experiment::Log::Quiet,
             shard: None,
         },
     )

@@ -26,6 +26,8 @@ use crate::newton::{NewtonEnd, NewtonParams, NewtonWork};
 use crate::precon::{BlockMasses, PreconParams};
 use jamkit_core::{Error, Result};
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Which force measure the stopping rule compares with `force_tol`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -435,6 +437,53 @@ pub struct Fire {
     precon_grad: Vec<f64>,
     /// With [`Fire::record`]: `(φ, outcome)` of every minimisation.
     trace: Option<Vec<(f64, MinimizeOutcome)>>,
+    /// With [`Fire::watch`]: where the minimiser stands, for another thread.
+    progress: Option<Arc<Progress>>,
+}
+
+/// Where a minimiser stands, written after every minimisation and read by
+/// another thread (a run's batch log): the last minimisation's `φ` and
+/// `V/N`, and the counts so far. Reading it changes nothing in the run.
+#[derive(Debug, Default)]
+pub struct Progress {
+    minimizations: AtomicU64,
+    fire_steps: AtomicU64,
+    phi: AtomicU64,
+    energy_per_particle: AtomicU64,
+}
+
+/// A copy of a [`Progress`] at one moment.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ProgressSnapshot {
+    /// Minimisations finished.
+    pub minimizations: u64,
+    /// FIRE steps over them.
+    pub fire_steps: u64,
+    /// `φ` of the last one.
+    pub phi: f64,
+    /// `V/N` at its end.
+    pub energy_per_particle: f64,
+}
+
+impl Progress {
+    fn record(&self, phi: f64, energy_per_particle: f64, steps: u64) {
+        self.phi.store(phi.to_bits(), Ordering::Relaxed);
+        self.energy_per_particle
+            .store(energy_per_particle.to_bits(), Ordering::Relaxed);
+        self.fire_steps.fetch_add(steps, Ordering::Relaxed);
+        self.minimizations.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// The counts and the last state (fields may be one minimisation
+    /// apart: each is read on its own).
+    pub fn snapshot(&self) -> ProgressSnapshot {
+        ProgressSnapshot {
+            minimizations: self.minimizations.load(Ordering::Relaxed),
+            fire_steps: self.fire_steps.load(Ordering::Relaxed),
+            phi: f64::from_bits(self.phi.load(Ordering::Relaxed)),
+            energy_per_particle: f64::from_bits(self.energy_per_particle.load(Ordering::Relaxed)),
+        }
+    }
 }
 
 impl Fire {
@@ -457,11 +506,24 @@ impl Fire {
         self.trace.as_mut().map(std::mem::take).unwrap_or_default()
     }
 
+    /// Report every minimisation from now on to `progress` (read by another
+    /// thread; changes nothing in the minimisations).
+    pub fn watch(&mut self, progress: Arc<Progress>) {
+        self.progress = Some(progress);
+    }
+
     /// Minimise `obj` from its current state, starting at rest.
     pub fn minimize<O: Objective>(&mut self, obj: &mut O) -> Result<MinimizeOutcome> {
         let out = self.minimize_dispatch(obj)?;
         if let Some(trace) = self.trace.as_mut() {
             trace.push((obj.phi(), out));
+        }
+        if let Some(p) = &self.progress {
+            p.record(
+                obj.phi(),
+                out.energy / obj.bodies().max(1) as f64,
+                out.steps,
+            );
         }
         Ok(out)
     }

@@ -32,7 +32,8 @@ pub mod scene;
 pub mod simd;
 
 pub use fire::{
-    Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Objective, StopReason,
+    Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Objective, Progress,
+    ProgressSnapshot, StopReason,
 };
 pub use neighbors::NeighborList;
 pub use newton::NewtonParams;

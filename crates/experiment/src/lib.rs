@@ -15,6 +15,7 @@
 //! * [`reload`]: a saved packing back as a typed scene (for the spectrum of
 //!   a packing on disk, and for new observables on a resumed run).
 
+pub mod batchlog;
 pub mod error;
 pub mod grid;
 pub mod overrides;
@@ -24,5 +25,6 @@ pub mod reload;
 pub mod runner;
 pub mod schema;
 
+pub use batchlog::Log;
 pub use error::ExperimentError;
 pub use schema::Experiment;

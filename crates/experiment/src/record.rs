@@ -128,6 +128,20 @@ pub struct PackingFile {
     pub spheres: Vec<Vec<f64>>,
 }
 
+/// `file` without its configuration (centres, sizes, orientations,
+/// rattler flags, spheres): what the tables need, at a fraction of the
+/// memory.
+pub fn without_configuration(file: &PackingFile) -> PackingFile {
+    PackingFile {
+        positions: Vec::new(),
+        radii: Vec::new(),
+        orientations: Vec::new(),
+        rattler: Vec::new(),
+        spheres: Vec::new(),
+        ..file.clone()
+    }
+}
+
 /// Write `contents` to `path` atomically (temporary file, then rename).
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), ExperimentError> {
     let tmp = path.with_extension(format!("tmp{}", std::process::id()));

@@ -5,16 +5,17 @@
 //! packing does not depend on `--jobs`. Samples whose file already exists in
 //! the output directory are read back instead of recomputed.
 
+use crate::batchlog::{BatchLog, Log};
 use crate::error::ExperimentError;
 use crate::grid::{self, Job, Point};
 use crate::record::{self, Measures, PackingFile, SpectrumMeasures};
 use crate::registry::{self, SceneVisitor};
 use crate::reload::{PackingVisitor, reload};
 use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
-    Fire, FireParams, JamParams, PressureParams, Scene, compress_to_phi, compress_to_pressure, jam,
+    Fire, FireParams, JamParams, PressureParams, Progress, Scene, compress_to_phi,
+    compress_to_pressure, jam,
 };
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::saddle::{self, SaddleParams};
@@ -22,7 +23,9 @@ use jamkit_observe::spectrum::{self, Spectrum};
 use jamkit_observe::{JammingSummary, RattlerRule, summarize_with};
 use rand::SeedableRng;
 use rayon::prelude::*;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// How to run.
@@ -32,8 +35,9 @@ pub struct RunOptions {
     pub out: PathBuf,
     /// Worker threads (`None`: all cores).
     pub jobs: Option<usize>,
-    /// Show a progress bar (only drawn when stderr is a terminal).
-    pub progress: bool,
+    /// What to tell while running: a bar, batch-log lines, or nothing
+    /// ([`Log::for_stderr`] picks by whether stderr is a terminal).
+    pub log: Log,
     /// Run only this part of the jobs (`--shard I/K`). A part writes its
     /// packings and `experiment.ron` but no tables (they would hold only
     /// its own packings): a run without a shard into the same directory
@@ -73,24 +77,34 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         .expect("experiment serialises");
     record::write_atomic(&options.out.join("experiment.ron"), effective.as_bytes())?;
 
-    let bar = if options.progress {
-        ProgressBar::with_draw_target(Some(jobs.len() as u64), ProgressDrawTarget::stderr())
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} packings, {elapsed} elapsed, ~{eta} left",
+    let log = BatchLog::new(options.log, jobs.len());
+    // The packings finished so far, in grid order and without their
+    // configurations, for `results.csv` as the run goes (not for a part:
+    // its table would hold its own packings only).
+    let order: HashMap<&str, usize> = jobs
+        .iter()
+        .enumerate()
+        .map(|(k, j)| (j.id.as_str(), k))
+        .collect();
+    let finished: Mutex<BTreeMap<usize, PackingFile>> = Mutex::new(BTreeMap::new());
+    let table_so_far = |job: &Job, file: &PackingFile| -> Result<(), ExperimentError> {
+        if options.shard.is_some() {
+            return Ok(());
+        }
+        let mut done = finished.lock().unwrap_or_else(|e| e.into_inner());
+        done.insert(order[job.id.as_str()], record::without_configuration(file));
+        let rows: Vec<PackingFile> = done.values().cloned().collect();
+        record::write_atomic(
+            &options.out.join("results.csv"),
+            record::results_csv(&rows).as_bytes(),
         )
-        .expect("valid template"),
-    );
-    let work = |job: &Job| -> Result<(PackingFile, bool), ExperimentError> {
+    };
+    let make = |job: &Job| -> Result<(PackingFile, bool), ExperimentError> {
         let path = packing_dir.join(format!("{}.json", job.id));
         let point = &points[job.point];
         let done = PackingFile::load_matching(&path, &settings(experiment, point, job));
         let (file, eigen, reused) = match done {
             Some(done) if covers(&stored(&done), experiment) => {
-                bar.inc(1);
                 return Ok((done, true));
             }
             // Same packing, other observables: measure them on the saved
@@ -104,7 +118,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
                 (file, eigen, true)
             }
             _ => {
-                let (file, eigen) = run_job(experiment, point, job)
+                let (file, eigen) = run_job_watched(experiment, point, job, log.begin(&job.id))
                     .map_err(|err| keep_failed_state(err, &packing_dir))?;
                 (file, eigen, false)
             }
@@ -118,18 +132,34 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         file.save(&path)?;
         // A stalled configuration from an earlier attempt is stale now.
         let _ = std::fs::remove_file(failed_path(&packing_dir, &job.id));
-        bar.inc(1);
         Ok((file, reused))
     };
-    let results: Vec<Result<(PackingFile, bool), ExperimentError>> = match options.jobs {
-        Some(threads) => rayon::ThreadPoolBuilder::new()
-            .num_threads(threads.max(1))
-            .build()
-            .expect("thread pool")
-            .install(|| jobs.par_iter().map(work).collect()),
-        None => jobs.par_iter().map(work).collect(),
+    let work = |job: &Job| -> Result<(PackingFile, bool), ExperimentError> {
+        let made = make(job).and_then(|(file, reused)| {
+            table_so_far(job, &file)?;
+            Ok((file, reused))
+        });
+        let told = match &made {
+            Ok((file, reused)) => Ok((file, *reused)),
+            Err(e) => Err(e.to_string()),
+        };
+        log.finish(&job.id, told);
+        made
     };
-    bar.finish_and_clear();
+    let results: Vec<Result<(PackingFile, bool), ExperimentError>> = std::thread::scope(|s| {
+        let watcher = s.spawn(|| log.watch());
+        let results = match options.jobs {
+            Some(threads) => rayon::ThreadPoolBuilder::new()
+                .num_threads(threads.max(1))
+                .build()
+                .expect("thread pool")
+                .install(|| jobs.par_iter().map(work).collect()),
+            None => jobs.par_iter().map(work).collect(),
+        };
+        log.close();
+        watcher.thread().unpark();
+        results
+    });
 
     let mut packings = Vec::new();
     let mut failures = Vec::new();
@@ -306,10 +336,22 @@ pub fn run_job(
     point: &Point,
     job: &Job,
 ) -> Result<(PackingFile, Option<String>), ExperimentError> {
+    run_job_watched(experiment, point, job, None)
+}
+
+/// [`run_job`], its minimiser reporting to `progress` (a batch log's view;
+/// the packing is the same bits).
+pub fn run_job_watched(
+    experiment: &Experiment,
+    point: &Point,
+    job: &Job,
+    progress: Option<Arc<Progress>>,
+) -> Result<(PackingFile, Option<String>), ExperimentError> {
     let visitor = SampleVisitor {
         experiment,
         point,
         job,
+        progress,
     };
     registry::dispatch(&experiment.family, point.dim, &point.params, visitor)?
 }
@@ -318,6 +360,7 @@ struct SampleVisitor<'a> {
     experiment: &'a Experiment,
     point: &'a Point,
     job: &'a Job,
+    progress: Option<Arc<Progress>>,
 }
 
 impl SceneVisitor for SampleVisitor<'_> {
@@ -338,6 +381,9 @@ impl SceneVisitor for SampleVisitor<'_> {
             .map_err(sample_err)?;
         let mut scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
         let mut fire = Fire::new(minimizer);
+        if let Some(p) = &self.progress {
+            fire.watch(p.clone());
+        }
         let mut saddle_escapes = None;
         let outcome: Result<_, jamkit_core::Error> = match e.protocol {
             Protocol::Jam {
