@@ -241,6 +241,14 @@ fn real_main() -> Result<()> {
                         out.display(),
                         out.display()
                     ),
+                    None if !report.elsewhere.is_empty() => out!(
+                        "\n{} packings ({} reused from an earlier run) in {}; {} more are being made by other processes (their locks: {}/packings/*.lock), so no tables were written: rerun when they are done to gather them",
+                        report.packings.len(),
+                        report.reused,
+                        out.display(),
+                        report.elsewhere.len(),
+                        out.display()
+                    ),
                     None => out!(
                         "\n{} packings ({} reused from an earlier run) in {}: {}",
                         report.packings.len(),

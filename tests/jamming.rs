@@ -96,10 +96,23 @@ fn packings_are_reproducible_and_runs_resume() {
     assert_eq!(csv.lines().count(), 4);
     let summary = std::fs::read_to_string(one.path().join("summary.csv")).unwrap();
     assert_eq!(summary.lines().count(), 2);
-    // Changed settings are not served from the old files.
+    // Changed settings are neither served from the old files nor mixed
+    // with them: the run is refused, naming the setting.
     let changed = jamkit_experiment::overrides::apply(&e, &["protocol.eps=2e-3".into()]).unwrap();
-    let redone = run_into(&changed, two.path(), 2);
-    assert_eq!(redone.reused, 0);
+    let options = jamkit_experiment::runner::RunOptions {
+        out: two.path().to_path_buf(),
+        jobs: Some(2),
+        log: jamkit_experiment::Log::Quiet,
+        shard: None,
+    };
+    let refused = jamkit_experiment::runner::run(&changed, &options).unwrap_err();
+    let message = refused.to_string();
+    assert!(
+        message.contains("protocol.Jam.eps = 0.002") && message.contains("another --out"),
+        "{message}"
+    );
+    // Nothing was touched: the same settings still read every packing back.
+    assert_eq!(run_into(&e, two.path(), 2).reused, 3);
     for p in &a.packings {
         for x in &p.positions {
             assert!(

@@ -55,6 +55,16 @@ impl Log {
     }
 }
 
+/// How a job ended, as the log tells it.
+pub(crate) enum Told<'a> {
+    /// Made here (`false`) or read back (`true`).
+    Done(&'a PackingFile, bool),
+    /// Left to the process holding its lock.
+    Elsewhere(&'a str),
+    /// Failed, with the error.
+    Failed(String),
+}
+
 /// A packing under way.
 struct Flight {
     start: Instant,
@@ -127,11 +137,11 @@ impl BatchLog {
         Some(progress)
     }
 
-    /// A packing is done: made (`reused == false`), read back, or failed.
-    pub fn finish(&self, id: &str, outcome: Result<(&PackingFile, bool), String>) {
+    /// A job is over: made, read back, left to another process, or failed.
+    pub fn finish(&self, id: &str, outcome: Told) {
         self.bar.inc(1);
         let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
-        if matches!(outcome, Ok((_, false))) {
+        if matches!(outcome, Told::Done(_, false)) {
             self.made.fetch_add(1, Ordering::Relaxed);
         }
         self.flights
@@ -142,8 +152,9 @@ impl BatchLog {
             return;
         }
         let what = match outcome {
-            Ok((_, true)) => "read back from an earlier run".to_string(),
-            Ok((f, false)) => {
+            Told::Done(_, true) => "read back from an earlier run".to_string(),
+            Told::Elsewhere(holder) => format!("in flight elsewhere ({holder}), left to it"),
+            Told::Done(f, false) => {
                 let m = &f.measures;
                 let z = m.z_j.map_or("–".into(), |z| format!("{z:.4}"));
                 format!(
@@ -151,7 +162,7 @@ impl BatchLog {
                     f.phi, m.fire_steps, m.wall_s
                 )
             }
-            Err(e) => format!("FAILED: {e}"),
+            Told::Failed(e) => format!("FAILED: {e}"),
         };
         let elapsed = self.start.elapsed();
         let made = self.made.load(Ordering::Relaxed);

@@ -25,6 +25,20 @@ pub enum ExperimentError {
         #[source]
         source: std::io::Error,
     },
+    /// The output directory holds a packing of this run made with other
+    /// settings (`lock` module): refused, so that one directory never
+    /// mixes two experiments.
+    #[error(
+        "{file} was made with {key} = {there}, this run has {key} = {here}: refusing to mix \
+         packings of different settings in one directory; use another --out, or remove that \
+         directory's packings to make them again"
+    )]
+    SettingsDiffer {
+        file: String,
+        key: String,
+        here: String,
+        there: String,
+    },
     /// The engine failed on one sample.
     #[error("sample {sample}: {source}{}", saved_note(saved))]
     Sample {

@@ -18,6 +18,7 @@
 pub mod batchlog;
 pub mod error;
 pub mod grid;
+pub mod lock;
 pub mod overrides;
 pub mod record;
 pub mod registry;

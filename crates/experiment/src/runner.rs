@@ -5,9 +5,10 @@
 //! packing does not depend on `--jobs`. Samples whose file already exists in
 //! the output directory are read back instead of recomputed.
 
-use crate::batchlog::{BatchLog, Log};
+use crate::batchlog::{BatchLog, Log, Told};
 use crate::error::ExperimentError;
 use crate::grid::{self, Job, Point};
+use crate::lock;
 use crate::record::{self, Measures, PackingFile, SpectrumMeasures};
 use crate::registry::{self, SceneVisitor};
 use crate::reload::{PackingVisitor, reload};
@@ -56,6 +57,18 @@ pub struct RunReport {
     pub failures: Vec<ExperimentError>,
     /// Per-point summaries, in grid order.
     pub summaries: Vec<record::PointSummary>,
+    /// Packings another process was making (their lock was held): left to
+    /// it; a later run gathers them. No tables are written while any is.
+    pub elsewhere: Vec<String>,
+}
+
+/// How one job ended in this process.
+enum Outcome {
+    /// Made here (`false`) or read back / measured on a saved packing
+    /// (`true`).
+    Done(PackingFile, bool),
+    /// Another process holds its lock (the lock file's contents).
+    Elsewhere(String),
 }
 
 /// Run an experiment into `options.out`.
@@ -72,6 +85,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             .collect();
     }
     let packing_dir = options.out.join("packings");
+    refuse_other_settings(experiment, &points, &jobs, &packing_dir)?;
     std::fs::create_dir_all(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;
     let effective = ron::ser::to_string_pretty(experiment, ron::ser::PrettyConfig::default())
         .expect("experiment serialises");
@@ -99,13 +113,27 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             record::results_csv(&rows).as_bytes(),
         )
     };
-    let make = |job: &Job| -> Result<(PackingFile, bool), ExperimentError> {
+    let make = |job: &Job| -> Result<Outcome, ExperimentError> {
         let path = packing_dir.join(format!("{}.json", job.id));
         let point = &points[job.point];
-        let done = PackingFile::load_matching(&path, &settings(experiment, point, job));
+        let wanted = settings(experiment, point, job);
+        let finished = || {
+            PackingFile::load_matching(&path, &wanted)
+                .filter(|done| covers(&stored(done), experiment))
+        };
+        if let Some(done) = finished() {
+            return Ok(Outcome::Done(done, true));
+        }
+        // Held until the packing is saved or has failed.
+        let _held = match lock::claim(&packing_dir, &job.id)? {
+            lock::Claim::Mine(held) => held,
+            lock::Claim::Busy(holder) => return Ok(Outcome::Elsewhere(holder)),
+        };
+        // Another process may have finished it since the first look.
+        let done = PackingFile::load_matching(&path, &wanted);
         let (file, eigen, reused) = match done {
             Some(done) if covers(&stored(&done), experiment) => {
-                return Ok((done, true));
+                return Ok(Outcome::Done(done, true));
             }
             // Same packing, other observables: measure them on the saved
             // configuration instead of making it again, keeping the ones
@@ -132,21 +160,24 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         file.save(&path)?;
         // A stalled configuration from an earlier attempt is stale now.
         let _ = std::fs::remove_file(failed_path(&packing_dir, &job.id));
-        Ok((file, reused))
+        Ok(Outcome::Done(file, reused))
     };
-    let work = |job: &Job| -> Result<(PackingFile, bool), ExperimentError> {
-        let made = make(job).and_then(|(file, reused)| {
-            table_so_far(job, &file)?;
-            Ok((file, reused))
+    let work = |job: &Job| -> Result<Outcome, ExperimentError> {
+        let made = make(job).and_then(|outcome| {
+            if let Outcome::Done(file, _) = &outcome {
+                table_so_far(job, file)?;
+            }
+            Ok(outcome)
         });
         let told = match &made {
-            Ok((file, reused)) => Ok((file, *reused)),
-            Err(e) => Err(e.to_string()),
+            Ok(Outcome::Done(file, reused)) => Told::Done(file, *reused),
+            Ok(Outcome::Elsewhere(holder)) => Told::Elsewhere(holder),
+            Err(e) => Told::Failed(e.to_string()),
         };
         log.finish(&job.id, told);
         made
     };
-    let results: Vec<Result<(PackingFile, bool), ExperimentError>> = std::thread::scope(|s| {
+    let results: Vec<Result<Outcome, ExperimentError>> = std::thread::scope(|s| {
         let watcher = s.spawn(|| log.watch());
         let results = match options.jobs {
             Some(threads) => rayon::ThreadPoolBuilder::new()
@@ -163,24 +194,27 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
 
     let mut packings = Vec::new();
     let mut failures = Vec::new();
+    let mut elsewhere = Vec::new();
     let mut reused = 0;
-    for r in results {
+    for (r, job) in results.into_iter().zip(&jobs) {
         match r {
-            Ok((f, was_reused)) => {
+            Ok(Outcome::Done(f, was_reused)) => {
                 reused += usize::from(was_reused);
                 packings.push(f);
             }
+            Ok(Outcome::Elsewhere(_)) => elsewhere.push(job.id.clone()),
             Err(e) => failures.push(e),
         }
     }
     let groups = group_by_point(experiment, &points, &jobs, &packings);
     let summaries = record::summarize_points(&groups);
-    if options.shard.is_some() {
+    if options.shard.is_some() || !elsewhere.is_empty() {
         return Ok(RunReport {
             packings,
             reused,
             failures,
             summaries,
+            elsewhere,
         });
     }
     record::write_atomic(
@@ -208,7 +242,34 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         reused,
         failures,
         summaries,
+        elsewhere,
     })
+}
+
+/// Refuse to run into a directory holding a packing of these jobs made
+/// with other settings, naming the first that differs (`lock` module).
+fn refuse_other_settings(
+    experiment: &Experiment,
+    points: &[Point],
+    jobs: &[Job],
+    packing_dir: &Path,
+) -> Result<(), ExperimentError> {
+    for job in jobs {
+        let path = packing_dir.join(format!("{}.json", job.id));
+        let Some(old) = PackingFile::load(&path) else {
+            continue;
+        };
+        let wanted = settings(experiment, &points[job.point], job);
+        if let Some((key, here, there)) = lock::first_difference(&wanted, &old.settings) {
+            return Err(ExperimentError::SettingsDiffer {
+                file: path.display().to_string(),
+                key,
+                here,
+                there,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Where the configuration of a failed sample goes.
