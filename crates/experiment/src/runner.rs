@@ -66,7 +66,7 @@ pub struct RunReport {
 enum Outcome {
     /// Made here (`false`) or read back / measured on a saved packing
     /// (`true`).
-    Done(PackingFile, bool),
+    Done(Box<PackingFile>, bool),
     /// Another process holds its lock (the lock file's contents).
     Elsewhere(String),
 }
@@ -122,7 +122,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
                 .filter(|done| covers(&stored(done), experiment))
         };
         if let Some(done) = finished() {
-            return Ok(Outcome::Done(done, true));
+            return Ok(Outcome::Done(Box::new(done), true));
         }
         // Held until the packing is saved or has failed.
         let _held = match lock::claim(&packing_dir, &job.id)? {
@@ -133,7 +133,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         let done = PackingFile::load_matching(&path, &wanted);
         let (file, eigen, reused) = match done {
             Some(done) if covers(&stored(&done), experiment) => {
-                return Ok(Outcome::Done(done, true));
+                return Ok(Outcome::Done(Box::new(done), true));
             }
             // Same packing, other observables: measure them on the saved
             // configuration instead of making it again, keeping the ones
@@ -160,7 +160,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         file.save(&path)?;
         // A stalled configuration from an earlier attempt is stale now.
         let _ = std::fs::remove_file(failed_path(&packing_dir, &job.id));
-        Ok(Outcome::Done(file, reused))
+        Ok(Outcome::Done(Box::new(file), reused))
     };
     let work = |job: &Job| -> Result<Outcome, ExperimentError> {
         let made = make(job).and_then(|outcome| {
@@ -200,7 +200,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         match r {
             Ok(Outcome::Done(f, was_reused)) => {
                 reused += usize::from(was_reused);
-                packings.push(f);
+                packings.push(*f);
             }
             Ok(Outcome::Elsewhere(_)) => elsewhere.push(job.id.clone()),
             Err(e) => failures.push(e),
