@@ -74,6 +74,17 @@ enum Command {
         #[arg(long)]
         verbose: bool,
     },
+    /// Gather the parts of a run (`run --shard`) from separate directories
+    /// into one, with the tables of one plain run; refuses parts of
+    /// different experiments, conflicting duplicates and missing packings.
+    Merge {
+        /// The parts' output directories.
+        #[arg(required = true, num_args = 1..)]
+        dirs: Vec<PathBuf>,
+        /// The merged run's directory (may be one of the parts).
+        #[arg(short, long)]
+        out: PathBuf,
+    },
     /// Check an experiment file and print its grid, without running it.
     Validate {
         /// The RON experiment file.
@@ -198,6 +209,17 @@ fn main() {
 
 fn real_main() -> Result<()> {
     match Cli::parse().command {
+        Command::Merge { dirs, out } => {
+            let report = jamkit_experiment::merge::merge(&dirs, &out)?;
+            out!(
+                "{} packings from {} parts ({} found in more than one, the same) in {}: results.csv, summary.csv, packings/",
+                report.packings,
+                dirs.len(),
+                report.duplicates,
+                out.display()
+            );
+            Ok(())
+        }
         Command::Run {
             files,
             out,

@@ -39,6 +39,9 @@ pub enum ExperimentError {
         here: String,
         there: String,
     },
+    /// `jamkit merge` cannot gather these parts.
+    #[error("merge refused: {message}")]
+    Merge { message: String },
     /// The engine failed on one sample.
     #[error("sample {sample}: {source}{}", saved_note(saved))]
     Sample {

@@ -19,6 +19,7 @@ pub mod batchlog;
 pub mod error;
 pub mod grid;
 pub mod lock;
+pub mod merge;
 pub mod overrides;
 pub mod record;
 pub mod registry;

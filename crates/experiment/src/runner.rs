@@ -217,26 +217,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             elsewhere,
         });
     }
-    record::write_atomic(
-        &options.out.join("results.csv"),
-        record::results_csv(&packings).as_bytes(),
-    )?;
-    record::write_atomic(
-        &options.out.join("summary.csv"),
-        record::summary_csv(&groups).as_bytes(),
-    )?;
-    if experiment.spectrum().is_some() {
-        record::write_atomic(
-            &options.out.join("dos.csv"),
-            record::dos_csv(&groups).as_bytes(),
-        )?;
-    }
-    if experiment.gaps().is_some() {
-        record::write_atomic(
-            &options.out.join("gaps.csv"),
-            record::gaps_csv(&groups).as_bytes(),
-        )?;
-    }
+    write_tables(experiment, &packings, &groups, &options.out)?;
     Ok(RunReport {
         packings,
         reused,
@@ -302,6 +283,46 @@ fn keep_failed_state(err: ExperimentError, packing_dir: &Path) -> ExperimentErro
         }
         other => other,
     }
+}
+
+/// The tables of a whole run in `out`: `results.csv`, `summary.csv`, and
+/// `dos.csv` / `gaps.csv` where the experiment measures them (one plain run
+/// and `jamkit merge` write them alike).
+fn write_tables(
+    experiment: &Experiment,
+    packings: &[PackingFile],
+    groups: &[(String, Vec<&PackingFile>)],
+    out: &Path,
+) -> Result<(), ExperimentError> {
+    record::write_atomic(
+        &out.join("results.csv"),
+        record::results_csv(packings).as_bytes(),
+    )?;
+    record::write_atomic(
+        &out.join("summary.csv"),
+        record::summary_csv(groups).as_bytes(),
+    )?;
+    if experiment.spectrum().is_some() {
+        record::write_atomic(&out.join("dos.csv"), record::dos_csv(groups).as_bytes())?;
+    }
+    if experiment.gaps().is_some() {
+        record::write_atomic(&out.join("gaps.csv"), record::gaps_csv(groups).as_bytes())?;
+    }
+    Ok(())
+}
+
+/// The grid's points and jobs of `experiment`, and the tables of
+/// `packings` (in grid order) written into `out`: the end of a run, for
+/// `jamkit merge`.
+pub(crate) fn tables_of(
+    experiment: &Experiment,
+    packings: &[PackingFile],
+    out: &Path,
+) -> Result<(), ExperimentError> {
+    let points = grid::points(experiment)?;
+    let jobs = grid::jobs(experiment, &points);
+    let groups = group_by_point(experiment, &points, &jobs, packings);
+    write_tables(experiment, packings, &groups, out)
 }
 
 fn group_by_point<'a>(

@@ -1,0 +1,155 @@
+//! `jamkit merge`: parts of a run made in separate directories gather into
+//! one run with the tables of one plain run (timings aside); a missing
+//! part, a conflicting duplicate and parts of different experiments are
+//! refused with messages that say what is wrong.
+
+use std::path::{Path, PathBuf};
+
+mod common;
+use common::jamkit;
+
+fn quickstart() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("experiments/quickstart.ron")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+/// `results.csv` without the `wall_s` column.
+fn results_without_timing(dir: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let rows: Vec<Vec<String>> = text
+        .lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    let wall = rows[0].iter().position(|c| c == "wall_s").unwrap();
+    rows.into_iter()
+        .map(|mut r| {
+            r.remove(wall);
+            r
+        })
+        .collect()
+}
+
+const SMALL: [&str; 6] = ["--set", "particles=32", "--set", "samples=5", "--jobs", "1"];
+
+/// Run part `i` of `k` (or everything, `k = 0`) into `dir`.
+fn run(dir: &Path, i: usize, k: usize, extra: &[&str]) {
+    let file = quickstart();
+    let shard = format!("{i}/{k}");
+    let mut args = vec!["run", &file, "--out", dir.to_str().unwrap(), "--quiet"];
+    args.extend(SMALL);
+    if k > 0 {
+        args.extend(["--shard", &shard]);
+    }
+    args.extend(extra);
+    let (code, _, err) = jamkit(&args);
+    assert_eq!(code, 0, "{args:?}: {err}");
+}
+
+fn merge(dirs: &[PathBuf], out: &Path) -> (i32, String, String) {
+    let mut args = vec!["merge".to_string()];
+    args.extend(dirs.iter().map(|d| d.to_str().unwrap().to_string()));
+    args.extend(["-o".into(), out.to_str().unwrap().into()]);
+    jamkit(&args.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+#[test]
+fn parts_in_separate_directories_merge_to_one_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let single = tmp.path().join("single");
+    run(&single, 0, 0, &[]);
+    for k in [2usize, 3] {
+        let parts: Vec<PathBuf> = (1..=k)
+            .map(|i| {
+                let d = tmp.path().join(format!("k{k}_part{i}"));
+                run(&d, i, k, &[]);
+                assert!(!d.join("results.csv").exists(), "a part writes no table");
+                d
+            })
+            .collect();
+        let out = tmp.path().join(format!("merged{k}"));
+        let (code, text, err) = merge(&parts, &out);
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            text.contains(&format!("5 packings from {k} parts")),
+            "{text}"
+        );
+        assert_eq!(
+            results_without_timing(&out),
+            results_without_timing(&single),
+            "K = {k}"
+        );
+        let summary = |d: &Path| std::fs::read_to_string(d.join("summary.csv")).unwrap();
+        assert_eq!(
+            summary(&out).lines().count(),
+            summary(&single).lines().count()
+        );
+        // Into one of the parts: the same tables.
+        let (code, _, err) = merge(&parts, &parts[0]);
+        assert_eq!(code, 0, "{err}");
+        assert_eq!(
+            results_without_timing(&parts[0]),
+            results_without_timing(&single)
+        );
+    }
+}
+
+#[test]
+fn a_missing_part_is_refused_and_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let parts: Vec<PathBuf> = (1..=3)
+        .map(|i| {
+            let d = tmp.path().join(format!("p{i}"));
+            run(&d, i, 3, &[]);
+            d
+        })
+        .collect();
+    let (code, _, err) = merge(&parts[..2], &tmp.path().join("out"));
+    assert_ne!(code, 0);
+    // Part 3 of 3 holds job j = 2 of the grid order (j mod 3 + 1 = 3): sample 3.
+    assert!(
+        err.contains("1 of the run's 5 packings are in none of the parts"),
+        "{err}"
+    );
+    assert!(err.contains("sphere_d2_N32_s3"), "{err}");
+    assert!(!tmp.path().join("out/results.csv").exists());
+}
+
+#[test]
+fn a_conflicting_duplicate_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    run(&a, 1, 2, &[]);
+    run(&b, 2, 2, &[]);
+    // A copy of one of a's packings in b, with another φ.
+    let name = "packings/sphere_d2_N32_s1.json";
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(a.join(name)).unwrap()).unwrap();
+    // The same file is fine: counted as a duplicate.
+    std::fs::write(b.join(name), serde_json::to_string(&v).unwrap()).unwrap();
+    let (code, text, err) = merge(&[a.clone(), b.clone()], &tmp.path().join("ok"));
+    assert_eq!(code, 0, "{err}");
+    assert!(text.contains("1 found in more than one"), "{text}");
+    v["phi"] = serde_json::json!(0.5);
+    std::fs::write(b.join(name), serde_json::to_string(&v).unwrap()).unwrap();
+    let (code, _, err) = merge(&[a, b], &tmp.path().join("out"));
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("packing sphere_d2_N32_s1 differs between"),
+        "{err}"
+    );
+}
+
+#[test]
+fn parts_of_different_experiments_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    run(&a, 1, 2, &[]);
+    run(&b, 2, 2, &["--set", "minimizer.force_tol=1e-24"]);
+    let (code, _, err) = merge(&[a, b], &tmp.path().join("out"));
+    assert_ne!(code, 0);
+    assert!(err.contains("ran different experiments"), "{err}");
+    assert!(err.contains("force_tol"), "{err}");
+}
