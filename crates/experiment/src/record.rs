@@ -162,13 +162,103 @@ impl PackingFile {
         serde_json::from_slice(&text).ok()
     }
 
-    /// Load, with an error that says what is wrong with the file.
+    /// Load, with an error that says what is wrong with the file: not a
+    /// packing record, or one whose configuration no computation can use
+    /// ([`PackingFile::check`]).
     pub fn load_checked(path: &Path) -> Result<Self, ExperimentError> {
         let text = std::fs::read(path).map_err(|e| ExperimentError::io(path, e))?;
-        serde_json::from_slice(&text).map_err(|e| ExperimentError::Parse {
+        let file: Self = serde_json::from_slice(&text).map_err(|e| ExperimentError::Parse {
             file: path.display().to_string(),
             message: format!("not a jamkit packing file: {e}"),
-        })
+        })?;
+        file.check()
+            .map_err(|(field, value, allowed)| ExperimentError::Invalid {
+                field: format!("{}: {field}", path.display()),
+                value,
+                allowed,
+            })?;
+        Ok(file)
+    }
+
+    /// The configuration is usable: `dim` from 2 to 4, `box` of `dim`
+    /// positive finite edges, and (when the configuration is stored) one
+    /// centre of `dim` finite coordinates, one positive finite size and
+    /// (if any) one row of finite orientation coordinates per body. The
+    /// first offence as `(field, value, what is allowed)`.
+    pub fn check(&self) -> Result<(), (String, String, String)> {
+        let bad = |field: String, value: String, allowed: &str| Err((field, value, allowed.into()));
+        if !(2..=4).contains(&self.dim) {
+            return bad("dim".into(), self.dim.to_string(), "must be 2, 3 or 4");
+        }
+        if self.box_edges.len() != self.dim {
+            return bad(
+                "box".into(),
+                format!("{} edges", self.box_edges.len()),
+                "must have one edge per dimension",
+            );
+        }
+        for (a, &l) in self.box_edges.iter().enumerate() {
+            if !(l.is_finite() && l > 0.0) {
+                return bad(
+                    format!("box[{a}]"),
+                    l.to_string(),
+                    "must be positive and finite",
+                );
+            }
+        }
+        if self.positions.is_empty() {
+            return Ok(());
+        }
+        let n = self.particles;
+        for (field, len) in [
+            ("positions", self.positions.len()),
+            ("radii", self.radii.len()),
+        ] {
+            if len != n {
+                return bad(
+                    field.into(),
+                    format!("{len} entries"),
+                    "must have one entry per body (particles)",
+                );
+            }
+        }
+        for (i, r) in self.positions.iter().enumerate() {
+            if r.len() != self.dim || !r.iter().all(|x| x.is_finite()) {
+                return bad(
+                    format!("positions[{i}]"),
+                    format!("{r:?}"),
+                    "must be dim finite coordinates",
+                );
+            }
+        }
+        for (i, &r) in self.radii.iter().enumerate() {
+            if !(r.is_finite() && r > 0.0) {
+                return bad(
+                    format!("radii[{i}]"),
+                    r.to_string(),
+                    "must be positive and finite",
+                );
+            }
+        }
+        if !self.orientations.is_empty() {
+            if self.orientations.len() != n {
+                return bad(
+                    "orientations".into(),
+                    format!("{} entries", self.orientations.len()),
+                    "must be empty or have one entry per body",
+                );
+            }
+            for (i, o) in self.orientations.iter().enumerate() {
+                if !o.iter().all(|x| x.is_finite()) {
+                    return bad(
+                        format!("orientations[{i}]"),
+                        format!("{o:?}"),
+                        "must be finite",
+                    );
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Load only if it was made with exactly these settings.
