@@ -513,21 +513,7 @@ fn bench_tolerances(plan: &Plan) -> Result<TolRuns> {
     Ok(runs)
 }
 
-fn mean(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        f64::NAN
-    } else {
-        v.iter().sum::<f64>() / v.len() as f64
-    }
-}
-
-fn std_dev(v: &[f64]) -> f64 {
-    if v.len() < 2 {
-        return f64::NAN;
-    }
-    let m = mean(v);
-    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
-}
+use jamkit_core::stats::{mean, std_dev};
 
 fn opt(x: Option<f64>, fmt: impl Fn(f64) -> String) -> String {
     x.map(fmt).unwrap_or_default()

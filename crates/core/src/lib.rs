@@ -31,6 +31,7 @@ pub mod potential;
 pub mod rotation;
 pub mod shape;
 pub mod sizes;
+pub mod stats;
 
 pub use error::{Error, Result};
 pub use family::{

@@ -570,19 +570,9 @@ pub fn gaps_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
     out
 }
 
-/// Mean and standard error of the mean (0 for a single value).
-pub fn mean_sem(values: &[f64]) -> (f64, f64) {
-    let n = values.len() as f64;
-    if values.is_empty() {
-        return (f64::NAN, f64::NAN);
-    }
-    let mean = values.iter().sum::<f64>() / n;
-    if values.len() < 2 {
-        return (mean, 0.0);
-    }
-    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
-}
+/// Mean and standard error of the mean (0 for a single value): the one
+/// definition in `jamkit_core::stats`.
+pub use jamkit_core::stats::mean_sem;
 
 /// One row of `summary.csv`.
 #[derive(Clone, Debug, PartialEq)]

@@ -8,6 +8,7 @@
 //! refitted, `B` times; the error is the standard deviation of the `B`
 //! slopes. The generator is seeded, so a report is reproducible.
 
+use jamkit_core::stats::std_dev;
 use rand::{RngExt, SeedableRng};
 
 /// A fitted power law.
@@ -109,14 +110,6 @@ pub fn power_law_of<T>(
         ),
         points: xy.len(),
     })
-}
-
-fn std_dev(v: &[f64]) -> f64 {
-    if v.len() < 2 {
-        return f64::NAN;
-    }
-    let m = v.iter().sum::<f64>() / v.len() as f64;
-    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
 }
 
 #[cfg(test)]
