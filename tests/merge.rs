@@ -60,7 +60,7 @@ fn parts_in_separate_directories_merge_to_one_run() {
     let tmp = tempfile::tempdir().unwrap();
     let single = tmp.path().join("single");
     run(&single, 0, 0, &[]);
-    for k in [2usize, 3] {
+    for k in [1usize, 2, 3, 4] {
         let parts: Vec<PathBuf> = (1..=k)
             .map(|i| {
                 let d = tmp.path().join(format!("k{k}_part{i}"));
@@ -152,4 +152,75 @@ fn parts_of_different_experiments_are_refused() {
     assert_ne!(code, 0);
     assert!(err.contains("ran different experiments"), "{err}");
     assert!(err.contains("force_tol"), "{err}");
+}
+
+/// A part killed in the middle resumes: rerun, it reads back what it
+/// finished, makes the rest, and the merged run is one plain run's.
+#[test]
+fn a_killed_part_resumes() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let file = quickstart();
+    let tmp = tempfile::tempdir().unwrap();
+    let big = [
+        "--set",
+        "particles=256",
+        "--set",
+        "samples=8",
+        "--jobs",
+        "1",
+    ];
+    let part = |dir: &Path, i: usize| -> Vec<String> {
+        let shard = format!("{i}/2");
+        let mut args = vec![
+            "run",
+            file.as_str(),
+            "--out",
+            dir.to_str().unwrap(),
+            "--shard",
+            &shard,
+        ];
+        args.extend(big);
+        args.into_iter().map(String::from).collect()
+    };
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_jamkit"))
+        .args(part(&a, 1))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stderr.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(first.starts_with("[1/4] "), "{first}");
+    let args = part(&a, 1);
+    let (code, _, err) = jamkit(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    let read_back = err.matches("read back from an earlier run").count();
+    assert!((1..4).contains(&read_back), "resumed, not redone: {err}");
+    let args = part(&b, 2);
+    let (code, _, err) = jamkit(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    let merged = tmp.path().join("merged");
+    let (code, _, err) = merge(&[a, b], &merged);
+    assert_eq!(code, 0, "{err}");
+    let single = tmp.path().join("single");
+    let mut args = vec![
+        "run",
+        file.as_str(),
+        "--out",
+        single.to_str().unwrap(),
+        "--quiet",
+    ];
+    args.extend(big);
+    let (code, _, err) = jamkit(&args);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        results_without_timing(&merged),
+        results_without_timing(&single)
+    );
 }
