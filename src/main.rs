@@ -28,7 +28,7 @@ use clap::{Parser, Subcommand};
 use jamkit_experiment::grid::Shard;
 use jamkit_experiment::runner::{RunOptions, default_out, run};
 use jamkit_experiment::{Experiment, Log, grid, overrides, registry};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
 #[command(
@@ -82,6 +82,16 @@ enum Command {
         #[arg(required = true, num_args = 1..)]
         dirs: Vec<PathBuf>,
         /// The merged run's directory (may be one of the parts).
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// Write packings as extended XYZ (for OVITO and ASE): one packing file,
+    /// or every packing of a run directory as the frames of one file
+    /// (docs/formats.md, "Extended XYZ").
+    Export {
+        /// A packing file (DIR/packings/<id>.json) or a run directory.
+        path: PathBuf,
+        /// The .xyz file to write.
         #[arg(short, long)]
         out: PathBuf,
     },
@@ -209,6 +219,17 @@ fn main() {
 
 fn real_main() -> Result<()> {
     match Cli::parse().command {
+        Command::Export { path, out } => {
+            let files = packing_files(&path)?;
+            let mut text = String::new();
+            for f in &files {
+                let file = jamkit_experiment::record::PackingFile::load_checked(f)?;
+                text.push_str(&jamkit_experiment::extxyz::frame(&file)?);
+            }
+            jamkit_experiment::record::write_atomic(&out, text.as_bytes())?;
+            out!("{} frames in {}", files.len(), out.display());
+            Ok(())
+        }
         Command::Merge { dirs, out } => {
             let report = jamkit_experiment::merge::merge(&dirs, &out)?;
             out!(
@@ -469,4 +490,40 @@ fn print_table(report: &jamkit_experiment::runner::RunReport) {
             s.flagged
         );
     }
+}
+
+/// The packing files `path` names: itself, or a run directory's packings
+/// (in the grid order of its `experiment.ron` when it has one, else by
+/// name).
+fn packing_files(path: &Path) -> Result<Vec<PathBuf>> {
+    if !path.is_dir() {
+        return Ok(vec![path.to_path_buf()]);
+    }
+    let dir = path.join("packings");
+    let ron = path.join("experiment.ron");
+    if ron.exists() {
+        let e = Experiment::from_file(&ron)?;
+        let points = grid::points(&e)?;
+        let files: Vec<PathBuf> = grid::jobs(&e, &points)
+            .iter()
+            .map(|j| dir.join(format!("{}.json", j.id)))
+            .filter(|p| p.exists())
+            .collect();
+        if !files.is_empty() {
+            return Ok(files);
+        }
+    }
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .with_context(|| format!("{}: not a packing file nor a run directory", path.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension().is_some_and(|x| x == "json")
+                && !p.to_string_lossy().ends_with(".failed.json")
+        })
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        bail!("{}: no packings in {}", path.display(), dir.display());
+    }
+    Ok(files)
 }

@@ -17,6 +17,7 @@
 
 pub mod batchlog;
 pub mod error;
+pub mod extxyz;
 pub mod grid;
 pub mod lock;
 pub mod merge;
