@@ -3,8 +3,9 @@
 //!
 //! Parts of a run (`--shard`) or two identical runs may write into one
 //! directory at the same time. Before making a packing a process creates
-//! `packings/<id>.lock` exclusively (`O_EXCL`), holding its host name and
-//! process id, and removes it when the packing is saved or has failed; a
+//! `packings/<id>.lock` exclusively (a file of its own, holding its host
+//! name and process id, hard-linked to that name: the lock appears whole
+//! or not at all), and removes it when the packing is saved or has failed; a
 //! process that finds the lock held leaves that packing to its holder
 //! (reported as *in flight elsewhere*; a later run gathers it). A lock left
 //! by a process that died on the same host (no `/proc/<pid>`) is taken
@@ -18,7 +19,6 @@
 //! experiments under one `experiment.ron`.
 
 use crate::error::ExperimentError;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// A held lock; dropping it removes the file.
@@ -83,31 +83,34 @@ fn stale(contents: &str) -> bool {
 /// Take the lock of packing `id`, or say who holds it.
 pub(crate) fn claim(packing_dir: &Path, id: &str) -> Result<Claim, ExperimentError> {
     let path = lock_path(packing_dir, id);
-    for _ in 0..2 {
-        match std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&path)
-        {
-            Ok(mut f) => {
-                f.write_all(holder().as_bytes())
-                    .map_err(|e| ExperimentError::io(&path, e))?;
-                return Ok(Claim::Mine(Held { path }));
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                let contents = std::fs::read_to_string(&path).unwrap_or_default();
-                if !stale(&contents) {
-                    return Ok(Claim::Busy(contents.trim().to_string()));
+    // The lock appears with its contents or not at all: written to a file
+    // of this process's own, then hard-linked to the lock's name (which
+    // fails if the name exists). A process killed between an exclusive
+    // create and its write would leave an empty lock that no one could
+    // tell from a live one.
+    let mine = packing_dir.join(format!("{id}.lock.{}", std::process::id()));
+    std::fs::write(&mine, holder()).map_err(|e| ExperimentError::io(&mine, e))?;
+    let claimed = (|| {
+        for _ in 0..2 {
+            match std::fs::hard_link(&mine, &path) {
+                Ok(()) => return Ok(Claim::Mine(Held { path: path.clone() })),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let contents = std::fs::read_to_string(&path).unwrap_or_default();
+                    if !stale(&contents) {
+                        return Ok(Claim::Busy(contents.trim().to_string()));
+                    }
+                    // A dead holder on this host: take over (if another
+                    // process takes it first, the next link says so).
+                    let _ = std::fs::remove_file(&path);
                 }
-                // A dead holder on this host: take over (if another
-                // process takes it first, the next `create_new` says so).
-                let _ = std::fs::remove_file(&path);
+                Err(e) => return Err(ExperimentError::io(&path, e)),
             }
-            Err(e) => return Err(ExperimentError::io(&path, e)),
         }
-    }
-    let contents = std::fs::read_to_string(&path).unwrap_or_default();
-    Ok(Claim::Busy(contents.trim().to_string()))
+        let contents = std::fs::read_to_string(&path).unwrap_or_default();
+        Ok(Claim::Busy(contents.trim().to_string()))
+    })();
+    let _ = std::fs::remove_file(&mine);
+    claimed
 }
 
 /// The first place where two settings records differ, as
