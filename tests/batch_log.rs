@@ -3,19 +3,10 @@
 //! the packings finished so far when the run is killed.
 
 use std::io::{BufRead, BufReader};
-use std::path::Path;
 use std::process::{Command, Stdio};
 
 mod common;
-use common::jamkit;
-
-fn quickstart() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("experiments/quickstart.ron")
-        .to_str()
-        .unwrap()
-        .to_string()
-}
+use common::{jamkit, quickstart};
 
 /// Without a terminal, each finished packing writes a line with its id,
 /// φ, z, FIRE steps and the run's ETA; the count matches the samples, and

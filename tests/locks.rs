@@ -3,35 +3,10 @@
 //! it), two identical runs at once make every packing exactly once, and
 //! the gathered tables are those of one plain run (timings aside).
 
-use std::path::Path;
 use std::process::{Command, Stdio};
 
 mod common;
-use common::jamkit;
-
-fn quickstart() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("experiments/quickstart.ron")
-        .to_str()
-        .unwrap()
-        .to_string()
-}
-
-/// `results.csv` without the `wall_s` column.
-fn results_without_timing(dir: &Path) -> Vec<Vec<String>> {
-    let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
-    let rows: Vec<Vec<String>> = text
-        .lines()
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect();
-    let wall = rows[0].iter().position(|c| c == "wall_s").unwrap();
-    rows.into_iter()
-        .map(|mut r| {
-            r.remove(wall);
-            r
-        })
-        .collect()
-}
+use common::{jamkit, quickstart, results_without_timing};
 
 fn host() -> String {
     std::fs::read_to_string("/proc/sys/kernel/hostname")

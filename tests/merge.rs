@@ -6,31 +6,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::jamkit;
-
-fn quickstart() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("experiments/quickstart.ron")
-        .to_str()
-        .unwrap()
-        .to_string()
-}
-
-/// `results.csv` without the `wall_s` column.
-fn results_without_timing(dir: &Path) -> Vec<Vec<String>> {
-    let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
-    let rows: Vec<Vec<String>> = text
-        .lines()
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect();
-    let wall = rows[0].iter().position(|c| c == "wall_s").unwrap();
-    rows.into_iter()
-        .map(|mut r| {
-            r.remove(wall);
-            r
-        })
-        .collect()
-}
+use common::{jamkit, quickstart, results_without_timing};
 
 const SMALL: [&str; 6] = ["--set", "particles=32", "--set", "samples=5", "--jobs", "1"];
 

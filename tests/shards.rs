@@ -6,24 +6,7 @@
 use std::path::Path;
 
 mod common;
-use common::jamkit;
-
-/// `results.csv` of `dir` without its `wall_s` column (the one number that
-/// depends on the machine, not on the packing).
-fn results_without_timing(dir: &Path) -> Vec<Vec<String>> {
-    let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
-    let rows: Vec<Vec<String>> = text
-        .lines()
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect();
-    let wall = rows[0].iter().position(|c| c == "wall_s").unwrap();
-    rows.into_iter()
-        .map(|mut r| {
-            r.remove(wall);
-            r
-        })
-        .collect()
-}
+use common::{jamkit, results_without_timing};
 
 #[test]
 fn any_number_of_shards_gathers_to_one_run() {

@@ -70,3 +70,31 @@ pub fn jamkit(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into(),
     )
 }
+
+/// `experiments/quickstart.ron`, as a path string for `jamkit` arguments.
+#[allow(dead_code)]
+pub fn quickstart() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("experiments/quickstart.ron")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+/// `results.csv` of `dir` without its `wall_s` column (the one number that
+/// depends on the machine, not on the packing).
+#[allow(dead_code)]
+pub fn results_without_timing(dir: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let rows: Vec<Vec<String>> = text
+        .lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    let wall = rows[0].iter().position(|c| c == "wall_s").unwrap();
+    rows.into_iter()
+        .map(|mut r| {
+            r.remove(wall);
+            r
+        })
+        .collect()
+}

@@ -10,7 +10,8 @@
 //! touching the computation. `--quiet` writes nothing; `--verbose` writes
 //! the lines on a terminal too, and the in-progress ones every 10 s.
 
-use crate::record::PackingFile;
+use crate::error::ExperimentError;
+use crate::runner::Outcome;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use jamkit_engine::Progress;
 use std::collections::BTreeMap;
@@ -53,16 +54,6 @@ impl Log {
             }
         }
     }
-}
-
-/// How a job ended, as the log tells it.
-pub(crate) enum Told<'a> {
-    /// Made here (`false`) or read back (`true`).
-    Done(&'a PackingFile, bool),
-    /// Left to the process holding its lock.
-    Elsewhere(&'a str),
-    /// Failed, with the error.
-    Failed(String),
 }
 
 /// A packing under way.
@@ -138,10 +129,10 @@ impl BatchLog {
     }
 
     /// A job is over: made, read back, left to another process, or failed.
-    pub fn finish(&self, id: &str, outcome: Told) {
+    pub fn finish(&self, id: &str, outcome: &Result<Outcome, ExperimentError>) {
         self.bar.inc(1);
         let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
-        if matches!(outcome, Told::Done(_, false)) {
+        if matches!(outcome, Ok(Outcome::Done(_, false))) {
             self.made.fetch_add(1, Ordering::Relaxed);
         }
         self.flights
@@ -152,9 +143,9 @@ impl BatchLog {
             return;
         }
         let what = match outcome {
-            Told::Done(_, true) => "read back from an earlier run".to_string(),
-            Told::Elsewhere(holder) => format!("in flight elsewhere ({holder}), left to it"),
-            Told::Done(f, false) => {
+            Ok(Outcome::Done(_, true)) => "read back from an earlier run".to_string(),
+            Ok(Outcome::Elsewhere(holder)) => format!("in flight elsewhere ({holder}), left to it"),
+            Ok(Outcome::Done(f, false)) => {
                 let m = &f.measures;
                 let z = m.z_j.map_or("–".into(), |z| format!("{z:.4}"));
                 format!(
@@ -162,7 +153,7 @@ impl BatchLog {
                     f.phi, m.fire_steps, m.wall_s
                 )
             }
-            Told::Failed(e) => format!("FAILED: {e}"),
+            Err(e) => format!("FAILED: {e}"),
         };
         let elapsed = self.start.elapsed();
         let made = self.made.load(Ordering::Relaxed);

@@ -5,7 +5,7 @@
 //! packing does not depend on `--jobs`. Samples whose file already exists in
 //! the output directory are read back instead of recomputed.
 
-use crate::batchlog::{BatchLog, Log, Told};
+use crate::batchlog::{BatchLog, Log};
 use crate::error::ExperimentError;
 use crate::grid::{self, Job, Point};
 use crate::lock;
@@ -63,7 +63,7 @@ pub struct RunReport {
 }
 
 /// How one job ended in this process.
-enum Outcome {
+pub(crate) enum Outcome {
     /// Made here (`false`) or read back / measured on a saved packing
     /// (`true`).
     Done(Box<PackingFile>, bool),
@@ -169,12 +169,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             }
             Ok(outcome)
         });
-        let told = match &made {
-            Ok(Outcome::Done(file, reused)) => Told::Done(file, *reused),
-            Ok(Outcome::Elsewhere(holder)) => Told::Elsewhere(holder),
-            Err(e) => Told::Failed(e.to_string()),
-        };
-        log.finish(&job.id, told);
+        log.finish(&job.id, &made);
         made
     };
     let results: Vec<Result<Outcome, ExperimentError>> = std::thread::scope(|s| {
