@@ -200,3 +200,32 @@ fn a_killed_part_resumes() {
         results_without_timing(&single)
     );
 }
+
+/// The same sample made in two parts is the same packing, but its timings
+/// (the packing's and its spectrum's `wall_s`) differ: merged, counted as
+/// a duplicate, not refused.
+#[test]
+fn a_sample_made_twice_with_a_spectrum_merges() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    let spectrum = ["--set", "observables=[Contacts, Spectrum(())]"];
+    run(&a, 1, 2, &spectrum);
+    run(&b, 2, 2, &spectrum);
+    // Part 1 again into b: sample 1 made a second time, other timings.
+    run(&b, 1, 2, &spectrum);
+    let name = "packings/sphere_d2_N32_s1.json";
+    let timing = |d: &Path| {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join(name)).unwrap()).unwrap();
+        (
+            v["measures"]["wall_s"].clone(),
+            v["measures"]["spectrum"]["wall_s"].clone(),
+        )
+    };
+    assert!(timing(&a).1.is_number(), "the packing has a spectrum");
+    let out = tmp.path().join("out");
+    let (code, text, err) = merge(&[a, b], &out);
+    assert_eq!(code, 0, "{err}");
+    assert!(text.contains("found in more than one"), "{text}");
+    assert!(out.join("dos.csv").exists());
+}

@@ -29,12 +29,21 @@ fn refuse(message: String) -> ExperimentError {
     ExperimentError::Merge { message }
 }
 
-/// A packing file's contents with the timing left out.
+/// A packing file's contents with every timing (`wall_s`, at any depth:
+/// the packing's and its spectrum's) left out.
 fn without_timing(file: &PackingFile) -> serde_json::Value {
-    let mut v = serde_json::to_value(file).expect("a packing serialises");
-    if let Some(m) = v.get_mut("measures").and_then(|m| m.as_object_mut()) {
-        m.remove("wall_s");
+    fn strip(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Object(m) => {
+                m.remove("wall_s");
+                m.values_mut().for_each(strip);
+            }
+            serde_json::Value::Array(a) => a.iter_mut().for_each(strip),
+            _ => {}
+        }
     }
+    let mut v = serde_json::to_value(file).expect("a packing serialises");
+    strip(&mut v);
     v
 }
 
