@@ -4,22 +4,15 @@
 //! search ends in the paper's window, and the paper's `Bisection` stays
 //! the default, left out of recorded settings.
 
-use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
+use jamkit_core::{Potential, Shape};
 use jamkit_engine::{
     Fire, FireParams, JamParams, JamSearch, Objective, Scene, energy_slope, extrapolated_step, jam,
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_sphere::Sphere;
-use rand::SeedableRng;
 
-/// `n` bodies placed at φ = 0.1 and compressed affinely to `phi`.
-fn compressed<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64, phi: f64) -> Scene<D, S> {
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let sizes = SizeDistribution::default().sample(n, &mut rng);
-    let mut packing = Packing::<D, S>::random(shape, sizes, 0.1, &mut rng).unwrap();
-    packing.set_phi(phi);
-    Scene::new(packing, Potential::Harmonic, 0.2)
-}
+mod common;
+use common::compressed;
 
 fn near_disk() -> NearDisk {
     NearDisk::fourier(&FourierParams {

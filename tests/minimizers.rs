@@ -4,7 +4,7 @@
 //! and the same contacts — and the paper's FIRE (`FireParams::paper()`)
 //! must still give the packings it gave before the Newton finish existed.
 
-use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
+use jamkit_core::Shape;
 use jamkit_engine::hessian::{Hessian, HessianOptions};
 use jamkit_engine::{
     Fire, FireParams, FireVariant, ForceCriterion, Masses, NewtonParams, Objective, PreconParams,
@@ -18,16 +18,7 @@ use rand::{RngExt, SeedableRng};
 use std::collections::BTreeSet;
 
 mod common;
-
-/// `n` bodies placed at φ = 0.1 and compressed affinely to `phi` (above
-/// jamming for every family here: deep overlaps, `V/N ~ 10⁻³`).
-fn compressed<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64, phi: f64) -> Scene<D, S> {
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let sizes = SizeDistribution::default().sample(n, &mut rng);
-    let mut packing = Packing::<D, S>::random(shape, sizes, 0.1, &mut rng).unwrap();
-    packing.set_phi(phi);
-    Scene::new(packing, Potential::Harmonic, 0.2)
-}
+use common::compressed;
 
 /// Pairs `(i, j)` in contact (`h < 0`).
 fn contact_set<const D: usize, S: Shape<D>>(scene: &mut Scene<D, S>) -> BTreeSet<(usize, usize)> {

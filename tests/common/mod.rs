@@ -98,3 +98,20 @@ pub fn results_without_timing(dir: &Path) -> Vec<Vec<String>> {
         })
         .collect()
 }
+
+/// `n` bodies placed at φ = 0.1 and compressed affinely to `phi` (above
+/// jamming for every family the tests use at their `phi`).
+#[allow(dead_code)]
+pub fn compressed<const D: usize, S: jamkit_core::Shape<D>>(
+    shape: S,
+    n: usize,
+    seed: u64,
+    phi: f64,
+) -> jamkit_engine::Scene<D, S> {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let sizes = jamkit_core::SizeDistribution::default().sample(n, &mut rng);
+    let mut packing = jamkit_core::Packing::<D, S>::random(shape, sizes, 0.1, &mut rng).unwrap();
+    packing.set_phi(phi);
+    jamkit_engine::Scene::new(packing, jamkit_core::Potential::Harmonic, 0.2)
+}
