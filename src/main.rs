@@ -85,6 +85,17 @@ enum Command {
         #[arg(short, long)]
         out: PathBuf,
     },
+    /// Copy a run's measures, tables and experiment.ron without the
+    /// packings' configurations (a fortieth of the size at N = 1024): what
+    /// `jamkit report` needs, small enough to commit (docs/formats.md,
+    /// "Archives"). Packings the run has not made yet are absent.
+    Archive {
+        /// The run's directory.
+        dir: PathBuf,
+        /// The archive's directory.
+        #[arg(short, long)]
+        out: PathBuf,
+    },
     /// Write packings as extended XYZ (for OVITO and ASE): one packing file,
     /// or every packing of a run directory as the frames of one file
     /// (docs/formats.md, "Extended XYZ").
@@ -228,6 +239,18 @@ fn real_main() -> Result<()> {
             }
             jamkit_experiment::record::write_atomic(&out, text.as_bytes())?;
             out!("{} frames in {}", files.len(), out.display());
+            Ok(())
+        }
+        Command::Archive { dir, out } => {
+            let report = jamkit_experiment::archive::archive(&dir, &out)?;
+            out!(
+                "{} packings archived in {} ({} in flight left out; {:.1} MB of packing files → {:.1} MB)",
+                report.packings,
+                out.display(),
+                report.in_flight,
+                report.bytes.0 as f64 / 1e6,
+                report.bytes.1 as f64 / 1e6
+            );
             Ok(())
         }
         Command::Merge { dirs, out } => {

@@ -1,0 +1,81 @@
+//! `jamkit archive DIR -o OUT`: what a study's report needs, small enough to
+//! commit.
+//!
+//! A packing file of N = 1024 near-disks weighs about 125 kB, almost all of
+//! it the configuration (centres, sizes, orientations, rattler flags); the
+//! measures that `jamkit report` reads (φ_J, contacts, the binned spectrum,
+//! the gap counts) take 2–5 kB. The archive holds every packing file of the
+//! run with its configuration left out ([`record::without_configuration`]),
+//! the run's `experiment.ron` and its tables (`*.csv`) as they are. A packing
+//! in flight (its lock present) is left out, since a process may be adding
+//! observables to it; an unreadable one is refused by name. The packings a
+//! run has not made yet are simply absent, so a study can be archived stage
+//! by stage while it runs.
+//!
+//! An archive is read by `jamkit report` like a run directory. It cannot be
+//! resumed (the configurations are gone): the packings of a resumed run are
+//! made again.
+
+use crate::error::ExperimentError;
+use crate::record::{self, PackingFile};
+use std::path::Path;
+
+/// What an archive holds.
+#[derive(Debug)]
+pub struct ArchiveReport {
+    /// Packing files archived.
+    pub packings: usize,
+    /// Packings in flight (locked by a running process), left out.
+    pub in_flight: usize,
+    /// Their bytes before and after the configuration was left out.
+    pub bytes: (u64, u64),
+}
+
+/// Archive the run in `dir` into `out` (created if needed; files of an
+/// earlier archive of the same run are replaced).
+pub fn archive(dir: &Path, out: &Path) -> Result<ArchiveReport, ExperimentError> {
+    let packing_dir = dir.join("packings");
+    let entries = std::fs::read_dir(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;
+    let mut paths: Vec<_> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .collect();
+    paths.sort();
+    // A packing in flight (its lock present) may be half-measured: left out.
+    let locked: Vec<_> = paths
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "lock"))
+        .map(|p| p.with_extension("json"))
+        .collect();
+    let is_packing = |p: &Path| {
+        p.extension().is_some_and(|e| e == "json")
+            && !p.to_string_lossy().ends_with(".failed.json")
+            && !locked.iter().any(|l| l == p)
+    };
+    let out_packings = out.join("packings");
+    std::fs::create_dir_all(&out_packings).map_err(|e| ExperimentError::io(&out_packings, e))?;
+    let mut report = ArchiveReport {
+        packings: 0,
+        in_flight: locked.len(),
+        bytes: (0, 0),
+    };
+    for path in paths.iter().filter(|p| is_packing(p)) {
+        let file = PackingFile::load_checked(path)?;
+        let kept = record::without_configuration(&file);
+        let target = out_packings.join(path.file_name().expect("a listed file has a name"));
+        kept.save(&target)?;
+        report.packings += 1;
+        report.bytes.0 += std::fs::metadata(path).map_or(0, |m| m.len());
+        report.bytes.1 += std::fs::metadata(&target).map_or(0, |m| m.len());
+    }
+    // The run's own description and tables, byte for byte.
+    let entries = std::fs::read_dir(dir).map_err(|e| ExperimentError::io(dir, e))?;
+    for path in entries.filter_map(|e| e.ok().map(|e| e.path())) {
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+        let Some(name) = name else { continue };
+        if name == "experiment.ron" || name.ends_with(".csv") {
+            let bytes = std::fs::read(&path).map_err(|e| ExperimentError::io(&path, e))?;
+            record::write_atomic(&out.join(&name), &bytes)?;
+        }
+    }
+    Ok(report)
+}

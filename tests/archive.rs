@@ -1,0 +1,83 @@
+//! `jamkit archive`: a run's measures without the configurations. The
+//! archive must be smaller, keep every measure, leave a packing in flight
+//! out, and give `jamkit report` the same fits as the run itself.
+
+use jamkit_experiment::Experiment;
+use jamkit_experiment::archive::archive;
+use jamkit_experiment::record::{PackingFile, without_configuration};
+mod common;
+
+#[test]
+fn archive_keeps_measures_and_gives_the_same_report() {
+    let run = tempfile::tempdir().unwrap();
+    let text = r#"(name: "arch", family: "fourier",
+        params: {"n": 2, "delta": [0.01, 0.03, 0.1, 0.3]}, particles: [16, 32], samples: 2, seed: 7,
+        observables: [Contacts, Spectrum(), Gaps(h_min: 1e-8, points_per_decade: 4)])"#;
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    common::run_ok(&e, run.path(), 2);
+    // A packing "in flight": its lock is present.
+    let packings = run.path().join("packings");
+    let mut ids: Vec<String> = std::fs::read_dir(&packings)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    ids.sort();
+    assert_eq!(ids.len(), 16);
+    let busy = &ids[0];
+    std::fs::write(packings.join(format!("{busy}.lock")), "host=x pid=1").unwrap();
+
+    let out = tempfile::tempdir().unwrap();
+    let report = archive(run.path(), out.path()).unwrap();
+    assert_eq!((report.packings, report.in_flight), (15, 1));
+    // At N = 16 and 32 the binned spectrum is most of a file; at N = 1024
+    // the configuration is (125 kB against 2–5 kB).
+    assert!(
+        report.bytes.1 < report.bytes.0,
+        "{:?} bytes before and after",
+        report.bytes
+    );
+    assert!(!out.path().join("packings").join(format!("{busy}.json")).exists());
+    for id in &ids[1..] {
+        let name = format!("{id}.json");
+        let full = PackingFile::load_checked(&packings.join(&name)).unwrap();
+        let kept = PackingFile::load_checked(&out.path().join("packings").join(&name)).unwrap();
+        assert!(kept.positions.is_empty() && kept.radii.is_empty());
+        assert_eq!(kept, without_configuration(&full), "{id}");
+    }
+    for table in ["experiment.ron", "results.csv", "summary.csv", "dos.csv", "gaps.csv"] {
+        assert_eq!(
+            std::fs::read(run.path().join(table)).unwrap(),
+            std::fs::read(out.path().join(table)).unwrap(),
+            "{table}"
+        );
+    }
+
+    // The report of the archive is the report of the run, fit for fit
+    // (the busy packing left out of both).
+    std::fs::remove_file(packings.join(format!("{busy}.json"))).unwrap();
+    let options = jamkit_report::Options {
+        resamples: 50,
+        ..Default::default()
+    };
+    let figs = tempfile::tempdir().unwrap();
+    let from_run = jamkit_report::report(&[run.path().to_path_buf()], figs.path(), &options).unwrap();
+    let from_archive =
+        jamkit_report::report(&[out.path().to_path_buf()], figs.path(), &options).unwrap();
+    assert!(!from_run.fits.is_empty());
+    assert_eq!(from_run.fits.len(), from_archive.fits.len());
+    for (a, b) in from_run.fits.iter().zip(&from_archive.fits) {
+        assert_eq!((&a.quantity, a.n, a.particles), (&b.quantity, b.n, b.particles));
+        assert_eq!(a.fit, b.fit, "{}", a.quantity);
+    }
+}
+
+#[test]
+fn archive_names_a_missing_run() {
+    let out = tempfile::tempdir().unwrap();
+    let err = archive(&out.path().join("nowhere"), out.path())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("nowhere"), "{err}");
+}
