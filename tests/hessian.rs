@@ -5,7 +5,7 @@
 
 use jamkit_core::Shape;
 use jamkit_fourier::{FourierParams, NearDisk};
-use jamkit_lobed::{Lobed, LobedParams};
+use jamkit_lobed::{LobedParams, lobed};
 use jamkit_nmer::{Nmer, NmerParams, SphereSpec};
 use jamkit_sphere::Sphere;
 
@@ -51,7 +51,7 @@ fn near_disk_hessian_matches_finite_differences() {
 #[test]
 fn lobed_hessian_matches_finite_differences() {
     for kappa in [0.5, 4.0] {
-        let shape = Lobed::new(&LobedParams {
+        let shape = lobed(&LobedParams {
             delta: 0.15,
             kappa,
             inertia: None,

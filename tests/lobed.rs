@@ -8,7 +8,7 @@ use jamkit_lobed::{Lobed, LobedParams};
 use std::path::Path;
 
 fn lobed(delta: f64, kappa: f64) -> Lobed {
-    Lobed::new(&LobedParams {
+    jamkit_lobed::lobed(&LobedParams {
         delta,
         kappa,
         inertia: None,

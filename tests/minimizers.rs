@@ -11,7 +11,7 @@ use jamkit_engine::{
     Scene, StopReason,
 };
 use jamkit_fourier::{FourierParams, NearDisk};
-use jamkit_lobed::{Lobed, LobedParams};
+use jamkit_lobed::{LobedParams, lobed};
 use jamkit_nmer::{Nmer, NmerParams};
 use jamkit_sphere::Sphere;
 use rand::{RngExt, SeedableRng};
@@ -157,7 +157,7 @@ fn near_disks_reach_fires_minimum() {
         same_minimum::<2, _>(shape, 24, 0.92, &[1, 2]);
     }
     same_minimum::<2, _>(common::multi_mode(), 24, 0.92, &[1]);
-    let lobed = Lobed::new(&LobedParams {
+    let lobed = lobed(&LobedParams {
         delta: 0.15,
         kappa: 2.0,
         inertia: None,

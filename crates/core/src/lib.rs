@@ -11,7 +11,7 @@
 //! * [`family`]: a family's one registration ([`Family`]), the
 //!   [`ShapeVisitor`] the registry hands shapes to, and the optional
 //!   [`Outline`] ability;
-//! * [`rotation`]: [`Rotation2`], the planar orientation shared by the 2D
+//! * [`rotation`]: [`Rotation2`] and [`Angle`], the planar orientations shared by the 2D
 //!   families (the 2D near-disk gaps live in `jamkit-planar`);
 //! * [`potential`]: scalar contact potentials `v(h)` (harmonic, Hertzian);
 //! * [`sizes`]: size distributions (binary, monodisperse, uniform);
@@ -41,6 +41,6 @@ pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use packing::Packing;
 pub use periodic::PeriodicBox;
 pub use potential::Potential;
-pub use rotation::Rotation2;
+pub use rotation::{Angle, Rotation2};
 pub use shape::{Contact, ContactLanes, GapHessian, PairLanes, Shape, contacts_one_by_one};
 pub use sizes::SizeDistribution;

@@ -16,8 +16,14 @@
 //!
 //! Both renormalise `|z| = 1` to round-off. The two give results that
 //! differ in the last bits, so a family keeps the one its recorded packings
-//! were made with. (`lobed` and `ellipse` accumulate `θ` itself and keep
-//! their own types: moving them here would change their packings.)
+//! were made with.
+//!
+//! [`Angle`] is the other planar orientation: it accumulates `θ` itself
+//! (wrapped into `(−π, π]`) and caches `cos Kθ` and `sin Kθ` by `sin_cos`
+//! after every turn, for families whose pair loop needs a multiple of the
+//! angle: `K = 1` for the profiled near-disks (`lobed`), `K = 2` for
+//! `ellipse` (symmetric under `θ → θ + π`). Their packings were made this
+//! way, so they keep it rather than [`Rotation2`].
 
 use crate::math::{Unit, Vector, turn_unit, unit_of_angle};
 use rand::{Rng, RngExt};
@@ -100,6 +106,65 @@ impl Rotation2 {
     }
 }
 
+/// A planar orientation that accumulates `θ` and caches `e^{iKθ}`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Angle<const K: u32> {
+    theta: f64,
+    cos: f64,
+    sin: f64,
+}
+
+impl<const K: u32> Angle<K> {
+    /// The orientation `θ`, wrapped into `(−π, π]`.
+    pub fn new(theta: f64) -> Self {
+        // NOTE: wrapping keeps sin/cos accurate for bodies that have turned
+        // many times; θ and θ + 2π are the same orientation.
+        let mut theta = theta - 2.0 * PI * (theta / (2.0 * PI)).round();
+        if theta <= -PI {
+            theta += 2.0 * PI;
+        }
+        let (sin, cos) = (K as f64 * theta).sin_cos();
+        Self { theta, cos, sin }
+    }
+
+    /// A uniformly random orientation: `θ = 2π u − π`, `u` uniform in
+    /// `[0, 1)`.
+    pub fn random<R: Rng + ?Sized>(rng: &mut R) -> Self {
+        Self::new(2.0 * PI * rng.random::<f64>() - PI)
+    }
+
+    /// `θ` in `(−π, π]`.
+    #[inline(always)]
+    pub fn theta(&self) -> f64 {
+        self.theta
+    }
+
+    /// `e^{iKθ} = (cos Kθ, sin Kθ)`.
+    #[inline(always)]
+    pub fn unit(&self) -> Unit {
+        (self.cos, self.sin)
+    }
+
+    /// Turned by `dθ` (θ accumulated, then `sin_cos`).
+    #[inline]
+    pub fn turned(self, dtheta: f64) -> Self {
+        Self::new(self.theta + dtheta)
+    }
+
+    /// The coordinates written to a packing file: `[θ]`.
+    pub fn coords(&self) -> Vec<f64> {
+        vec![self.theta]
+    }
+
+    /// The inverse of [`Angle::coords`]: one finite angle, else `None`.
+    pub fn from_coords(coords: &[f64]) -> Option<Self> {
+        match coords {
+            [theta] if theta.is_finite() => Some(Self::new(*theta)),
+            _ => None,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -117,6 +182,20 @@ mod tests {
         assert_relative_eq!(b.theta(), want, epsilon = 1e-12);
         let s = Rotation2::new(0.5).apply(&Vector::<2>::new(1.0, 0.0));
         assert_relative_eq!(s, Vector::<2>::new(0.5f64.cos(), 0.5f64.sin()));
+    }
+
+    #[test]
+    fn angles_wrap_cache_their_multiple_and_round_trip() {
+        let mut a = Angle::<2>::new(3.0);
+        a = a.turned(0.5);
+        assert_relative_eq!(a.theta(), 3.5 - 2.0 * PI, epsilon = 1e-15);
+        assert_relative_eq!(a.unit().0, 7.0f64.cos(), epsilon = 1e-14);
+        assert_relative_eq!(a.unit().1, 7.0f64.sin(), epsilon = 1e-14);
+        // −π is the same orientation as π: kept in (−π, π].
+        assert_eq!(Angle::<1>::new(-PI).theta(), PI);
+        assert_eq!(Angle::<1>::from_coords(&a.coords()), Some(Angle::<1>::new(a.theta())));
+        assert!(Angle::<1>::from_coords(&[f64::NAN]).is_none());
+        assert!(Angle::<1>::from_coords(&[0.1, 0.2]).is_none());
     }
 
     #[test]

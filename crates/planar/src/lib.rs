@@ -3,6 +3,10 @@
 //! What the planar families share beyond the `Shape` contract, kept out of
 //! `jamkit-core` (which neither the engine nor the observables need it):
 //!
+//! * [`profiled`]: [`Profiled<P>`](profiled::Profiled), the whole `Shape`
+//!   of a near-disk with the first-order gap from its profile `P` alone
+//!   (`lobed` is one; a new near-disk family is a profile and its
+//!   parameters);
 //! * [`first_order`]: the paper's first-order near-disk gap with its second
 //!   derivatives, for any profile `R(θ)/R⁰ = 1 + Δ P(θ)` given by `P`, `P'`
 //!   and `P''` at the two bodies' angles (used by `fourier`, `fourier_sum`
@@ -16,3 +20,4 @@
 
 pub mod first_order;
 pub mod gap2d;
+pub mod profiled;

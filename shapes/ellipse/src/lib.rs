@@ -68,7 +68,7 @@ use jamkit_core::{
     SharedOutline, Vector,
 };
 use jamkit_planar::gap2d::{ExactGap, SupportJet};
-use rand::{Rng, RngExt};
+use rand::Rng;
 use serde::Deserialize;
 use std::f64::consts::PI;
 
@@ -249,8 +249,8 @@ impl Ellipse {
         Form {
             p: 0.5 * r2 * (self.aspect + 1.0 / self.aspect),
             m: 0.5 * r2 * (self.aspect - 1.0 / self.aspect),
-            c2: o.c2,
-            s2: o.s2,
+            c2: o.unit().0,
+            s2: o.unit().1,
         }
     }
 
@@ -432,33 +432,9 @@ impl Solution {
 }
 
 /// An orientation: the angle `θ` of the long axis in `(−π, π]`, with
-/// `cos 2θ` and `sin 2θ` (all the pair loop needs: an ellipse is
+/// `cos 2θ` and `sin 2θ` cached (all the pair loop needs: an ellipse is
 /// symmetric under `θ → θ + π`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Axis {
-    theta: f64,
-    c2: f64,
-    s2: f64,
-}
-
-impl Axis {
-    /// The orientation `θ` (wrapped into `(−π, π]`).
-    pub fn new(theta: f64) -> Self {
-        // NOTE: wrapping keeps sin/cos accurate for bodies that have turned
-        // many times; θ and θ + 2π are the same orientation.
-        let mut theta = theta - 2.0 * PI * (theta / (2.0 * PI)).round();
-        if theta <= -PI {
-            theta += 2.0 * PI;
-        }
-        let (s2, c2) = (2.0 * theta).sin_cos();
-        Self { theta, c2, s2 }
-    }
-
-    /// `θ` in `(−π, π]`.
-    pub fn theta(&self) -> f64 {
-        self.theta
-    }
-}
+pub type Axis = jamkit_core::Angle<2>;
 
 /// `A = P²/(4πS)` of an ellipse of aspect ratio `alpha` (semi-axes `√α`,
 /// `1/√α`, so `S = π`).
@@ -515,23 +491,20 @@ impl Shape<2> for Ellipse {
     }
 
     fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Axis {
-        Axis::new(2.0 * PI * rng.random::<f64>() - PI)
+        Axis::random(rng)
     }
 
     #[inline]
     fn rotate(&self, o: &mut Axis, dq: &[f64]) {
-        *o = Axis::new(o.theta + dq[0]);
+        *o = o.turned(dq[0]);
     }
 
     fn orientation_coords(&self, o: &Axis) -> Vec<f64> {
-        vec![o.theta]
+        o.coords()
     }
 
     fn orientation_from_coords(&self, coords: &[f64]) -> Option<Axis> {
-        match coords {
-            [theta] if theta.is_finite() => Some(Axis::new(*theta)),
-            _ => None,
-        }
+        Axis::from_coords(coords)
     }
 
     /// `d + 1 = 3`, as for near-disks.

@@ -38,19 +38,17 @@
 //! S = ½ ∫ R² dφ = π (R⁰)² [1 + Δ² ⟨G²⟩],   ⟨G²⟩ = (e^{−2κ} I₀(2κ) − m²) / (1 − m)².
 //! ```
 //!
-//! NOTE: the pair loop calls one `exp` per body and no `atan2`, `sin` or
-//! `cos`: `e^{iA_i} = e^{iθ_i} e^{−iθ_ij}` is a complex product of the
-//! cached `e^{iθ_i}` and the unit vector `u`, and `G` needs only `sin A` and
-//! `cos A`. The `−π` in `A_j` flips the sign of both, which `G` (π-periodic)
-//! does not see.
+//! The family is its profile: [`LobedProfile`] gives `G`, `G'`, `G''`,
+//! their range and moments, and `jamkit_planar::profiled::Profiled` does
+//! the rest (parameter checks for `Δ` and the inertia, orientations, the
+//! pair loop, the Hessian, the outline for drawing, the convexity warning).
+//! `G` needs only `sin A` and `cos A`, so the pair loop calls one `exp` per
+//! body and no `atan2`, `sin` or `cos`.
 
-use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, Outline, ParamSpec, RotVec, Shape, ShapeVisitor,
-    SharedOutline, Vector,
-};
-use jamkit_planar::first_order::{Profile, gap_hessian};
-use rand::{Rng, RngExt};
+use jamkit_core::{Dims, Family, FamilyInfo, ParamSpec, ShapeVisitor};
+use jamkit_planar::profiled::{NearDiskProfile, Profiled};
 use serde::Deserialize;
+#[cfg(test)]
 use std::f64::consts::PI;
 
 /// The `lobed` family's self-description.
@@ -109,13 +107,7 @@ impl Family for LobedFamily {
         _dim: usize,
         visitor: V,
     ) -> jamkit_core::Result<V::Output> {
-        Ok(visitor.visit::<2, _>(Lobed::new(p)?))
-    }
-}
-
-impl Outline for Lobed {
-    fn relative_radius(&self, psi: f64) -> f64 {
-        Lobed::relative_radius(self, psi)
+        Ok(visitor.visit::<2, _>(lobed(p)?))
     }
 }
 
@@ -127,13 +119,10 @@ impl Outline for Lobed {
 /// 0.11 rad and the neglected `O(Δ² G'²) ~ Δ² κ` terms of the gap grow.
 pub const KAPPA_RANGE: (f64, f64) = (0.1, 20.0);
 
-/// The `lobed` family: `Δ`, `κ`, the moment of inertia, and the constants
-/// of `G` computed once at construction.
+/// The profile `G` of sharpness `κ`, with its constants computed once.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Lobed {
-    delta: f64,
+pub struct LobedProfile {
     kappa: f64,
-    inertia: f64,
     /// `m = ⟨e^{−2κ sin²φ}⟩ = e^{−κ} I₀(κ)`.
     mean: f64,
     /// `1/(1 − m)`.
@@ -142,25 +131,8 @@ pub struct Lobed {
     mean_square: f64,
 }
 
-/// Orientation `θ` with `e^{iθ}` cached (`cos θ`, `sin θ`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Angle {
-    /// `θ`, kept in `[−π, π]`.
-    pub theta: f64,
-    cos: f64,
-    sin: f64,
-}
-
-impl Angle {
-    /// The orientation `θ`, wrapped into `[−π, π]`.
-    pub fn new(theta: f64) -> Self {
-        // NOTE: wrapping keeps sin/cos accurate for bodies that have turned
-        // many times; θ and θ + 2π are the same orientation.
-        let theta = theta - 2.0 * PI * (theta / (2.0 * PI)).round();
-        let (sin, cos) = theta.sin_cos();
-        Self { theta, cos, sin }
-    }
-}
+/// The `lobed` shape: a near-disk of profile [`LobedProfile`].
+pub type Lobed = Profiled<LobedProfile>;
 
 /// `e^{−x} I₀(x)` by the power series `I₀(x) = Σ_k (x²/4)^k / (k!)²`.
 ///
@@ -178,64 +150,32 @@ fn scaled_bessel_i0(x: f64) -> f64 {
     sum * (-x).exp()
 }
 
-impl Lobed {
-    /// Build the family, checking every parameter.
-    pub fn new(p: &LobedParams) -> jamkit_core::Result<Self> {
-        let err = |field: &str, value: f64, allowed: String| {
-            jamkit_core::Error::invalid(field, value, allowed)
-        };
-        if !(p.delta.is_finite() && p.delta >= 0.0) {
-            return Err(err(
-                "params.delta",
-                p.delta,
-                "must be a finite number ≥ 0".into(),
-            ));
-        }
+/// The shape of `p`, every parameter checked (`κ` here, `Δ` and the
+/// inertia by [`Profiled::new`]).
+pub fn lobed(p: &LobedParams) -> jamkit_core::Result<Lobed> {
+    Profiled::new(LobedProfile::new(p.kappa)?, p.delta, p.inertia)
+}
+
+impl LobedProfile {
+    /// The profile of sharpness `kappa`, which must lie in [`KAPPA_RANGE`].
+    pub fn new(kappa: f64) -> jamkit_core::Result<Self> {
         let (lo, hi) = KAPPA_RANGE;
-        if !(p.kappa >= lo && p.kappa <= hi) {
-            return Err(err(
+        if !(kappa >= lo && kappa <= hi) {
+            return Err(jamkit_core::Error::invalid(
                 "params.kappa",
-                p.kappa,
+                kappa,
                 format!("must lie in [{lo}, {hi}] (for κ < {lo} use family `fourier` with n = 2)"),
             ));
         }
-        let inertia = p.inertia.unwrap_or(p.delta);
-        if !(inertia > 0.0 && inertia.is_finite()) {
-            return Err(err(
-                "params.inertia",
-                inertia,
-                "must be positive and finite (the default I = Δ needs Δ > 0)".into(),
-            ));
-        }
-        let mean = scaled_bessel_i0(p.kappa);
+        let mean = scaled_bessel_i0(kappa);
         let scale = 1.0 / (1.0 - mean);
-        let mean_g2 = scaled_bessel_i0(2.0 * p.kappa);
-        let shape = Self {
-            delta: p.delta,
-            kappa: p.kappa,
-            inertia,
+        let mean_g2 = scaled_bessel_i0(2.0 * kappa);
+        Ok(Self {
+            kappa,
             mean,
             scale,
             mean_square: (mean_g2 - mean * mean) * scale * scale,
-        };
-        let min_r = shape.min_relative_radius();
-        if !(min_r > 0.0) {
-            return Err(err(
-                "params.delta",
-                p.delta,
-                format!(
-                    "is so large that R(θ) ≤ 0 at the waist (min R/R0 = {min_r:.4}); need Δ < {:.4} at κ = {}",
-                    -1.0 / shape.profile_min(),
-                    p.kappa
-                ),
-            ));
-        }
-        Ok(shape)
-    }
-
-    /// `Δ`.
-    pub fn delta(&self) -> f64 {
-        self.delta
+        })
     }
 
     /// `κ`.
@@ -243,21 +183,10 @@ impl Lobed {
         self.kappa
     }
 
-    /// `G(A)` and `G'(A)` from `cos A` and `sin A` (the pair loop's path).
-    #[inline(always)]
-    fn profile_from_phase(&self, cos: f64, sin: f64) -> (f64, f64) {
-        // e^{−2κ sin²A}; sin 2A = 2 sin A cos A.
-        let g = (-2.0 * self.kappa * sin * sin).exp();
-        (
-            (g - self.mean) * self.scale,
-            -4.0 * self.kappa * sin * cos * g * self.scale,
-        )
-    }
-
     /// `G(φ)` and `G'(φ)` (slow path, for geometry and tests).
     pub fn profile(&self, phi: f64) -> (f64, f64) {
         let (sin, cos) = phi.sin_cos();
-        self.profile_from_phase(cos, sin)
+        self.value_slope(cos, sin)
     }
 
     /// `G''(φ) = 4κ (κ sin²2φ − cos 2φ) e^{−2κ sin²φ} / (1 − m)`.
@@ -271,202 +200,40 @@ impl Lobed {
     pub fn profile_min(&self) -> f64 {
         ((-2.0 * self.kappa).exp() - self.mean) * self.scale
     }
-
-    /// `R(φ)/R⁰ = 1 + Δ G(φ)` in the body frame.
-    pub fn relative_radius(&self, phi: f64) -> f64 {
-        1.0 + self.delta * self.profile(phi).0
-    }
-
-    /// `min R/R⁰ = 1 + Δ min G`, at the waist.
-    pub fn min_relative_radius(&self) -> f64 {
-        1.0 + self.delta * self.profile_min()
-    }
-
-    /// True when the outline is convex: the polar curvature numerator
-    /// `r² + 2r'² − r r''` stays positive (sampled on 4096 angles of one
-    /// period, `[0, π)`; the narrowest lobe, κ = 20, spans ~140 of them).
-    pub fn is_convex(&self) -> bool {
-        (0..4096).all(|k| {
-            let phi = PI * k as f64 / 4096.0;
-            let (g, dg) = self.profile(phi);
-            let (r, dr, ddr) = (
-                1.0 + self.delta * g,
-                self.delta * dg,
-                self.delta * self.profile_second(phi),
-            );
-            r * r + 2.0 * dr * dr - r * ddr > 0.0
-        })
-    }
-
-    /// Area in units of `(R⁰)²`: `π [1 + Δ² ⟨G²⟩]`.
-    pub fn relative_area(&self) -> f64 {
-        PI * (1.0 + self.delta * self.delta * self.mean_square)
-    }
 }
 
-impl Shape<2> for Lobed {
-    type Orientation = Angle;
+impl NearDiskProfile for LobedProfile {
+    const FAMILY: &'static str = INFO.name;
+    /// `G` depends on `sin² A` only.
+    const HALF_TURN_SYMMETRIC: bool = true;
 
-    fn family(&self) -> &'static str {
-        INFO.name
-    }
-
-    fn rot_dof(&self) -> usize {
-        1
-    }
-
-    fn volume(&self, size: f64) -> f64 {
-        self.relative_area() * size * size
-    }
-
-    /// `R⁰ (1 + Δ)`: the lobe tips, since `max G = 1`.
-    fn bounding_radius(&self, size: f64) -> f64 {
-        size * (1.0 + self.delta)
-    }
-
-    fn rot_inertia(&self, _size: f64) -> RotVec {
-        [self.inertia, 1.0, 1.0]
-    }
-
-    fn outline(&self) -> Option<SharedOutline> {
-        Some(std::sync::Arc::new(self.clone()))
-    }
-
-    fn reference_orientation(&self) -> Angle {
-        Angle::new(0.0)
-    }
-
-    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Angle {
-        Angle::new(2.0 * PI * rng.random::<f64>() - PI)
-    }
-
-    fn rotate(&self, o: &mut Angle, dq: &[f64]) {
-        *o = Angle::new(o.theta + dq[0]);
-    }
-
-    fn orientation_coords(&self, o: &Angle) -> Vec<f64> {
-        vec![o.theta]
-    }
-
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Angle> {
-        match coords {
-            [theta] if theta.is_finite() => Some(Angle::new(*theta)),
-            _ => None,
-        }
-    }
-
-    /// Three, as for the paper's near-disks (`d + 1`).
-    fn rattler_threshold(&self) -> usize {
-        3
-    }
-
-    /// Near-disks jam hypostatic.
-    fn expects_isostatic(&self) -> bool {
-        false
-    }
-
-    fn warnings(&self) -> Vec<String> {
-        if self.is_convex() {
-            Vec::new()
-        } else {
-            vec![format!(
-                "non-convex outline (Δ = {}, κ = {}): the first-order gap assumes convex bodies with one contact per pair",
-                self.delta, self.kappa
-            )]
-        }
-    }
-
+    /// `G(A)` and `G'(A)`: `e^{−2κ sin²A}`, and `sin 2A = 2 sin A cos A`.
     #[inline(always)]
-    fn contacts<F: FnMut(Contact<2>)>(
-        &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-        mut visit: F,
-    ) {
-        let r = r_ij.norm();
-        // G ≤ 1, so h ≥ |r| − b_i − b_j: skip pairs that are certainly apart.
-        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
-            return;
-        }
-        // NOTE: coincident centres have no direction θ_ij; take θ_ij = 0
-        // (deterministic; such a pair overlaps deeply and any direction
-        // pushes it apart).
-        let (u, inv_r) = if r > 0.0 {
-            (r_ij * (1.0 / r), 1.0 / r)
-        } else {
-            (Vector::<2>::new(1.0, 0.0), 0.0)
-        };
-        // e^{iA} = e^{iθ} e^{−iθ_ij}: cos A = cos θ u_x + sin θ u_y,
-        // sin A = sin θ u_x − cos θ u_y. For body j the −π of A_j is dropped
-        // (G is π-periodic).
-        let phase = |o: &Angle| (o.cos * u[0] + o.sin * u[1], o.sin * u[0] - o.cos * u[1]);
-        let (ci, si) = phase(o_i);
-        let (cj, sj) = phase(o_j);
-        let (g_i, dg_i) = self.profile_from_phase(ci, si);
-        let (g_j, dg_j) = self.profile_from_phase(cj, sj);
-        let d = self.delta;
-        let gap = r - size_i - size_j - d * (size_i * g_i + size_j * g_j);
-        let tangent = Vector::<2>::new(-u[1], u[0]);
-        let grad_r = u + tangent * (d * (size_i * dg_i + size_j * dg_j) * inv_r);
-        visit(Contact {
-            gap,
-            grad_r,
-            grad_rot_i: [-d * size_i * dg_i, 0.0, 0.0],
-            grad_rot_j: [-d * size_j * dg_j, 0.0, 0.0],
-        });
+    fn value_slope(&self, cos: f64, sin: f64) -> (f64, f64) {
+        let g = (-2.0 * self.kappa * sin * sin).exp();
+        (
+            (g - self.mean) * self.scale,
+            -4.0 * self.kappa * sin * cos * g * self.scale,
+        )
     }
 
-    /// The same gap with its second derivatives, for the Hessian: the
-    /// first-order gap is the paper's for any profile, so
-    /// [`jamkit_planar::first_order::gap_hessian`] does the work once it has
-    /// `G`, `G'` and `G''` at the two angles (this path is not hot, so `A`
-    /// comes from `atan2`).
-    fn gap_hessians<V: FnMut(GapHessian<2>)>(
-        &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-        mut visit: V,
-    ) -> jamkit_core::Result<()> {
-        let r = r_ij.norm();
-        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
-            return Ok(());
-        }
-        let u = if r > 0.0 {
-            r_ij * (1.0 / r)
-        } else {
-            Vector::<2>::new(1.0, 0.0)
-        };
-        // NOTE: as in `contacts`, A_j = θ_j − θ_ij − π, whose −π flips the
-        // signs of cos A_j and sin A_j. G, G' and G'' are π-periodic and do
-        // not see it, so both bodies use A = θ − θ_ij here. A profile that
-        // is not π-periodic must pass (−cos, −sin) for body j (and
-        // atan2(−sin, −cos) for its curvature), or its Hessian is wrong.
-        let profile = |o: &Angle| {
-            let (cos, sin) = (o.cos * u[0] + o.sin * u[1], o.sin * u[0] - o.cos * u[1]);
-            let (value, slope) = self.profile_from_phase(cos, sin);
-            Profile {
-                value,
-                slope,
-                curvature: self.profile_second(sin.atan2(cos)),
-            }
-        };
-        visit(gap_hessian(
-            r_ij,
-            size_i,
-            size_j,
-            self.delta,
-            profile(o_i),
-            profile(o_j),
-        ));
-        Ok(())
+    /// `G''` at `A = atan2(sin, cos)` (not a hot path).
+    fn curvature(&self, cos: f64, sin: f64) -> f64 {
+        self.profile_second(sin.atan2(cos))
+    }
+
+    /// `max G = G(0) = 1`, `min G = G(π/2)`.
+    fn range(&self) -> (f64, f64) {
+        (self.profile_min(), 1.0)
+    }
+
+    /// `⟨G⟩ = 0` and `⟨G²⟩ = (e^{−2κ} I₀(2κ) − m²) / (1 − m)²`, exact.
+    fn moments(&self) -> (f64, f64) {
+        (0.0, self.mean_square)
+    }
+
+    fn describe(&self) -> String {
+        format!("κ = {}", self.kappa)
     }
 }
 
@@ -474,9 +241,10 @@ impl Shape<2> for Lobed {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use jamkit_core::{Angle, Contact, Shape, Vector};
 
-    fn lobed(delta: f64, kappa: f64) -> Lobed {
-        Lobed::new(&LobedParams {
+    fn shape(delta: f64, kappa: f64) -> Lobed {
+        lobed(&LobedParams {
             delta,
             kappa,
             inertia: None,
@@ -485,7 +253,7 @@ mod tests {
     }
 
     fn contact(s: &Lobed, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> Contact<2> {
-        s.pair_contacts(ri, &Angle::new(ti), rj, &Angle::new(tj), &d, f64::INFINITY)[0]
+        s.pair_contacts(ri, &Angle::<1>::new(ti), rj, &Angle::<1>::new(tj), &d, f64::INFINITY)[0]
     }
 
     /// `G` written directly from its definition, with `exp` and `sin`.
@@ -503,7 +271,7 @@ mod tests {
     #[test]
     fn gap_matches_the_printed_formula() {
         for kappa in [0.3, 1.0, 6.0] {
-            let s = lobed(0.2, kappa);
+            let s = shape(0.2, kappa);
             for &(x, y, ti, tj) in &[
                 (1.1, 0.3, 0.4, -2.0),
                 (-0.9, -0.8, 3.1, 1.0),
@@ -527,7 +295,7 @@ mod tests {
     /// ∂h/∂θ_i ↔ ∂h/∂θ_j.
     #[test]
     fn gap_is_symmetric() {
-        let s = lobed(0.3, 2.0);
+        let s = shape(0.3, 2.0);
         let d = Vector::<2>::new(0.8, -0.9);
         let a = contact(&s, 0.5, 0.3, 0.7, -1.2, d);
         let b = contact(&s, 0.7, -1.2, 0.5, 0.3, -d);
@@ -543,7 +311,7 @@ mod tests {
     fn pair_derivatives_match_finite_differences() {
         let eps = 1e-6;
         for kappa in [0.3, 1.0, 6.0] {
-            let s = lobed(0.2, kappa);
+            let s = shape(0.2, kappa);
             let (ti, tj, d) = (0.7, -2.2, Vector::<2>::new(-0.9, 0.6));
             let c = contact(&s, 0.5, ti, 0.7, tj, d);
             let h = |ti: f64, tj: f64, d: Vector<2>| contact(&s, 0.5, ti, 0.7, tj, d).gap;
@@ -565,22 +333,22 @@ mod tests {
     #[test]
     fn profile_is_normalised_and_its_derivatives_are_right() {
         for kappa in [0.1, 1.0, 5.0, 20.0] {
-            let s = lobed(0.1, kappa);
+            let s = shape(0.1, kappa);
             let m = 4096;
             let mean: f64 = (0..m)
-                .map(|k| s.profile(2.0 * PI * k as f64 / m as f64).0)
+                .map(|k| s.profile().profile(2.0 * PI * k as f64 / m as f64).0)
                 .sum::<f64>()
                 / m as f64;
             assert!(mean.abs() < 1e-13, "κ = {kappa}: ⟨G⟩ = {mean:e}");
-            assert_relative_eq!(s.profile(0.0).0, 1.0, epsilon = 1e-14);
-            assert_relative_eq!(s.profile(PI / 2.0).0, s.profile_min(), epsilon = 1e-14);
+            assert_relative_eq!(s.profile().profile(0.0).0, 1.0, epsilon = 1e-14);
+            assert_relative_eq!(s.profile().profile(PI / 2.0).0, s.profile().profile_min(), epsilon = 1e-14);
             let eps = 1e-5;
             for phi in [0.2, 1.0, 2.5, -0.7] {
-                let num1 = (s.profile(phi + eps).0 - s.profile(phi - eps).0) / (2.0 * eps);
-                let num2 = (s.profile(phi + eps).1 - s.profile(phi - eps).1) / (2.0 * eps);
+                let num1 = (s.profile().profile(phi + eps).0 - s.profile().profile(phi - eps).0) / (2.0 * eps);
+                let num2 = (s.profile().profile(phi + eps).1 - s.profile().profile(phi - eps).1) / (2.0 * eps);
                 let scale = 1.0 + kappa * kappa;
-                assert_relative_eq!(s.profile(phi).1, num1, epsilon = 1e-7 * scale);
-                assert_relative_eq!(s.profile_second(phi), num2, epsilon = 1e-7 * scale);
+                assert_relative_eq!(s.profile().profile(phi).1, num1, epsilon = 1e-7 * scale);
+                assert_relative_eq!(s.profile().profile_second(phi), num2, epsilon = 1e-7 * scale);
             }
         }
     }
@@ -592,7 +360,7 @@ mod tests {
     #[test]
     fn area_matches_quadrature() {
         for (delta, kappa) in [(0.3, 0.1), (0.5, 1.0), (0.2, 5.0), (0.4, 20.0)] {
-            let s = lobed(delta, kappa);
+            let s = shape(delta, kappa);
             let m = 4096;
             let quad: f64 = (0..m)
                 .map(|k| 0.5 * s.relative_radius(2.0 * PI * k as f64 / m as f64).powi(2))
@@ -611,10 +379,10 @@ mod tests {
 
     #[test]
     fn rotation_wraps_and_coords_round_trip() {
-        let s = lobed(0.1, 1.0);
+        let s = shape(0.1, 1.0);
         let mut o = Angle::new(3.0);
         s.rotate(&mut o, &[0.5]);
-        assert_relative_eq!(o.theta, 3.5 - 2.0 * PI, epsilon = 1e-15);
+        assert_relative_eq!(o.theta(), 3.5 - 2.0 * PI, epsilon = 1e-15);
         let back = s
             .orientation_from_coords(&s.orientation_coords(&o))
             .unwrap();
@@ -626,7 +394,7 @@ mod tests {
     #[test]
     fn nonsense_parameters_are_rejected_and_large_delta_is_non_convex() {
         let try_new = |delta, kappa, inertia| {
-            Lobed::new(&LobedParams {
+            lobed(&LobedParams {
                 delta,
                 kappa,
                 inertia,
@@ -658,10 +426,10 @@ mod tests {
             try_new(1.7, 1.0, None).unwrap_err().field(),
             Some("params.delta")
         );
-        assert!(lobed(0.2, 1.0).is_convex());
-        assert!(Shape::<2>::warnings(&lobed(0.2, 1.0)).is_empty());
+        assert!(shape(0.2, 1.0).is_convex());
+        assert!(Shape::<2>::warnings(&shape(0.2, 1.0)).is_empty());
         // The waist turns concave near Δ ≈ 0.61 at κ = 1.
-        assert!(!lobed(1.0, 1.0).is_convex());
-        assert_eq!(Shape::<2>::warnings(&lobed(1.0, 1.0)).len(), 1);
+        assert!(!shape(1.0, 1.0).is_convex());
+        assert_eq!(Shape::<2>::warnings(&shape(1.0, 1.0)).len(), 1);
     }
 }
