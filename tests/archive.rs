@@ -38,7 +38,12 @@ fn archive_keeps_measures_and_gives_the_same_report() {
         "{:?} bytes before and after",
         report.bytes
     );
-    assert!(!out.path().join("packings").join(format!("{busy}.json")).exists());
+    assert!(
+        !out.path()
+            .join("packings")
+            .join(format!("{busy}.json"))
+            .exists()
+    );
     for id in &ids[1..] {
         let name = format!("{id}.json");
         let full = PackingFile::load_checked(&packings.join(&name)).unwrap();
@@ -46,7 +51,13 @@ fn archive_keeps_measures_and_gives_the_same_report() {
         assert!(kept.positions.is_empty() && kept.radii.is_empty());
         assert_eq!(kept, without_configuration(&full), "{id}");
     }
-    for table in ["experiment.ron", "results.csv", "summary.csv", "dos.csv", "gaps.csv"] {
+    for table in [
+        "experiment.ron",
+        "results.csv",
+        "summary.csv",
+        "dos.csv",
+        "gaps.csv",
+    ] {
         assert_eq!(
             std::fs::read(run.path().join(table)).unwrap(),
             std::fs::read(out.path().join(table)).unwrap(),
@@ -62,13 +73,17 @@ fn archive_keeps_measures_and_gives_the_same_report() {
         ..Default::default()
     };
     let figs = tempfile::tempdir().unwrap();
-    let from_run = jamkit_report::report(&[run.path().to_path_buf()], figs.path(), &options).unwrap();
+    let from_run =
+        jamkit_report::report(&[run.path().to_path_buf()], figs.path(), &options).unwrap();
     let from_archive =
         jamkit_report::report(&[out.path().to_path_buf()], figs.path(), &options).unwrap();
     assert!(!from_run.fits.is_empty());
     assert_eq!(from_run.fits.len(), from_archive.fits.len());
     for (a, b) in from_run.fits.iter().zip(&from_archive.fits) {
-        assert_eq!((&a.quantity, a.n, a.particles), (&b.quantity, b.n, b.particles));
+        assert_eq!(
+            (&a.quantity, a.n, a.particles),
+            (&b.quantity, b.n, b.particles)
+        );
         assert_eq!(a.fit, b.fit, "{}", a.quantity);
     }
 }

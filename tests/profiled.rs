@@ -27,7 +27,10 @@ impl NearDiskProfile for TwoMode {
         // sin 2φ = 2sc, cos 2φ = c² − s², sin 3φ = 3s − 4s³, cos 3φ = 4c³ − 3c.
         let (s2, c2) = (2.0 * s * c, c * c - s * s);
         let (s3, c3) = (3.0 * s - 4.0 * s * s * s, 4.0 * c * c * c - 3.0 * c);
-        (self.a * s2 / 2.0 + self.b * s3 / 3.0, self.a * c2 + self.b * c3)
+        (
+            self.a * s2 / 2.0 + self.b * s3 / 3.0,
+            self.a * c2 + self.b * c3,
+        )
     }
 
     fn curvature(&self, c: f64, s: f64) -> f64 {
@@ -74,8 +77,16 @@ fn the_generic_shape_is_the_fourier_family_where_they_coincide() {
     let ours = two_mode(a, b, delta);
     let fourier = NearDisk::fourier_sum(&FourierSumParams {
         modes: vec![
-            Mode { n: 2, a: a / 2.0, b: 0.0 },
-            Mode { n: 3, a: b / 3.0, b: 0.0 },
+            Mode {
+                n: 2,
+                a: a / 2.0,
+                b: 0.0,
+            },
+            Mode {
+                n: 3,
+                a: b / 3.0,
+                b: 0.0,
+            },
         ],
         delta,
         inertia: None,
@@ -90,7 +101,10 @@ fn the_generic_shape_is_the_fourier_family_where_they_coincide() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
     let mut compared = 0;
     for _ in 0..500 {
-        let (ti, tj) = (2.0 * PI * rng.random::<f64>(), 2.0 * PI * rng.random::<f64>());
+        let (ti, tj) = (
+            2.0 * PI * rng.random::<f64>(),
+            2.0 * PI * rng.random::<f64>(),
+        );
         let phi = 2.0 * PI * rng.random::<f64>();
         let r = 1.0 + 0.3 * rng.random::<f64>();
         let d = Vector::<2>::new(r * phi.cos(), r * phi.sin());

@@ -193,7 +193,10 @@ mod tests {
         assert_relative_eq!(a.unit().1, 7.0f64.sin(), epsilon = 1e-14);
         // −π is the same orientation as π: kept in (−π, π].
         assert_eq!(Angle::<1>::new(-PI).theta(), PI);
-        assert_eq!(Angle::<1>::from_coords(&a.coords()), Some(Angle::<1>::new(a.theta())));
+        assert_eq!(
+            Angle::<1>::from_coords(&a.coords()),
+            Some(Angle::<1>::new(a.theta()))
+        );
         assert!(Angle::<1>::from_coords(&[f64::NAN]).is_none());
         assert!(Angle::<1>::from_coords(&[0.1, 0.2]).is_none());
     }

@@ -35,10 +35,9 @@ pub struct ArchiveReport {
 /// earlier archive of the same run are replaced).
 pub fn archive(dir: &Path, out: &Path) -> Result<ArchiveReport, ExperimentError> {
     let packing_dir = dir.join("packings");
-    let entries = std::fs::read_dir(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;
-    let mut paths: Vec<_> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .collect();
+    let entries =
+        std::fs::read_dir(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;
+    let mut paths: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
     paths.sort();
     // A packing in flight (its lock present) may be half-measured: left out.
     let locked: Vec<_> = paths

@@ -38,7 +38,9 @@
 //! mode) gets the unflipped pair, which it cannot tell apart.
 
 use crate::first_order::{Profile, gap_hessian};
-use jamkit_core::{Angle, Contact, Error, GapHessian, Outline, RotVec, Shape, SharedOutline, Vector};
+use jamkit_core::{
+    Angle, Contact, Error, GapHessian, Outline, RotVec, Shape, SharedOutline, Vector,
+};
 use rand::Rng;
 use std::f64::consts::PI;
 use std::fmt::Debug;
@@ -100,7 +102,11 @@ impl<P: NearDiskProfile> Profiled<P> {
     /// `params.delta` or `params.inertia`.
     pub fn new(profile: P, delta: f64, inertia: Option<f64>) -> jamkit_core::Result<Self> {
         if !(delta.is_finite() && delta >= 0.0) {
-            return Err(Error::invalid("params.delta", delta, "must be a finite number ≥ 0"));
+            return Err(Error::invalid(
+                "params.delta",
+                delta,
+                "must be a finite number ≥ 0",
+            ));
         }
         let inertia = inertia.unwrap_or(delta);
         if !(inertia > 0.0 && inertia.is_finite()) {

@@ -253,7 +253,14 @@ mod tests {
     }
 
     fn contact(s: &Lobed, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> Contact<2> {
-        s.pair_contacts(ri, &Angle::<1>::new(ti), rj, &Angle::<1>::new(tj), &d, f64::INFINITY)[0]
+        s.pair_contacts(
+            ri,
+            &Angle::<1>::new(ti),
+            rj,
+            &Angle::<1>::new(tj),
+            &d,
+            f64::INFINITY,
+        )[0]
     }
 
     /// `G` written directly from its definition, with `exp` and `sin`.
@@ -341,14 +348,24 @@ mod tests {
                 / m as f64;
             assert!(mean.abs() < 1e-13, "κ = {kappa}: ⟨G⟩ = {mean:e}");
             assert_relative_eq!(s.profile().profile(0.0).0, 1.0, epsilon = 1e-14);
-            assert_relative_eq!(s.profile().profile(PI / 2.0).0, s.profile().profile_min(), epsilon = 1e-14);
+            assert_relative_eq!(
+                s.profile().profile(PI / 2.0).0,
+                s.profile().profile_min(),
+                epsilon = 1e-14
+            );
             let eps = 1e-5;
             for phi in [0.2, 1.0, 2.5, -0.7] {
-                let num1 = (s.profile().profile(phi + eps).0 - s.profile().profile(phi - eps).0) / (2.0 * eps);
-                let num2 = (s.profile().profile(phi + eps).1 - s.profile().profile(phi - eps).1) / (2.0 * eps);
+                let num1 = (s.profile().profile(phi + eps).0 - s.profile().profile(phi - eps).0)
+                    / (2.0 * eps);
+                let num2 = (s.profile().profile(phi + eps).1 - s.profile().profile(phi - eps).1)
+                    / (2.0 * eps);
                 let scale = 1.0 + kappa * kappa;
                 assert_relative_eq!(s.profile().profile(phi).1, num1, epsilon = 1e-7 * scale);
-                assert_relative_eq!(s.profile().profile_second(phi), num2, epsilon = 1e-7 * scale);
+                assert_relative_eq!(
+                    s.profile().profile_second(phi),
+                    num2,
+                    epsilon = 1e-7 * scale
+                );
             }
         }
     }
