@@ -8,7 +8,7 @@ use std::path::Path;
 
 fn small_run(dir: &Path) {
     let text = r#"(name: "rep", family: "fourier",
-        params: {"n": 2, "delta": [0.01, 0.03, 0.1, 0.3]}, particles: [16, 32], samples: 2, seed: 5,
+        params: {"n": 2, "delta": [0.003, 0.01, 0.03, 0.1, 0.3]}, particles: [16, 32], samples: 2, seed: 5,
         observables: [Contacts, Spectrum(), Gaps(h_min: 1e-8, points_per_decade: 4)])"#;
     let e = Experiment::from_ron(text, "inline").unwrap();
     common::run_ok(&e, dir, 2);
@@ -47,7 +47,20 @@ fn report_writes_figures_fits_and_summary() {
         );
         assert!(f.fit.points >= 3);
     }
+    // Fits over four Δ or more are refitted without each end point: one
+    // point fewer, a range inside the full one, and the table says so.
+    let varied: Vec<_> = r.fits.iter().filter(|f| f.fit.points >= 4).collect();
+    assert!(!varied.is_empty(), "{:?}", r.fits);
+    for f in varied {
+        assert_eq!(f.range_variants.len(), 2, "{f:?}");
+        for (_, v) in &f.range_variants {
+            assert_eq!(v.points, f.fit.points - 1, "{f:?}");
+            assert!(v.range.0 >= f.fit.range.0 && v.range.1 <= f.fit.range.1);
+            assert!(v.range != f.fit.range);
+        }
+    }
     let md = std::fs::read_to_string(out.path().join("report.md")).unwrap();
+    assert!(md.contains("## How the exponents move with the fit range"));
     assert_eq!(md, r.markdown);
     assert!(md.contains("| paper's claim | our measurement | agrees? |"));
     assert!(md.contains("ω₁ ∝ Δ"));

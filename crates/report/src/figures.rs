@@ -18,7 +18,7 @@
 
 use crate::ReportError;
 use crate::data::{Point, Sample, load, mean_sem};
-use crate::fit::{PowerLaw, line, power_law_of};
+use crate::fit::{PowerLaw, line, power_law_of, power_law_within};
 use crate::plot::{Figure, Guide, Series};
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::spectrum::DosHistogram;
@@ -63,6 +63,11 @@ pub struct FitRow {
     pub expected: f64,
     /// Accepted deviation from it (the tolerance).
     pub tolerance: f64,
+    /// The same fit with the end points of its range left out one at a
+    /// time (`without the smallest x`, `without the largest x`), where four
+    /// points or more were fitted: how much the exponent depends on the
+    /// choice of range.
+    pub range_variants: Vec<(String, PowerLaw)>,
 }
 
 impl FitRow {
@@ -81,6 +86,7 @@ impl FitRow {
             },
             expected,
             tolerance,
+            range_variants: Vec::new(),
         }
     }
 
@@ -438,7 +444,36 @@ impl Builder {
         if defined < 3 {
             return None;
         }
-        let f = power_law_of(points, stat, self.options.resamples, self.options.seed)?;
+        let f = power_law_of(points, &stat, self.options.resamples, self.options.seed)?;
+        if f.points >= 4 {
+            // The same fit without its first, then without its last point.
+            let xs: Vec<f64> = points
+                .iter()
+                .map(|p| p.0)
+                .filter(|x| *x >= f.range.0 && *x <= f.range.1)
+                .collect();
+            let above = |x0: f64| {
+                xs.iter()
+                    .copied()
+                    .filter(|x| *x > x0)
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let below = |x1: f64| {
+                xs.iter()
+                    .copied()
+                    .filter(|x| *x < x1)
+                    .fold(f64::NEG_INFINITY, f64::max)
+            };
+            let (r, s) = (self.options.resamples, self.options.seed);
+            for (name, range) in [
+                ("without the smallest", (above(f.range.0), f.range.1)),
+                ("without the largest", (f.range.0, below(f.range.1))),
+            ] {
+                if let Some(v) = power_law_within(points, &stat, r, s, range) {
+                    row.range_variants.push((name.to_string(), v));
+                }
+            }
+        }
         let guide = Guide::power_law(
             format!("fit {}, n = {}: Δ^{:.2}", row.quantity, row.n, f.exponent),
             f.prefactor,
@@ -854,6 +889,33 @@ impl Builder {
                 f.fit.range.1,
                 f.fit.points
             );
+        }
+        if self.fits.iter().any(|f| !f.range_variants.is_empty()) {
+            m += "\n## How the exponents move with the fit range\n\nEach fit over Δ with four points or more, refitted without its smallest and without its largest Δ (same bootstrap). A claim that holds only on one side of this table depends on the choice of range.\n\n| quantity | n | N | full range | without the smallest Δ | without the largest Δ |\n|---|---|---|---|---|---|\n";
+            for f in self.fits.iter().filter(|f| !f.range_variants.is_empty()) {
+                let cell = |p: &PowerLaw| {
+                    format!(
+                        "{:.3} ± {:.3} ({:.1e} … {:.1e})",
+                        p.exponent, p.error, p.range.0, p.range.1
+                    )
+                };
+                let variant = |name: &str| {
+                    f.range_variants
+                        .iter()
+                        .find(|(n, _)| n == name)
+                        .map_or("–".to_string(), |(_, p)| cell(p))
+                };
+                let _ = writeln!(
+                    m,
+                    "| {} | {} | {} | {} | {} | {} |",
+                    f.quantity,
+                    f.n,
+                    f.particles,
+                    cell(&f.fit),
+                    variant("without the smallest"),
+                    variant("without the largest")
+                );
+            }
         }
         m += "\n## Figures\n\n";
         for f in &self.figures {

@@ -69,11 +69,30 @@ pub fn power_law_of<T>(
     resamples: usize,
     seed: u64,
 ) -> Option<PowerLaw> {
+    power_law_within(
+        points,
+        stat,
+        resamples,
+        seed,
+        (f64::NEG_INFINITY, f64::INFINITY),
+    )
+}
+
+/// [`power_law_of`] over the points with `lo ≤ x ≤ hi` only (for the
+/// sensitivity of an exponent to its fit range).
+pub fn power_law_within<T>(
+    points: &[(f64, Vec<T>)],
+    stat: impl Fn(&[&T]) -> Option<f64>,
+    resamples: usize,
+    seed: u64,
+    (lo, hi): (f64, f64),
+) -> Option<PowerLaw> {
     fn all<T>(v: &[T]) -> Vec<&T> {
         v.iter().collect()
     }
     let points: Vec<(f64, &Vec<T>)> = points
         .iter()
+        .filter(|(x, _)| *x >= lo && *x <= hi)
         .filter(|(_, v)| !v.is_empty() && stat(&all(v)).is_some())
         .map(|(x, v)| (*x, v))
         .collect();
