@@ -1,0 +1,103 @@
+//! The committed paper-size data (`data/`, issue "The paper at the paper's
+//! size"): every archived packing loads and is a jammed packing of the
+//! profile, and `jamkit report` regenerates the report from a slice of
+//! them (the n = 2 packings), with φ_J as the files say.
+
+use jamkit_experiment::record::PackingFile;
+use std::path::{Path, PathBuf};
+
+fn data(dir: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(dir)
+}
+
+fn packing_files(dir: &Path) -> Vec<PathBuf> {
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir.join("packings"))
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    paths.sort();
+    paths
+}
+
+/// Every archived packing of the N = 1024 set loads, holds no
+/// configuration, and ended in the paper's window 1e-16 < V/N < 2e-16 with
+/// its contacts, gaps and spectrum measured.
+#[test]
+fn the_archived_packings_are_jammed_packings_of_the_profile() {
+    let files = packing_files(&data("paper-full"));
+    assert!(files.len() >= 32, "{} files", files.len());
+    for path in &files {
+        let f = PackingFile::load_checked(path).unwrap();
+        assert!(
+            f.positions.is_empty(),
+            "{}: configuration kept",
+            path.display()
+        );
+        assert_eq!(
+            (f.family.as_str(), f.dim, f.particles),
+            ("fourier", 2, 1024)
+        );
+        assert!(
+            f.energy_per_particle > 1e-16 && f.energy_per_particle < 2e-16,
+            "{}: V/N = {}",
+            path.display(),
+            f.energy_per_particle
+        );
+        let m = &f.measures;
+        assert!(
+            m.z_j.is_some() && m.gaps.is_some() && m.spectrum.is_some(),
+            "{}",
+            f.id
+        );
+    }
+}
+
+/// `jamkit report` on the n = 2 packings alone: the figures of one n, the
+/// δz_J fit over its Δ, and φ_J at the largest Δ equal to the mean over
+/// the files read here (to round-off: the report prints four decimals).
+#[test]
+fn the_report_regenerates_from_a_slice_of_the_data() {
+    let slice = tempfile::tempdir().unwrap();
+    std::fs::create_dir(slice.path().join("packings")).unwrap();
+    let mut phis: Vec<(f64, f64)> = Vec::new();
+    for path in packing_files(&data("paper-full")) {
+        let f = PackingFile::load_checked(&path).unwrap();
+        if f.params["n"] == 2 {
+            phis.push((f.params["delta"].as_f64().unwrap(), f.phi));
+            std::fs::copy(
+                &path,
+                slice
+                    .path()
+                    .join("packings")
+                    .join(path.file_name().unwrap()),
+            )
+            .unwrap();
+        }
+    }
+    let largest = phis.iter().map(|p| p.0).fold(0.0, f64::max);
+    let at_largest: Vec<f64> = phis
+        .iter()
+        .filter(|p| p.0 == largest)
+        .map(|p| p.1)
+        .collect();
+    let mean = at_largest.iter().sum::<f64>() / at_largest.len() as f64;
+
+    let out = tempfile::tempdir().unwrap();
+    let options = jamkit_report::Options {
+        resamples: 50,
+        ..Default::default()
+    };
+    let r = jamkit_report::report(&[slice.path().to_path_buf()], out.path(), &options).unwrap();
+    assert!(r.figures.len() >= 6, "{:?}", r.figures);
+    let dz = r.fits.iter().find(|f| f.quantity == "δz_J" && f.n == 2);
+    let dz = dz.unwrap_or_else(|| panic!("no δz_J fit: {:?}", r.fits));
+    assert!(dz.fit.points >= 4 && dz.fit.exponent.is_finite());
+    assert!(r.fits.iter().all(|f| f.n == 2), "{:?}", r.fits);
+    let printed = format!("{mean:.4} at Δ = {largest:e}");
+    assert!(
+        r.markdown.contains(&printed),
+        "φ_J {printed} not in the report:\n{}",
+        r.markdown
+    );
+}
