@@ -137,6 +137,18 @@ enum Command {
         #[arg(long, default_value_t = 500)]
         resamples: usize,
     },
+    /// Figures of any run, whatever its family: each scanned parameter (or
+    /// N) against φ_J, z_J, z_corr, the rattler fraction and the pressure
+    /// with error bars, and D(ω) and Z(h) where they were measured
+    /// (docs/formats.md, "jamkit plot").
+    Plot {
+        /// Output directories of runs (or archives), each with packings/.
+        #[arg(required = true, num_args = 1..)]
+        dirs: Vec<PathBuf>,
+        /// Directory for the figures and index.md.
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+    },
     /// Eigenvalues of a saved packing's Hessian, one per line, ascending.
     Spectrum {
         /// A packing file written by `run` (DIR/packings/<id>.json).
@@ -389,6 +401,20 @@ fn real_main() -> Result<()> {
                 r.figures.len(),
                 r.fits.len(),
                 out.join("report.md").display()
+            );
+            Ok(())
+        }
+        Command::Plot { dirs, out } => {
+            let p = jamkit_report::runplot::plot(&dirs, &out)?;
+            out!(
+                "{} figures (PNG and SVG), scanned: {}: {}",
+                p.figures.len(),
+                if p.scanned.is_empty() {
+                    "nothing".to_string()
+                } else {
+                    p.scanned.join(", ")
+                },
+                out.join("index.md").display()
             );
             Ok(())
         }

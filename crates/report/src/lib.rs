@@ -7,6 +7,8 @@
 //!   `(n, Δ, N)` of the near-disk ensembles;
 //! * [`fit`]: power laws on log–log axes with bootstrap errors over packings;
 //! * [`plot`]: figures with error bars and guide lines, SVG and PNG;
+//! * [`runplot`]: `jamkit plot`, figures of any run (every family): each
+//!   scanned parameter against φ_J, z_J, rattlers and pressure, D(ω), Z(h);
 //! * [`figures`]: the paper's Figs. 7–13 and the markdown summary with the
 //!   table "paper's claim | our measurement | agrees?"; Fig. 5 (ellipses
 //!   against `n = 2` near-disks at equal asphericity) when the runs hold
@@ -20,6 +22,7 @@ mod ellipses;
 pub mod figures;
 pub mod fit;
 pub mod plot;
+pub mod runplot;
 
 pub use figures::{Options, Report, report};
 
@@ -41,6 +44,9 @@ pub enum ReportError {
         "no packings of the `fourier` family (with parameters n and delta) under {0}; give the output directories of runs of experiments/paper/"
     )]
     NoData(String),
+    /// No packing files at all.
+    #[error("no packing files under {0}; give output directories of `jamkit run` (or archives)")]
+    NoPackings(String),
     /// A figure had nothing to draw.
     #[error("figure `{0}` has no finite point to draw")]
     Empty(String),

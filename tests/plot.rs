@@ -1,0 +1,49 @@
+//! `jamkit plot`: figures of any run. Scanned quantities are found, one
+//! figure per observable and scanned quantity is written (SVG and PNG),
+//! series are labelled by the other coordinates, unmeasured observables are
+//! skipped and said so, and a directory without packings is refused.
+
+use jamkit_experiment::Experiment;
+mod common;
+
+#[test]
+fn a_dimer_scan_plots_every_observable_against_each_scanned_quantity() {
+    let run = tempfile::tempdir().unwrap();
+    let text = r#"(name: "dimers", family: "nmer", dim: 2,
+        params: {"alpha": [1.2, 1.5]}, particles: [16, 24], samples: 2, seed: 3,
+        observables: [Contacts, Pressure, Spectrum()])"#;
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    common::run_ok(&e, run.path(), 2);
+    let out = tempfile::tempdir().unwrap();
+    let p = jamkit_report::runplot::plot(&[run.path().to_path_buf()], out.path()).unwrap();
+    assert_eq!(p.scanned, ["alpha", "particles"]);
+    for x in ["alpha", "particles"] {
+        for y in ["phi_j", "z_j", "rattlers", "pressure"] {
+            let stem = out.path().join(format!("{y}_vs_{x}"));
+            assert!(p.figures.contains(&stem), "{y}_vs_{x}: {:?}", p.figures);
+            let png = std::fs::read(stem.with_extension("png")).unwrap();
+            assert_eq!(&png[1..4], b"PNG");
+        }
+    }
+    // φ_J against α: one series per N, labelled with it.
+    let svg = std::fs::read_to_string(out.path().join("phi_j_vs_alpha.svg")).unwrap();
+    assert!(
+        svg.contains("N = 16") && svg.contains("N = 24"),
+        "series labels"
+    );
+    assert!(p.figures.contains(&out.path().join("dos")));
+    assert!(p.index.contains("Z(h) (no Gaps measured)"), "{}", p.index);
+    let index = std::fs::read_to_string(out.path().join("index.md")).unwrap();
+    assert_eq!(index, p.index);
+}
+
+#[test]
+fn plot_refuses_a_directory_without_packings() {
+    let empty = tempfile::tempdir().unwrap();
+    std::fs::create_dir(empty.path().join("packings")).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let err = jamkit_report::runplot::plot(&[empty.path().to_path_buf()], out.path())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no packing files"), "{err}");
+}
