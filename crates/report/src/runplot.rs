@@ -179,6 +179,10 @@ fn scanned(points: &[Point]) -> Vec<String> {
         .collect()
 }
 
+/// A series in the making: the order key (the other coordinates), its
+/// label and its points `(x, mean, s.e.m.)`.
+type Group = (Vec<f64>, String, Vec<(f64, f64, f64)>);
+
 /// One observable of a packing (`None` where it was not measured).
 type Measure = fn(&PackingFile) -> Option<f64>;
 
@@ -254,7 +258,7 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
         for (key, y_label, measure) in OBSERVABLES {
             // One series per value of the other coordinates, in their
             // numerical order.
-            let mut groups: Vec<(Vec<f64>, String, Vec<(f64, f64, f64)>)> = Vec::new();
+            let mut groups: Vec<Group> = Vec::new();
             for p in points.iter() {
                 let Some(&x) = p.coords.get(x_name) else {
                     continue;
