@@ -137,6 +137,27 @@ enum Command {
         #[arg(long, default_value_t = 500)]
         resamples: usize,
     },
+    /// Measure a sphere packing made by another code (extended XYZ, or
+    /// plain `x y (z) r` lines) as our own: contacts, rattlers, z, iso
+    /// margin, pressure, spectrum, gaps; writes a jamkit packing file
+    /// (docs/formats.md, "jamkit analyze").
+    Analyze {
+        /// The packing: FILE.xyz / FILE.extxyz (extended XYZ, first frame)
+        /// or plain text.
+        file: PathBuf,
+        /// The jamkit packing file to write.
+        #[arg(short, long)]
+        out: PathBuf,
+        /// The dimension, where the file does not say it.
+        #[arg(long)]
+        dim: Option<usize>,
+        /// Box edges `Lx,Ly(,Lz)`, for plain text without a `# box` line.
+        #[arg(long, value_delimiter = ',')]
+        r#box: Option<Vec<f64>>,
+        /// The observables, as in an experiment file.
+        #[arg(long, default_value = "[Contacts, Pressure, Spectrum(), Gaps()]")]
+        observables: String,
+    },
     /// Figures of any run, whatever its family: each scanned parameter (or
     /// N) against φ_J, z_J, z_corr, the rattler fraction and the pressure
     /// with error bars, and D(ω) and Z(h) where they were measured
@@ -402,6 +423,59 @@ fn real_main() -> Result<()> {
                 r.fits.len(),
                 out.join("report.md").display()
             );
+            Ok(())
+        }
+        Command::Analyze {
+            file,
+            out,
+            dim,
+            r#box,
+            observables,
+        } => {
+            let observables = jamkit_experiment::analyze::parse_observables(&observables)?;
+            let options = jamkit_experiment::analyze::ReadOptions {
+                dim,
+                box_edges: r#box,
+            };
+            let packing = jamkit_experiment::analyze::read(&file, &options)?;
+            let (packing, force, table) =
+                jamkit_experiment::analyze::analyze(packing, &observables)?;
+            packing.save(&out)?;
+            if let Some(table) = table {
+                jamkit_experiment::record::write_atomic(
+                    &out.with_extension("eigenvalues.csv"),
+                    table.as_bytes(),
+                )?;
+            }
+            let m = &packing.measures;
+            let opt = |x: Option<f64>| x.map_or("–".to_string(), |x| format!("{x:.6}"));
+            out!(
+                "{} spheres in {}D, φ = {:.6}, V/N = {:.3e}, largest force component {:.3e}",
+                packing.particles,
+                packing.dim,
+                packing.phi,
+                packing.energy_per_particle,
+                force
+            );
+            out!(
+                "contacts {}, rattlers {}, z = {}, iso margin {}, pressure {}",
+                m.n_contacts.map_or("–".into(), |c| c.to_string()),
+                m.n_rattlers.map_or("–".into(), |c| c.to_string()),
+                opt(m.z_j),
+                m.iso_margin.map_or("–".into(), |c| c.to_string()),
+                m.pressure.map_or("–".to_string(), |p| format!("{p:.4e}"))
+            );
+            if let Some(s) = &m.spectrum {
+                let params = &s.dos;
+                out!(
+                    "spectrum: {} coordinates, {} zero modes, ω₁ = {}, ω_* = {}",
+                    s.coordinates,
+                    s.zero_modes.total,
+                    opt(s.histogram.omega_1()),
+                    opt(s.histogram.omega_star(params))
+                );
+            }
+            out!("written: {}", out.display());
             Ok(())
         }
         Command::Plot { dirs, out } => {

@@ -12,11 +12,14 @@
 //! * [`runner`]: runs the samples in parallel, resumes, collects records;
 //! * [`record`]: packing files, `results.csv`, `summary.csv`, `dos.csv`
 //!   and `gaps.csv`, written atomically;
+//! * [`analyze`]: a sphere packing from another code (extended XYZ or
+//!   `x y (z) r` text) measured as our own (`jamkit analyze`);
 //! * [`archive`]: a run's measures without the configurations, small
 //!   enough to commit (`jamkit archive`);
 //! * [`reload`]: a saved packing back as a typed scene (for the spectrum of
 //!   a packing on disk, and for new observables on a resumed run).
 
+pub mod analyze;
 pub mod archive;
 pub mod batchlog;
 pub mod error;

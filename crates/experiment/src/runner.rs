@@ -756,7 +756,7 @@ impl Observed {
 /// Measure the observables of `e` on a saved packing (same settings,
 /// other observables); the protocol's own figures are kept, and the
 /// measuring time is added to `wall_s`.
-fn remeasure(
+pub(crate) fn remeasure(
     e: &Experiment,
     file: PackingFile,
 ) -> Result<(PackingFile, Option<String>), ExperimentError> {
