@@ -280,14 +280,14 @@ fn read_plain(path: &Path, text: &str, options: &ReadOptions) -> Result<Bodies, 
     for (k, raw) in text.lines().enumerate() {
         let line = k + 1;
         let (body, comment) = raw.split_once('#').unwrap_or((raw, ""));
-        if let Some(b) = comment.trim().strip_prefix("box") {
-            if box_edges.is_none() {
-                box_edges = Some(
-                    b.split_whitespace()
-                        .map(|x| number(path, line, "box", x))
-                        .collect::<Result<_, _>>()?,
-                );
-            }
+        if let Some(b) = comment.trim().strip_prefix("box")
+            && box_edges.is_none()
+        {
+            box_edges = Some(
+                b.split_whitespace()
+                    .map(|x| number(path, line, "box", x))
+                    .collect::<Result<_, _>>()?,
+            );
         }
         let values: Vec<f64> = body
             .split_whitespace()
@@ -297,7 +297,7 @@ fn read_plain(path: &Path, text: &str, options: &ReadOptions) -> Result<Bodies, 
             rows.push((line, values));
         }
     }
-    let Some(&(_, ref first)) = rows.first() else {
+    let Some((_, first)) = rows.first() else {
         return Err(parse_err(
             path,
             1,
