@@ -416,7 +416,19 @@ fn real_main() -> Result<()> {
                 resamples,
                 ..Default::default()
             };
-            let r = jamkit_report::report(&dirs, &out, &options)?;
+            let r = match jamkit_report::report(&dirs, &out, &options) {
+                Err(jamkit_report::ReportError::NoData(_)) => {
+                    // Not the paper's near-disks: the figures of any run.
+                    let p = jamkit_report::runplot::plot(&dirs, &out)?;
+                    out!(
+                        "no near-disk packings with n and Δ (the paper's figures); drew the runs' own instead (jamkit plot): {} figures, {}",
+                        p.figures.len(),
+                        out.join("index.md").display()
+                    );
+                    return Ok(());
+                }
+                r => r?,
+            };
             out!(
                 "{} figures (PNG and SVG), {} fitted exponents: {}",
                 r.figures.len(),

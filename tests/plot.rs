@@ -47,3 +47,29 @@ fn plot_refuses_a_directory_without_packings() {
         .to_string();
     assert!(err.contains("no packing files"), "{err}");
 }
+
+/// `jamkit report` on a run that is not the paper's near-disks (the
+/// README's quickstart) draws the run's own figures instead of failing.
+#[test]
+fn report_on_the_quickstart_draws_its_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let fig = dir.path().join("fig");
+    let (code, _, err) = common::jamkit(&[
+        "run",
+        &common::quickstart(),
+        "--out",
+        run.to_str().unwrap(),
+        "--set",
+        "samples=2",
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) =
+        common::jamkit(&["report", run.to_str().unwrap(), "-o", fig.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("drew the runs' own instead"), "{out}");
+    let index = std::fs::read_to_string(fig.join("index.md")).unwrap();
+    assert!(index.contains("phi_j_vs_"), "{index}");
+    assert!(fig.join("dos.png").exists() || index.contains("no Spectrum measured"));
+}

@@ -14,8 +14,9 @@
 //!   the pooled cumulative gap distribution `Z(h)` where `Gaps` was, one
 //!   curve per point (zero modes left out of `D(ω)`).
 //!
-//! An x axis is logarithmic when all its values are positive and span a
-//! factor of 20 or more. A quantity that was not measured (no `Contacts`,
+//! A run of one point (nothing scanned) is drawn packing by packing,
+//! against the seed. An x axis is logarithmic when all its values are
+//! positive and span a factor of 20 or more. A quantity that was not measured (no `Contacts`,
 //! no `Pressure`) is skipped, and the index says so.
 
 use crate::ReportError;
@@ -85,6 +86,7 @@ fn axis_name(name: &str) -> String {
         "delta" => "Δ".into(),
         "alpha" => "α".into(),
         "kappa" => "κ".into(),
+        "seed" => "seed (one packing each)".into(),
         other => other.into(),
     }
 }
@@ -207,7 +209,27 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
         path: out.to_path_buf(),
         error: e,
     })?;
-    let scanned = scanned(&points);
+    let mut scanned = scanned(&points);
+    let mut points = points;
+    if scanned.is_empty() {
+        // One point: its packings one by one, against their seed.
+        points = points
+            .into_iter()
+            .flat_map(|p| {
+                p.files.into_iter().map(move |f| {
+                    let mut coords = p.coords.clone();
+                    coords.insert("seed".into(), f.seed as f64);
+                    Point {
+                        family: p.family.clone(),
+                        coords,
+                        tags: p.tags.clone(),
+                        files: vec![f],
+                    }
+                })
+            })
+            .collect();
+        scanned = vec!["seed".into()];
+    }
     let families = {
         let mut f: Vec<&str> = points.iter().map(|p| p.family.as_str()).collect();
         f.sort_unstable();
