@@ -12,6 +12,7 @@ use crate::error::ExperimentError;
 use crate::registry::{self, ParamMap};
 use crate::schema::Experiment;
 use jamkit_core::FamilyInfo;
+use jamkit_engine::FireParams;
 
 /// One parameter point of the grid.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,6 +25,10 @@ pub struct Point {
     pub particles: usize,
     /// Every family parameter (defaults filled in).
     pub params: ParamMap,
+    /// The experiment's minimiser with the family's defaults filled in
+    /// (`dt_max`: the experiment's, else the family's, else 0.5), resolved
+    /// once here, where the point's shape is built to check it.
+    pub minimizer: FireParams,
 }
 
 impl Point {
@@ -139,13 +144,15 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
             for params in &combos {
                 let check = CheckOnly {
                     hessian: experiment.spectrum().is_some(),
+                    minimizer: &experiment.minimizer,
                 };
-                registry::dispatch(&experiment.family, dim, params, check)??;
+                let minimizer = registry::dispatch(&experiment.family, dim, params, check)??;
                 out.push(Point {
                     index: out.len(),
                     dim,
                     particles,
                     params: params.clone(),
+                    minimizer,
                 });
             }
         }
@@ -257,21 +264,22 @@ fn param_axes(
 /// A visitor that only checks that the shape can be built.
 /// Builds the shape (which checks its parameters) and, when the spectrum
 /// is asked for, that the family gives the second derivatives of its gap.
-struct CheckOnly {
+struct CheckOnly<'a> {
     hessian: bool,
+    minimizer: &'a FireParams,
 }
 
-impl registry::SceneVisitor for CheckOnly {
-    type Output = Result<(), ExperimentError>;
+impl registry::SceneVisitor for CheckOnly<'_> {
+    type Output = Result<FireParams, ExperimentError>;
     fn visit<const D: usize, S: jamkit_core::Shape<D>>(self, shape: S) -> Self::Output {
-        if !self.hessian {
-            return Ok(());
+        if self.hessian {
+            let o = shape.reference_orientation();
+            let apart = jamkit_core::Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
+            shape
+                .gap_hessians(1.0, &o, 1.0, &o, &apart, f64::INFINITY, |_| {})
+                .map_err(|e| ExperimentError::invalid("observables", "Spectrum", e.to_string()))?;
         }
-        let o = shape.reference_orientation();
-        let apart = jamkit_core::Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
-        shape
-            .gap_hessians(1.0, &o, 1.0, &o, &apart, f64::INFINITY, |_| {})
-            .map_err(|e| ExperimentError::invalid("observables", "Spectrum", e.to_string()))
+        Ok(self.minimizer.for_family(&shape))
     }
 }
 

@@ -15,7 +15,7 @@ use crate::reload::{PackingVisitor, reload};
 use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
 use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
-    Fire, FireParams, JamParams, PressureParams, Progress, Scene, compress_to_phi,
+    Fire, JamParams, PressureParams, Progress, Scene, compress_to_phi,
     compress_to_pressure, jam,
 };
 use jamkit_observe::gaps::GapCounts;
@@ -347,7 +347,7 @@ fn group_by_point<'a>(
 /// Everything that shapes one packing, for the resume check.
 pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json::Value {
     let e = experiment;
-    let minimizer = minimizer_at(e, point).unwrap_or_else(|_| e.minimizer.clone());
+    let minimizer = &point.minimizer;
     serde_json::json!({
         "dim": point.dim,
         "family": e.family,
@@ -361,20 +361,6 @@ pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json
         "rattlers": e.rattlers,
         "engine": e.engine,
     })
-}
-
-/// The minimiser of `e` for the family at `point`, with `dt_max` filled in
-/// (the experiment's, else the family's, else 0.5), so that the settings a
-/// packing records hold the time step it was made with.
-pub fn minimizer_at(e: &Experiment, point: &Point) -> Result<FireParams, ExperimentError> {
-    struct Resolve<'a>(&'a FireParams);
-    impl SceneVisitor for Resolve<'_> {
-        type Output = FireParams;
-        fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> FireParams {
-            self.0.for_family(&shape)
-        }
-    }
-    registry::dispatch(&e.family, point.dim, &point.params, Resolve(&e.minimizer))
 }
 
 /// The observables of `experiment`, as stored with each packing.
@@ -447,7 +433,7 @@ impl SceneVisitor for SampleVisitor<'_> {
         let (e, job) = (self.experiment, self.job);
         let sample_err = |source| ExperimentError::sample(job.id.clone(), source);
         let start = Instant::now();
-        let minimizer = e.minimizer.for_family(&shape);
+        let minimizer = self.point.minimizer.clone();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(job.seed);
         let sizes = e.sizes.sample(self.point.particles, &mut rng);
         let min_reach = sizes
