@@ -355,10 +355,13 @@ fn param_cells(f: &PackingFile, names: &[String]) -> Vec<String> {
     names
         .iter()
         .map(|n| {
-            f.params
-                .get(n)
-                .map(|v| csv_field(&v.to_string()))
-                .unwrap_or_default()
+            // An absent optional (`None`, JSON null) is an empty cell, a
+            // text value its text (no JSON quotes), a number its digits.
+            match f.params.get(n) {
+                None | Some(serde_json::Value::Null) => String::new(),
+                Some(serde_json::Value::String(s)) => csv_field(s),
+                Some(v) => csv_field(&v.to_string()),
+            }
         })
         .collect()
 }

@@ -15,8 +15,7 @@ use crate::reload::{PackingVisitor, reload};
 use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
 use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
-    Fire, JamParams, PressureParams, Progress, Scene, compress_to_phi,
-    compress_to_pressure, jam,
+    Fire, JamParams, PressureParams, Progress, Scene, compress_to_phi, compress_to_pressure, jam,
 };
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::saddle::{self, SaddleParams};
