@@ -625,6 +625,9 @@ fn print_table(report: &jamkit_experiment::runner::RunReport) {
             s.flagged
         );
     }
+    out!(
+        "phi, z: mean ± s.e.m. over the point's packings (z = z_J among non-rattlers); z_iso: the isostatic z of the non-rattlers' coordinates (2f); z_corr: z_J counting free rotations of rotational rattlers as missing contacts; iso_min: the smallest N_c − (f N_nr − d) (negative: hypostatic); flagged: packings with a warning (results.csv column flag). docs/formats.md, \"results.csv\"."
+    );
 }
 
 /// The packing files `path` names: itself, or a run directory's packings
