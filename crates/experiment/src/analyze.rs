@@ -124,12 +124,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<PackingFile, Experimen
         rattler: Vec::new(),
         spheres: Vec::new(),
     };
-    file.check()
-        .map_err(|(field, value, allowed)| ExperimentError::Invalid {
-            field: format!("{}: {field}", path.display()),
-            value,
-            allowed,
-        })?;
+    file.check_as(path.display())?;
     Ok(file)
 }
 

@@ -48,12 +48,7 @@ fn contacts_per_body(file: &PackingFile) -> Result<Vec<usize>, ExperimentError> 
 
 /// One frame of extended XYZ for `file`.
 pub fn frame(file: &PackingFile) -> Result<String, ExperimentError> {
-    file.check()
-        .map_err(|(field, value, allowed)| ExperimentError::Invalid {
-            field: format!("packing {}: {field}", file.id),
-            value,
-            allowed,
-        })?;
+    file.check_as(format_args!("packing {}", file.id))?;
     if file.positions.len() != file.particles {
         return Err(ExperimentError::invalid(
             format!("packing {}: positions", file.id),

@@ -171,12 +171,7 @@ impl PackingFile {
             file: path.display().to_string(),
             message: format!("not a jamkit packing file: {e}"),
         })?;
-        file.check()
-            .map_err(|(field, value, allowed)| ExperimentError::Invalid {
-                field: format!("{}: {field}", path.display()),
-                value,
-                allowed,
-            })?;
+        file.check_as(path.display())?;
         Ok(file)
     }
 
@@ -259,6 +254,17 @@ impl PackingFile {
             }
         }
         Ok(())
+    }
+
+    /// [`PackingFile::check`] as an error whose field names `whose` (a
+    /// path, or `packing <id>`).
+    pub fn check_as(&self, whose: impl std::fmt::Display) -> Result<(), ExperimentError> {
+        self.check()
+            .map_err(|(field, value, allowed)| ExperimentError::Invalid {
+                field: format!("{whose}: {field}"),
+                value,
+                allowed,
+            })
     }
 
     /// Load only if it was made with exactly these settings.
