@@ -3,7 +3,7 @@
 //! `jamkit report` draws the paper's figures, which need near-disks with
 //! `n` and `Δ`. This module draws what every run has: the packings are
 //! grouped into points (family, dimension, `N`, parameters), and each
-//! *scanned* quantity — a parameter or `N` that takes more than one value
+//! *scanned* quantity — a parameter, `N` or the dimension `d` that takes more than one value
 //! in the runs — goes on the x axis of one figure per observable:
 //!
 //! * φ_J, `z_J` (and `z_corr` where rotational rattlers make it differ),
@@ -83,6 +83,7 @@ fn short(v: f64) -> String {
 fn axis_name(name: &str) -> String {
     match name {
         "particles" => "N".into(),
+        "dim" => "d".into(),
         "delta" => "Δ".into(),
         "alpha" => "α".into(),
         "kappa" => "κ".into(),
@@ -115,7 +116,10 @@ fn load(dirs: &[PathBuf]) -> Result<Vec<Point>, ReportError> {
             if !seen.insert(file.id.clone()) {
                 continue;
             }
-            let mut coords = BTreeMap::from([("particles".to_string(), file.particles as f64)]);
+            let mut coords = BTreeMap::from([
+                ("dim".to_string(), file.dim as f64),
+                ("particles".to_string(), file.particles as f64),
+            ]);
             let mut tags = BTreeMap::new();
             if let Some(map) = file.params.as_object() {
                 for (k, v) in map {
