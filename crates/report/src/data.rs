@@ -5,7 +5,7 @@ use crate::ReportError;
 use jamkit_experiment::record::PackingFile;
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::spectrum::{DosHistogram, DosParams};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// One packing, reduced to what the figures need.
 #[derive(Clone, Debug)]
@@ -57,6 +57,24 @@ pub struct Point {
     pub samples: Vec<Sample>,
 }
 
+/// The packing files of the run (or archive) in `run`, sorted by name:
+/// `run/packings/*.json` without the `.failed.json` states of failed
+/// samples (which are not packings at jamming).
+pub fn packing_paths(run: &Path) -> Result<Vec<PathBuf>, ReportError> {
+    let dir = run.join("packings");
+    let entries = std::fs::read_dir(&dir).map_err(|e| ReportError::Io {
+        path: dir.clone(),
+        error: e,
+    })?;
+    let mut paths: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .filter(|p| !p.to_string_lossy().ends_with(".failed.json"))
+        .collect();
+    paths.sort();
+    Ok(paths)
+}
+
 /// The points found in `dirs` (each a run's output directory), and the
 /// number of packing files skipped (not a `fourier` near-disk with `n` and
 /// `delta`, or unreadable). A packing present in several runs (same id and
@@ -68,17 +86,7 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
     // with the most observables.
     let mut files: Vec<PackingFile> = Vec::new();
     for dir in dirs {
-        let dir = dir.as_ref().join("packings");
-        let entries = std::fs::read_dir(&dir).map_err(|e| ReportError::Io {
-            path: dir.clone(),
-            error: e,
-        })?;
-        let mut paths: Vec<_> = entries
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|e| e == "json"))
-            .collect();
-        paths.sort();
-        for path in paths {
+        for path in packing_paths(dir.as_ref())? {
             let Some(file) = PackingFile::load(&path) else {
                 skipped += 1;
                 continue;

@@ -7,7 +7,7 @@
 //! table pairing the points of equal `A` (mean ± s.e.m. over packings).
 
 use crate::ReportError;
-use crate::data::{Point, mean_sem};
+use crate::data::{Point, mean_sem, packing_paths};
 use crate::plot::{Figure, Series};
 use jamkit_experiment::record::PackingFile;
 use plotters::prelude::SeriesLabelPosition;
@@ -47,15 +47,8 @@ struct Row {
 fn load(dirs: &[PathBuf]) -> (Vec<EllipsePoint>, usize) {
     let mut files: Vec<PackingFile> = Vec::new();
     for dir in dirs {
-        let Ok(entries) = std::fs::read_dir(dir.join("packings")) else {
-            continue;
-        };
-        let mut paths: Vec<_> = entries
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|e| e == "json"))
-            .collect();
-        paths.sort();
-        for path in paths {
+        // A missing directory was reported by the near-disks' loader.
+        for path in packing_paths(dir).unwrap_or_default() {
             let Some(file) = PackingFile::load(&path) else {
                 continue;
             };

@@ -20,6 +20,7 @@
 //! no `Pressure`) is skipped, and the index says so.
 
 use crate::ReportError;
+use crate::data::packing_paths;
 use crate::plot::{Figure, Series};
 use jamkit_core::stats::mean_sem;
 use jamkit_experiment::record::{PackingFile, pooled_histogram};
@@ -98,18 +99,7 @@ fn load(dirs: &[PathBuf]) -> Result<Vec<Point>, ReportError> {
     let mut seen = std::collections::BTreeSet::new();
     let mut points: Vec<Point> = Vec::new();
     for dir in dirs {
-        let dir = dir.join("packings");
-        let entries = std::fs::read_dir(&dir).map_err(|e| ReportError::Io {
-            path: dir.clone(),
-            error: e,
-        })?;
-        let mut paths: Vec<_> = entries
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|e| e == "json"))
-            .filter(|p| !p.to_string_lossy().ends_with(".failed.json"))
-            .collect();
-        paths.sort();
-        for path in paths {
+        for path in packing_paths(dir)? {
             let Some(file) = PackingFile::load(&path) else {
                 continue;
             };
