@@ -164,7 +164,7 @@ pub struct Partials {
 /// terms that diverge as `1/r` (such a pair overlaps deeply and any
 /// direction pushes it apart), as the first-order gap does.
 #[inline(always)]
-fn direction(r_ij: &Vector<2>) -> (f64, Vector<2>, f64) {
+pub(crate) fn direction(r_ij: &Vector<2>) -> (f64, Vector<2>, f64) {
     let r = r_ij.norm();
     if r > 0.0 {
         (r, r_ij * (1.0 / r), 1.0 / r)

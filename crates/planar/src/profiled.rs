@@ -38,6 +38,7 @@
 //! mode) gets the unflipped pair, which it cannot tell apart.
 
 use crate::first_order::{Profile, gap_hessian};
+use crate::gap2d::direction;
 use jamkit_core::{
     Angle, Contact, Error, GapHessian, Outline, RotVec, Shape, SharedOutline, Vector,
 };
@@ -201,19 +202,6 @@ impl<P: NearDiskProfile> Profiled<P> {
         };
         [phase(o_i), j]
     }
-
-    /// The unit vector of `r_ij` and `1/|r_ij|`; coincident centres take
-    /// `θ_ij = 0` (deterministic; such a pair overlaps deeply and any
-    /// direction pushes it apart).
-    #[inline(always)]
-    fn direction(r_ij: &Vector<2>) -> (f64, Vector<2>, f64) {
-        let r = r_ij.norm();
-        if r > 0.0 {
-            (r, r_ij * (1.0 / r), 1.0 / r)
-        } else {
-            (r, Vector::<2>::new(1.0, 0.0), 0.0)
-        }
-    }
 }
 
 impl<P: NearDiskProfile> Outline for Profiled<P> {
@@ -308,7 +296,7 @@ impl<P: NearDiskProfile> Shape<2> for Profiled<P> {
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return;
         }
-        let (_, u, inv_r) = Self::direction(r_ij);
+        let (_, u, inv_r) = direction(r_ij);
         let [(ci, si), (cj, sj)] = self.phases(o_i, o_j, &u);
         let (p_i, dp_i) = self.profile.value_slope(ci, si);
         let (p_j, dp_j) = self.profile.value_slope(cj, sj);
@@ -336,7 +324,7 @@ impl<P: NearDiskProfile> Shape<2> for Profiled<P> {
         max_gap: f64,
         mut visit: V,
     ) -> jamkit_core::Result<()> {
-        let (r, u, _) = Self::direction(r_ij);
+        let (r, u, _) = direction(r_ij);
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return Ok(());
         }
