@@ -168,8 +168,9 @@ pub enum BenchCommand {
         /// `engine.skin` in an experiment file).
         #[arg(long, default_value_t = 0.4)]
         skin: f64,
-        /// Minimiser.
-        #[arg(long, value_enum, default_value_t = MinimizerArg::Paper)]
+        /// Minimiser [default: `newton`, as in experiment files; `paper` is
+        /// the paper's FIRE].
+        #[arg(long, value_enum, default_value_t = MinimizerArg::default())]
         minimizer: MinimizerArg,
         /// Force criterion [default: the minimiser's].
         #[arg(long, value_enum)]
@@ -191,11 +192,13 @@ pub enum BenchCommand {
         /// FIRE's largest time step [default: the family's].
         #[arg(long)]
         dt_max: Option<f64>,
-        /// How the bisection decompresses a jammed state
-        /// (`protocol.search`): the paper's halved steps (`bisection`) or
-        /// the step its pressure predicts (`extrapolated`).
-        #[arg(long, value_enum, default_value_t = SearchArg::Bisection)]
-        search: SearchArg,
+        /// How the jamming search decompresses a jammed state
+        /// (`protocol.search`): the step its pressure predicts
+        /// (`extrapolated`) or the paper's halved steps (`bisection`)
+        /// [default: `bisection` with `--minimizer paper`, so that it is the
+        /// paper's path bit for bit; `extrapolated` otherwise].
+        #[arg(long, value_enum)]
+        search: Option<SearchArg>,
         /// Write every minimisation (φ, FIRE steps, Newton iterations, why it
         /// stopped, V/N, Σ g²) of every packing to this CSV (a step trace).
         #[arg(long, value_name = "FILE")]
@@ -291,8 +294,10 @@ pub fn run(what: BenchCommand) -> Result<()> {
         } => {
             let jam_params = JamParams {
                 search: match search {
-                    SearchArg::Bisection => JamSearch::Bisection,
-                    SearchArg::Extrapolated => JamSearch::Extrapolated,
+                    Some(SearchArg::Bisection) => JamSearch::Bisection,
+                    Some(SearchArg::Extrapolated) => JamSearch::Extrapolated,
+                    None if minimizer == MinimizerArg::Paper => JamSearch::Bisection,
+                    None => JamSearch::default(),
                 },
                 ..JamParams::default()
             };

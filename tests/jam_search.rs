@@ -1,13 +1,14 @@
 //! The extrapolated jamming search (`protocol.search: Extrapolated`): the
 //! slope it extrapolates with is the derivative of the relaxed energy
 //! (finite differences), one leap lands where `V/N ∝ (φ − φ_J)²` says, the
-//! search ends in the paper's window, and the paper's `Bisection` stays
-//! the default, left out of recorded settings.
+//! search ends in the paper's window, and it is the default, with the
+//! paper's `Bisection` left out of recorded settings.
 
 use jamkit_core::{Potential, Shape};
 use jamkit_engine::{
     Fire, FireParams, JamParams, JamSearch, Objective, Scene, energy_slope, extrapolated_step, jam,
 };
+use jamkit_experiment::{Experiment, grid, runner};
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_sphere::Sphere;
 
@@ -159,23 +160,74 @@ fn extrapolated_search_ends_in_the_window_in_fewer_minimisations() {
     );
 }
 
-/// The paper's bisection is the default and is not written into recorded
-/// settings (packings made before the option existed still resume);
-/// `Extrapolated` is written and read back.
+/// `Extrapolated` is the default (its ensembles are the bisection's:
+/// docs/performance.md). `experiment.ron` always names the search, so a run
+/// directory reads back as the search it was made with; a packing's
+/// recorded settings leave out `search: Bisection`, as packings made before
+/// the field existed (all bisection packings) record nothing, so that those
+/// still resume under an explicit `Bisection`, and never under the default.
 #[test]
-fn bisection_is_the_default_and_left_out_of_settings() {
-    let default = JamParams::default();
-    assert_eq!(default.search, JamSearch::Bisection);
-    let text = ron::to_string(&default).unwrap();
-    assert!(!text.contains("search"), "{text}");
-    let leaps = JamParams {
-        search: JamSearch::Extrapolated,
-        ..default
+fn extrapolated_is_the_default_and_bisection_is_left_out_of_settings() {
+    assert_eq!(JamParams::default().search, JamSearch::Extrapolated);
+    let protocol = |search: &str| {
+        let text = format!(
+            r#"(name: "s", family: "sphere", dim: 2, particles: 8, samples: 1, seed: 1{search})"#
+        );
+        let e = Experiment::from_ron(&text, "inline").unwrap();
+        let points = grid::points(&e).unwrap();
+        let jobs = grid::jobs(&e, &points);
+        let settings = runner::settings(&e, &points[0], &jobs[0]);
+        let written = ron::ser::to_string(&e).unwrap();
+        (settings["protocol"]["Jam"].get("search").cloned(), written)
     };
-    let text = ron::to_string(&leaps).unwrap();
-    assert!(text.contains("search:Extrapolated"), "{text}");
-    let back: JamParams = ron::from_str(&text).unwrap();
-    assert_eq!(back, leaps);
+    let (default, written) = protocol("");
+    assert_eq!(default, Some(serde_json::json!("Extrapolated")));
+    assert!(written.contains("search:Extrapolated"), "{written}");
+    let (explicit, written) = protocol(", protocol: Jam(search: Extrapolated)");
+    assert_eq!(explicit, default);
+    assert!(written.contains("search:Extrapolated"), "{written}");
+    let (bisection, written) = protocol(", protocol: Jam(search: Bisection)");
+    assert_eq!(bisection, None, "bisection settings name no search");
+    assert!(written.contains("search:Bisection"), "{written}");
+    let back = Experiment::from_ron(&written, "experiment.ron").unwrap();
+    assert_eq!(ron::ser::to_string(&back).unwrap(), written);
     let err = ron::from_str::<JamParams>("(search: Halving)").unwrap_err();
     assert!(err.to_string().contains("Halving"), "{err}");
+}
+
+/// A run directory of bisection packings (as every run made before
+/// `Extrapolated` became the default) is refused under the default, with
+/// the search named and the fix said, and resumed under an explicit
+/// `search: Bisection`.
+#[test]
+fn bisection_packings_are_refused_under_the_default_and_resume_as_bisection() {
+    let dir = tempfile::tempdir().unwrap();
+    let experiment = |protocol: &str| {
+        let text = format!(
+            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3{protocol})"#
+        );
+        Experiment::from_ron(&text, "inline").unwrap()
+    };
+    let bisection = experiment(", protocol: Jam(search: Bisection)");
+    let made = common::run_ok(&bisection, dir.path(), 1);
+    assert_eq!((made.packings.len(), made.reused), (2, 0));
+    let options = runner::RunOptions {
+        out: dir.path().to_path_buf(),
+        jobs: Some(1),
+        log: jamkit_experiment::Log::Quiet,
+        shard: None,
+    };
+    let err = runner::run(&experiment(""), &options)
+        .unwrap_err()
+        .to_string();
+    for part in [
+        "protocol.Jam.search",
+        "\"Extrapolated\"",
+        "\"Bisection\" (not written",
+        "add `search: Bisection`",
+    ] {
+        assert!(err.contains(part), "{part:?} missing from: {err}");
+    }
+    let again = common::run_ok(&bisection, dir.path(), 1);
+    assert_eq!((again.packings.len(), again.reused), (2, 2));
 }

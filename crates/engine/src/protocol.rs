@@ -30,12 +30,10 @@ pub struct JamParams {
     pub energy_high: f64,
     /// Give up after this many changes of `φ`.
     pub max_density_steps: u64,
-    /// How a jammed state (`V/N ≥ E_high`) is decompressed: by the paper's
-    /// halved steps (`Bisection`, the default) or by the step that the
-    /// state's own pressure predicts (`Extrapolated`). Left out of the
-    /// recorded settings when `Bisection`, so that packings made before it
-    /// existed still resume.
-    #[serde(skip_serializing_if = "JamSearch::is_bisection")]
+    /// How a jammed state (`V/N ≥ E_high`) is decompressed: by the step
+    /// that the state's own pressure predicts (`Extrapolated`, the default)
+    /// or by the paper's halved steps (`Bisection`, the paper's path bit for
+    /// bit).
     pub search: JamSearch,
 }
 
@@ -43,17 +41,19 @@ pub struct JamParams {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum JamSearch {
     /// The paper's: reverse and halve `ε` on every crossing of `E_low`.
-    #[default]
     Bisection,
     /// The paper's moves, except that a jammed state's decompression is
     /// the step to the window that `V/N ∝ (φ − φ_J)^α` predicts from its
     /// `V/N` and its pressure (module docs), where that step stays above
-    /// the last unjammed `φ`.
+    /// the last unjammed `φ`. The default since its ensembles were shown
+    /// to be the bisection's (docs/performance.md).
+    #[default]
     Extrapolated,
 }
 
 impl JamSearch {
-    /// `Bisection` (left out of recorded settings).
+    /// `Bisection` (left out of a packing's recorded settings, as before the
+    /// field existed, so that bisection packings made then still resume).
     pub fn is_bisection(&self) -> bool {
         *self == JamSearch::Bisection
     }
@@ -66,7 +66,7 @@ impl Default for JamParams {
             energy_low: 1e-16,
             energy_high: 2e-16,
             max_density_steps: 200_000,
-            search: JamSearch::Bisection,
+            search: JamSearch::Extrapolated,
         }
     }
 }

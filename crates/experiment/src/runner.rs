@@ -235,7 +235,13 @@ fn refuse_other_settings(
             continue;
         };
         let wanted = settings(experiment, &points[job.point], job);
-        if let Some((key, here, there)) = lock::first_difference(&wanted, &old.settings) {
+        if let Some((key, here, mut there)) = lock::first_difference(&wanted, &old.settings) {
+            if key == "protocol.Jam.search" && there == "(not set)" {
+                // Bisection packings record no search (`protocol_settings`).
+                there = "\"Bisection\" (not written; the default before \"Extrapolated\": \
+                         add `search: Bisection` to the protocol to resume them)"
+                    .to_string();
+            }
             return Err(ExperimentError::SettingsDiffer {
                 file: path.display().to_string(),
                 key,
@@ -354,12 +360,28 @@ pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json
         "particles": point.particles,
         "seed": job.seed,
         "sizes": e.sizes,
-        "protocol": e.protocol,
+        "protocol": protocol_settings(&e.protocol),
         "minimizer": minimizer,
         "potential": e.potential,
         "rattlers": e.rattlers,
         "engine": e.engine,
     })
+}
+
+/// The protocol as a packing records it: as written to `experiment.ron`,
+/// except that `search: Bisection` is left out. Packings made before the
+/// field existed were bisection packings and record no `search`, so they
+/// still resume under an explicit `search: Bisection`; the default,
+/// `Extrapolated`, is always written, so no packing of one search is ever
+/// taken for the other's.
+fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
+    let mut value = serde_json::to_value(protocol).expect("protocol serialises");
+    if let Some(jam) = value.get_mut("Jam").and_then(|j| j.as_object_mut())
+        && jam.get("search") == Some(&serde_json::json!("Bisection"))
+    {
+        jam.remove("search");
+    }
+    value
 }
 
 /// The observables of `experiment`, as stored with each packing.

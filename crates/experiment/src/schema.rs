@@ -140,10 +140,12 @@ pub enum Protocol {
         /// (docs/sanity.md), so the escape is a diagnostic, not a fix.
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         escape_saddles: bool,
-        /// How a jammed state is decompressed: `Bisection` (the paper's
-        /// halved steps, the default, not written out) or `Extrapolated`
-        /// (the step its pressure predicts; docs/physics.md).
-        #[serde(default, skip_serializing_if = "JamSearch::is_bisection")]
+        /// How a jammed state is decompressed: `Extrapolated` (the step its
+        /// pressure predicts, the default; docs/physics.md) or `Bisection`
+        /// (the paper's halved steps, the paper's path bit for bit). Always
+        /// written to `experiment.ron`; left out of a packing's settings
+        /// when `Bisection` (`runner::settings`).
+        #[serde(default)]
         search: JamSearch,
     },
     /// Compress in steps of `eps` to packing fraction `phi`.
@@ -204,7 +206,7 @@ impl Default for Protocol {
             energy_high: default_energy_high(),
             max_density_steps: default_max_density_steps(),
             escape_saddles: false,
-            search: JamSearch::Bisection,
+            search: JamSearch::default(),
         }
     }
 }
