@@ -20,8 +20,8 @@
 
 use jamkit_core::Shape;
 use jamkit_engine::{Fire, FireParams, Objective, Scene};
-use jamkit_experiment::record::PackingFile;
 use jamkit_experiment::reload::{PackingVisitor, reload};
+use jamkit_format::PackingFile;
 use jamkit_observe::hessian::{Hessian, HessianOptions};
 use jamkit_observe::spectrum::omega_max_sq;
 

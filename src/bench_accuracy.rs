@@ -651,7 +651,7 @@ pub fn run(o: &Options) -> Result<()> {
 }
 
 fn write(path: &Path, text: &str) -> Result<()> {
-    jamkit_experiment::record::write_atomic(path, text.as_bytes())
+    jamkit_format::write_atomic(path, text.as_bytes())
         .with_context(|| format!("writing {}", path.display()))
 }
 

@@ -267,10 +267,10 @@ fn real_main() -> Result<()> {
             let files = packing_files(&path)?;
             let mut text = String::new();
             for f in &files {
-                let file = jamkit_experiment::record::PackingFile::load_checked(f)?;
+                let file = jamkit_format::PackingFile::load_checked(f)?;
                 text.push_str(&jamkit_experiment::extxyz::frame(&file)?);
             }
-            jamkit_experiment::record::write_atomic(&out, text.as_bytes())?;
+            jamkit_format::write_atomic(&out, text.as_bytes())?;
             out!("{} frames in {}", files.len(), out.display());
             Ok(())
         }
@@ -454,7 +454,7 @@ fn real_main() -> Result<()> {
                 jamkit_experiment::analyze::analyze(packing, &observables)?;
             packing.save(&out)?;
             if let Some(table) = table {
-                jamkit_experiment::record::write_atomic(
+                jamkit_format::write_atomic(
                     &out.with_extension("eigenvalues.csv"),
                     table.as_bytes(),
                 )?;
@@ -520,7 +520,7 @@ fn real_main() -> Result<()> {
                 use std::io::Write;
                 let _ = std::io::stdout().write_all(text.as_bytes());
             } else {
-                jamkit_experiment::record::write_atomic(&out, text.as_bytes())?;
+                jamkit_format::write_atomic(&out, text.as_bytes())?;
                 out!(
                     "{}: {summary}; written to {}",
                     packing.display(),

@@ -3,8 +3,8 @@
 use anyhow::{Context, Result};
 use jamkit_core::Shape;
 use jamkit_engine::Scene;
-use jamkit_experiment::record::PackingFile;
 use jamkit_experiment::reload::{PackingVisitor, reload};
+use jamkit_format::PackingFile;
 use jamkit_observe::hessian::HessianOptions;
 use jamkit_observe::spectrum::{self, DosParams};
 use std::path::Path;

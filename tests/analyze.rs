@@ -5,8 +5,8 @@
 //! and what was expected.
 
 use jamkit_experiment::analyze::{ReadOptions, analyze, parse_observables, read};
-use jamkit_experiment::record::PackingFile;
 use jamkit_experiment::{Experiment, extxyz};
+use jamkit_format::PackingFile;
 use std::fmt::Write as _;
 mod common;
 

@@ -4,7 +4,7 @@
 
 use jamkit_experiment::Experiment;
 use jamkit_experiment::archive::archive;
-use jamkit_experiment::record::{PackingFile, without_configuration};
+use jamkit_format::{PackingFile, without_configuration};
 mod common;
 
 #[test]

@@ -7,9 +7,9 @@ use common::{run_into, run_ok};
 use jamkit_core::Shape;
 use jamkit_engine::{Objective, Scene};
 use jamkit_experiment::Experiment;
-use jamkit_experiment::record::PackingFile;
 use jamkit_experiment::reload::{PackingVisitor, reload};
 use jamkit_experiment::runner::failed_path;
+use jamkit_format::PackingFile;
 use jamkit_observe::hessian::{Hessian, HessianOptions};
 use jamkit_observe::spectrum::omega_max_sq;
 

@@ -1,7 +1,7 @@
 //! Small-N jamming end to end, in 2D and 3D, through the experiment runner.
 
 use jamkit_experiment::Experiment;
-use jamkit_experiment::record::PackingFile;
+use jamkit_format::PackingFile;
 mod common;
 use common::run_into;
 

@@ -422,7 +422,7 @@ fn gap_second_derivatives_match_finite_differences() {
 
 /// Run `file` (under `experiments/`) with overrides into a temporary
 /// directory; no sample may fail.
-fn run_small(file: &str, sets: &[&str]) -> Vec<jamkit_experiment::record::PackingFile> {
+fn run_small(file: &str, sets: &[&str]) -> Vec<jamkit_format::PackingFile> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
     let e = Experiment::from_file(&path).unwrap();
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
@@ -446,7 +446,7 @@ fn run_small(file: &str, sets: &[&str]) -> Vec<jamkit_experiment::record::Packin
 /// Contacts among non-rattlers recomputed from the packing file's `spheres`
 /// rows alone (centres, radii, body index; minimum image in the box), with
 /// no knowledge of orientations: the indices of the two spheres of each.
-fn contacts_from_spheres(p: &jamkit_experiment::record::PackingFile) -> Vec<(usize, usize)> {
+fn contacts_from_spheres(p: &jamkit_format::PackingFile) -> Vec<(usize, usize)> {
     let d = p.dim;
     let mut found = Vec::new();
     for (a, s) in p.spheres.iter().enumerate() {
@@ -475,7 +475,7 @@ fn contacts_from_spheres(p: &jamkit_experiment::record::PackingFile) -> Vec<(usi
 /// coordinates (its rotation about that sphere is free), one touching on
 /// both spheres `r_b = 3` (in 2D two spheres' contacts always pin the
 /// rotation, barring an exactly degenerate arrangement).
-fn z_iso_2d_from_spheres(p: &jamkit_experiment::record::PackingFile) -> f64 {
+fn z_iso_2d_from_spheres(p: &jamkit_format::PackingFile) -> f64 {
     let (mut coordinates, mut kept) = (0, 0);
     for (body, t) in spheres_touched(p).iter().enumerate() {
         if !p.rattler[body] {
@@ -489,7 +489,7 @@ fn z_iso_2d_from_spheres(p: &jamkit_experiment::record::PackingFile) -> f64 {
 /// Which of its two spheres each dimer touches a non-rattler with, from
 /// the `spheres` rows alone (the two spheres of body k are rows 2k and
 /// 2k + 1).
-fn spheres_touched(p: &jamkit_experiment::record::PackingFile) -> Vec<[bool; 2]> {
+fn spheres_touched(p: &jamkit_format::PackingFile) -> Vec<[bool; 2]> {
     let mut touched = vec![[false; 2]; p.particles];
     for (a, b) in contacts_from_spheres(p) {
         for s in [a, b] {
@@ -505,7 +505,7 @@ fn spheres_touched(p: &jamkit_experiment::record::PackingFile) -> Vec<[bool; 2]>
 /// Both spheres pin the rotation of a dimer in 2D and the two rotations
 /// that are coordinates in 3D (the spin about the axis is none), barring
 /// an exactly degenerate arrangement.
-fn rot_rattlers_from_spheres(p: &jamkit_experiment::record::PackingFile) -> usize {
+fn rot_rattlers_from_spheres(p: &jamkit_format::PackingFile) -> usize {
     spheres_touched(p)
         .iter()
         .enumerate()

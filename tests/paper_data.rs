@@ -3,7 +3,7 @@
 //! profile, and `jamkit report` regenerates the report from a slice of
 //! them (the n = 2 packings), with φ_J as the files say.
 
-use jamkit_experiment::record::PackingFile;
+use jamkit_format::PackingFile;
 use std::path::{Path, PathBuf};
 
 fn data(dir: &str) -> PathBuf {

@@ -9,7 +9,7 @@
 use crate::DrawError;
 use crate::colors::{Rgb, size_colors};
 use crate::geometry::{Outline, Point, periodic_pieces};
-use jamkit_experiment::record::PackingFile;
+use jamkit_format::PackingFile;
 use std::path::Path;
 
 /// One body: centre (wrapped into the box), size `R⁰`, orientation `θ`.

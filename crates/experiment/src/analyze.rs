@@ -24,12 +24,12 @@
 //! Errors name the file, the line and what was expected there.
 
 use crate::error::ExperimentError;
-use crate::record::{Measures, PackingFile};
 use crate::reload::{PackingVisitor, reload};
 use crate::runner;
 use crate::schema::{Experiment, Observable};
 use jamkit_core::Shape;
 use jamkit_engine::{Objective, Scene};
+use jamkit_format::{Measures, PackingFile};
 use std::path::Path;
 
 /// How to read a file that does not say everything itself.

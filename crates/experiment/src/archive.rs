@@ -5,7 +5,7 @@
 //! it the configuration (centres, sizes, orientations, rattler flags); the
 //! measures that `jamkit report` reads (φ_J, contacts, the binned spectrum,
 //! the gap counts) take 2–5 kB. The archive holds every packing file of the
-//! run with its configuration left out ([`record::without_configuration`]),
+//! run with its configuration left out ([`format::without_configuration`]),
 //! the run's `experiment.ron` and its tables (`*.csv`) as they are. A packing
 //! in flight (its lock present) is left out, since a process may be adding
 //! observables to it; an unreadable one is refused by name. The packings a
@@ -17,7 +17,7 @@
 //! made again.
 
 use crate::error::ExperimentError;
-use crate::record::{self, PackingFile};
+use jamkit_format::{self as format, PackingFile};
 use std::path::Path;
 
 /// What an archive holds.
@@ -59,7 +59,7 @@ pub fn archive(dir: &Path, out: &Path) -> Result<ArchiveReport, ExperimentError>
     };
     for path in paths.iter().filter(|p| is_packing(p)) {
         let file = PackingFile::load_checked(path)?;
-        let kept = record::without_configuration(&file);
+        let kept = format::without_configuration(&file);
         let target = out_packings.join(path.file_name().expect("a listed file has a name"));
         kept.save(&target)?;
         report.packings += 1;
@@ -73,7 +73,7 @@ pub fn archive(dir: &Path, out: &Path) -> Result<ArchiveReport, ExperimentError>
         let Some(name) = name else { continue };
         if name == "experiment.ron" || name.ends_with(".csv") {
             let bytes = std::fs::read(&path).map_err(|e| ExperimentError::io(&path, e))?;
-            record::write_atomic(&out.join(&name), &bytes)?;
+            format::write_atomic(&out.join(&name), &bytes)?;
         }
     }
     Ok(report)

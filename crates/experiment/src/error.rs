@@ -51,7 +51,7 @@ pub enum ExperimentError {
         /// The configuration the engine stopped at, when there is one to
         /// look at (a minimisation that did not converge); the runner
         /// saves it as `packings/<id>.failed.json` and sets `saved`.
-        state: Option<Box<crate::record::PackingFile>>,
+        state: Option<Box<jamkit_format::PackingFile>>,
         /// Where `state` was saved.
         saved: Option<String>,
     },
@@ -93,6 +93,25 @@ impl ExperimentError {
         Self::Io {
             path: path.as_ref().display().to_string(),
             source,
+        }
+    }
+}
+
+impl From<jamkit_format::FormatError> for ExperimentError {
+    fn from(e: jamkit_format::FormatError) -> Self {
+        use jamkit_format::FormatError as F;
+        match e {
+            F::Parse { file, message } => Self::Parse { file, message },
+            F::Invalid {
+                field,
+                value,
+                allowed,
+            } => Self::Invalid {
+                field,
+                value,
+                allowed,
+            },
+            F::Io { path, source } => Self::Io { path, source },
         }
     }
 }

@@ -21,10 +21,10 @@
 //! double, so nothing is lost.
 
 use crate::error::ExperimentError;
-use crate::record::PackingFile;
 use crate::reload::{PackingVisitor, reload};
 use jamkit_core::Shape;
 use jamkit_engine::Scene;
+use jamkit_format::PackingFile;
 use std::fmt::Write;
 
 /// Contacts per body of the packing in `file` (`h < 0`).

@@ -11,9 +11,9 @@
 use crate::error::ExperimentError;
 use crate::grid;
 use crate::lock::first_difference;
-use crate::record::{self, PackingFile};
 use crate::runner;
 use crate::schema::Experiment;
+use jamkit_format::{self as format, PackingFile};
 use std::path::{Path, PathBuf};
 
 /// What a merge gathered.
@@ -152,11 +152,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeReport, ExperimentErro
             let dir = out.join("eigenvalues");
             std::fs::create_dir_all(&dir).map_err(|e| ExperimentError::io(&dir, e))?;
             let text = std::fs::read(&table).map_err(|e| ExperimentError::io(&table, e))?;
-            record::write_atomic(&dir.join(format!("{}.csv", job.id)), &text)?;
+            format::write_atomic(&dir.join(format!("{}.csv", job.id)), &text)?;
         }
         file.save(&packing_dir.join(format!("{}.json", job.id)))?;
     }
-    record::write_atomic(&out.join("experiment.ron"), text.as_bytes())?;
+    format::write_atomic(&out.join("experiment.ron"), text.as_bytes())?;
     runner::tables_of(&experiment, &packings, out)?;
     Ok(MergeReport {
         packings: packings.len(),

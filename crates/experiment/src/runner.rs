@@ -9,7 +9,6 @@ use crate::batchlog::{BatchLog, Log};
 use crate::error::ExperimentError;
 use crate::grid::{self, Job, Point};
 use crate::lock;
-use crate::record::{self, Measures, PackingFile, SpectrumMeasures};
 use crate::registry::{self, SceneVisitor};
 use crate::reload::{PackingVisitor, reload};
 use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
@@ -17,6 +16,7 @@ use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
     Fire, JamParams, PressureParams, Progress, Scene, compress_to_phi, compress_to_pressure, jam,
 };
+use jamkit_format::{self as format, Measures, PackingFile, SpectrumMeasures};
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::saddle::{self, SaddleParams};
 use jamkit_observe::spectrum::{self, Spectrum};
@@ -55,7 +55,7 @@ pub struct RunReport {
     /// Samples that failed, with their errors.
     pub failures: Vec<ExperimentError>,
     /// Per-point summaries, in grid order.
-    pub summaries: Vec<record::PointSummary>,
+    pub summaries: Vec<format::PointSummary>,
     /// Packings another process was making (their lock was held): left to
     /// it; a later run gathers them. No tables are written while any is.
     pub elsewhere: Vec<String>,
@@ -88,7 +88,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
     std::fs::create_dir_all(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;
     let effective = ron::ser::to_string_pretty(experiment, ron::ser::PrettyConfig::default())
         .expect("experiment serialises");
-    record::write_atomic(&options.out.join("experiment.ron"), effective.as_bytes())?;
+    format::write_atomic(&options.out.join("experiment.ron"), effective.as_bytes())?;
 
     let log = BatchLog::new(options.log, jobs.len());
     // The packings finished so far, in grid order and without their
@@ -105,12 +105,13 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             return Ok(());
         }
         let mut done = finished.lock().unwrap_or_else(|e| e.into_inner());
-        done.insert(order[job.id.as_str()], record::without_configuration(file));
+        done.insert(order[job.id.as_str()], format::without_configuration(file));
         let rows: Vec<PackingFile> = done.values().cloned().collect();
-        record::write_atomic(
+        format::write_atomic(
             &options.out.join("results.csv"),
-            record::results_csv(&rows).as_bytes(),
-        )
+            format::results_csv(&rows).as_bytes(),
+        )?;
+        Ok(())
     };
     let make = |job: &Job| -> Result<Outcome, ExperimentError> {
         let path = packing_dir.join(format!("{}.json", job.id));
@@ -154,7 +155,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         if let Some(table) = eigen {
             let dir = options.out.join("eigenvalues");
             std::fs::create_dir_all(&dir).map_err(|e| ExperimentError::io(&dir, e))?;
-            record::write_atomic(&dir.join(format!("{}.csv", job.id)), table.as_bytes())?;
+            format::write_atomic(&dir.join(format!("{}.csv", job.id)), table.as_bytes())?;
         }
         file.save(&path)?;
         // A stalled configuration from an earlier attempt is stale now.
@@ -201,7 +202,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         }
     }
     let groups = group_by_point(experiment, &points, &jobs, &packings);
-    let summaries = record::summarize_points(&groups);
+    let summaries = format::summarize_points(&groups);
     if options.shard.is_some() || !elsewhere.is_empty() {
         return Ok(RunReport {
             packings,
@@ -294,19 +295,19 @@ fn write_tables(
     groups: &[(String, Vec<&PackingFile>)],
     out: &Path,
 ) -> Result<(), ExperimentError> {
-    record::write_atomic(
+    format::write_atomic(
         &out.join("results.csv"),
-        record::results_csv(packings).as_bytes(),
+        format::results_csv(packings).as_bytes(),
     )?;
-    record::write_atomic(
+    format::write_atomic(
         &out.join("summary.csv"),
-        record::summary_csv(groups).as_bytes(),
+        format::summary_csv(groups).as_bytes(),
     )?;
     if experiment.spectrum().is_some() {
-        record::write_atomic(&out.join("dos.csv"), record::dos_csv(groups).as_bytes())?;
+        format::write_atomic(&out.join("dos.csv"), format::dos_csv(groups).as_bytes())?;
     }
     if experiment.gaps().is_some() {
-        record::write_atomic(&out.join("gaps.csv"), record::gaps_csv(groups).as_bytes())?;
+        format::write_atomic(&out.join("gaps.csv"), format::gaps_csv(groups).as_bytes())?;
     }
     Ok(())
 }

@@ -2,7 +2,7 @@
 //! near-disk ensembles: family, mode number `n`, amplitude `Δ` and `N`.
 
 use crate::ReportError;
-use jamkit_experiment::record::PackingFile;
+use jamkit_format::PackingFile;
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::spectrum::{DosHistogram, DosParams};
 use std::path::{Path, PathBuf};
@@ -163,5 +163,5 @@ fn richness(f: &PackingFile) -> usize {
 /// there are none).
 pub fn mean_sem<T>(items: &[T], f: impl Fn(&T) -> Option<f64>) -> (f64, f64) {
     let v: Vec<f64> = items.iter().filter_map(f).collect();
-    jamkit_experiment::record::mean_sem(&v)
+    jamkit_format::mean_sem(&v)
 }

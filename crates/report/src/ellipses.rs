@@ -9,7 +9,7 @@
 use crate::ReportError;
 use crate::data::{Point, mean_sem, packing_paths};
 use crate::plot::{Figure, Series};
-use jamkit_experiment::record::PackingFile;
+use jamkit_format::PackingFile;
 use plotters::prelude::SeriesLabelPosition;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

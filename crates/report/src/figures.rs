@@ -379,7 +379,7 @@ impl Builder {
                 points: values
                     .iter()
                     .map(|(d, v, _)| {
-                        let (m, e) = jamkit_experiment::record::mean_sem(v);
+                        let (m, e) = jamkit_format::mean_sem(v);
                         (*d, m, e)
                     })
                     .collect(),
@@ -388,7 +388,7 @@ impl Builder {
             let fit_points: Vec<(f64, Vec<f64>)> = values
                 .iter()
                 .filter(|(d, v, nnr)| {
-                    let m = jamkit_experiment::record::mean_sem(v).0;
+                    let m = jamkit_format::mean_sem(v).0;
                     *d <= 0.1 && m >= 8.0 / nnr
                 })
                 .map(|(d, v, _)| (*d, v.clone()))
@@ -497,7 +497,7 @@ impl Builder {
                 stat(&pick)
             })
             .collect();
-        jamkit_experiment::record::mean_sem(&values).1 * (values.len() as f64).sqrt()
+        jamkit_format::mean_sem(&values).1 * (values.len() as f64).sqrt()
     }
 
     /// Fig. 9: n = 2 at several N, and the collapse.

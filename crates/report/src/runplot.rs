@@ -23,7 +23,7 @@ use crate::ReportError;
 use crate::data::packing_paths;
 use crate::plot::{Figure, Series};
 use jamkit_core::stats::mean_sem;
-use jamkit_experiment::record::{PackingFile, pooled_histogram};
+use jamkit_format::{PackingFile, pooled_histogram};
 use jamkit_observe::gaps::GapCounts;
 use plotters::prelude::SeriesLabelPosition;
 use std::collections::BTreeMap;

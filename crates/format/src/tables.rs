@@ -1,332 +1,26 @@
-//! What a run writes: one JSON file per packing, `results.csv` with a row per
-//! packing, `summary.csv` with mean and standard error per parameter point.
-//! Every file is written to a temporary name and renamed into place, so a
-//! killed run never leaves a half-written file; the packing files are also
-//! the checkpoint from which a rerun resumes. Formats: `docs/formats.md`.
+//! The tables a run writes beside its packings: `results.csv` (a row per
+//! packing), `summary.csv` (mean and standard error per parameter point),
+//! `dos.csv` (pooled `D(ω)`) and `gaps.csv` (pooled `Z(h)`). Cells are
+//! formatted here (one number format per column, an empty cell for what
+//! was not measured or a mean of nothing); quoting and line ends are the
+//! `csv` crate's. Columns: `docs/formats.md`.
 
-use crate::error::ExperimentError;
-use jamkit_observe::gaps::GapCounts;
-use jamkit_observe::spectrum::{DosHistogram, DosParams, ZeroModes};
-use serde::{Deserialize, Serialize};
-use std::path::Path;
+use crate::record::{PackingFile, SpectrumMeasures};
+use jamkit_core::stats::mean_sem;
+use jamkit_observe::spectrum::DosHistogram;
 
-/// The values measured on one packing (one row of `results.csv`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Measures {
-    /// Packing fraction at the end of the protocol (φ_J for `Jam`).
-    pub phi: f64,
-    /// `V/N` at the end.
-    pub energy_per_particle: f64,
-    /// Contacts among non-rattlers, `N_c`.
-    pub n_contacts: Option<usize>,
-    /// Number of rattlers.
-    pub n_rattlers: Option<usize>,
-    /// `z_J = 2 N_c / N_nr`.
-    pub z_j: Option<f64>,
-    /// `N_c − (f N_nr − d)`.
-    pub iso_margin: Option<i64>,
-    /// Virial pressure.
-    pub pressure: Option<f64>,
-    /// FIRE steps over the whole protocol.
-    pub fire_steps: u64,
-    /// Minimisations (density changes + 1).
-    pub minimizations: u64,
-    /// Wall-clock seconds for the protocol and the observables.
-    pub wall_s: f64,
-    /// Empty, or why this packing deserves a second look.
-    pub flag: String,
-    /// Saddle escapes made after the jamming bisection (`None`: the escape
-    /// was off), see `jamkit_observe::saddle`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub saddle_escapes: Option<u32>,
-    /// The Hessian's spectrum, when asked for.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub spectrum: Option<SpectrumMeasures>,
-    /// Gap counts below each sample point, when asked for.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub gaps: Option<GapCounts>,
-    /// Rotational rattlers: non-rattlers whose contacts constrain fewer
-    /// than `f` of their coordinates (a body made of spheres held on one
-    /// sphere), see `jamkit_observe::JammingSummary`. 0 when rattlers go by
-    /// count; `None` in files written before it was recorded.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub n_rot_rattlers: Option<usize>,
-    /// Their free coordinates, `Σ_b (f − r_b)` over the non-rattlers.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub free_rotations: Option<usize>,
-}
-
-/// The spectrum of one packing, as stored.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SpectrumMeasures {
-    /// Rows of the Hessian (`N_dof`).
-    pub coordinates: usize,
-    /// Zero modes by origin.
-    pub zero_modes: ZeroModes,
-    /// Smallest eigenvalue.
-    pub lambda_min: f64,
-    /// Largest eigenvalue.
-    pub lambda_max: f64,
-    /// The binned frequencies (summed over samples for `dos.csv`).
-    pub histogram: DosHistogram,
-    /// The bins and thresholds used.
-    pub dos: DosParams,
-    /// Seconds for assembly and diagonalisation.
-    pub wall_s: f64,
-}
-
-/// One packing on disk (`packings/<id>.json`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PackingFile {
-    /// Identifier (also the file name).
-    pub id: String,
-    /// The experiment's name.
-    pub experiment: String,
-    /// Family name.
-    pub family: String,
-    /// Family parameters at this grid point.
-    pub params: serde_json::Value,
-    /// Spatial dimension.
-    pub dim: usize,
-    /// Number of bodies.
-    pub particles: usize,
-    /// Seed of the random start.
-    pub seed: u64,
-    /// Protocol name (`jam`, `phi`, `pressure`).
-    pub protocol: String,
-    /// Every setting that shapes this packing (family, parameters, sizes,
-    /// protocol, minimiser, potential, rattlers, engine): a rerun reuses the
-    /// file only if these are unchanged.
-    pub settings: serde_json::Value,
-    /// The observables measured on it; a rerun that asks for others
-    /// measures them again on the saved configuration.
-    #[serde(default)]
-    pub observables: serde_json::Value,
-    /// Packing fraction.
-    pub phi: f64,
-    /// `V/N`.
-    pub energy_per_particle: f64,
-    /// Everything measured.
-    pub measures: Measures,
-    /// Box edge lengths.
-    #[serde(rename = "box")]
-    pub box_edges: Vec<f64>,
-    /// Centres (N × D), empty when `output.packings` is false.
-    pub positions: Vec<Vec<f64>>,
-    /// Size `R⁰` of each body.
-    pub radii: Vec<f64>,
-    /// Orientation coordinates (N × k); empty for spheres.
-    pub orientations: Vec<Vec<f64>>,
-    /// Rattler flags (empty when contacts were not measured).
-    pub rattler: Vec<bool>,
-    /// For bodies made of spheres (`Shape::sphere_decomposition`), every
-    /// sphere as `[x, y(, z), radius, body]`: world-frame centre (the
-    /// body's wrapped centre plus the sphere's offset, so it may lie just
-    /// outside the box), radius and body index. Absent for other families
-    /// and when `output.packings` is false.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub spheres: Vec<Vec<f64>>,
-}
-
-/// `file` without its configuration (centres, sizes, orientations,
-/// rattler flags, spheres): what the tables need, at a fraction of the
-/// memory.
-pub fn without_configuration(file: &PackingFile) -> PackingFile {
-    PackingFile {
-        positions: Vec::new(),
-        radii: Vec::new(),
-        orientations: Vec::new(),
-        rattler: Vec::new(),
-        spheres: Vec::new(),
-        ..file.clone()
+/// `head` and `rows` as CSV text: a cell is quoted where it holds a comma,
+/// a quote or a line end; every row has the header's columns.
+fn table(head: &[String], rows: Vec<Vec<String>>) -> String {
+    let mut w = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    for row in std::iter::once(head).chain(rows.iter().map(Vec::as_slice)) {
+        debug_assert_eq!(row.len(), head.len(), "a row of {} cells", row.len());
+        w.write_record(row).expect("writing to memory cannot fail");
     }
-}
-
-/// Write `contents` to `path` atomically (temporary file, then rename).
-pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), ExperimentError> {
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, contents).map_err(|e| ExperimentError::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| ExperimentError::io(path, e))
-}
-
-impl PackingFile {
-    /// Save as pretty JSON.
-    pub fn save(&self, path: &Path) -> Result<(), ExperimentError> {
-        let text = serde_json::to_vec_pretty(self).expect("a packing serialises");
-        write_atomic(path, &text)
-    }
-
-    /// Load; `None` if the file is missing or unreadable (then it is redone).
-    pub fn load(path: &Path) -> Option<Self> {
-        let text = std::fs::read(path).ok()?;
-        serde_json::from_slice(&text).ok()
-    }
-
-    /// Load, with an error that says what is wrong with the file: not a
-    /// packing record, or one whose configuration no computation can use
-    /// ([`PackingFile::check`]).
-    pub fn load_checked(path: &Path) -> Result<Self, ExperimentError> {
-        let text = std::fs::read(path).map_err(|e| ExperimentError::io(path, e))?;
-        let file: Self = serde_json::from_slice(&text).map_err(|e| ExperimentError::Parse {
-            file: path.display().to_string(),
-            message: format!("not a jamkit packing file: {e}"),
-        })?;
-        file.check_as(path.display())?;
-        Ok(file)
-    }
-
-    /// The configuration is usable: `dim` from 2 to 4, `box` of `dim`
-    /// positive finite edges, and (when the configuration is stored) one
-    /// centre of `dim` finite coordinates, one positive finite size and
-    /// (if any) one row of finite orientation coordinates per body. The
-    /// first offence as `(field, value, what is allowed)`.
-    pub fn check(&self) -> Result<(), (String, String, String)> {
-        let bad = |field: String, value: String, allowed: &str| Err((field, value, allowed.into()));
-        if !(2..=4).contains(&self.dim) {
-            return bad("dim".into(), self.dim.to_string(), "must be 2, 3 or 4");
-        }
-        if self.box_edges.len() != self.dim {
-            return bad(
-                "box".into(),
-                format!("{} edges", self.box_edges.len()),
-                "must have one edge per dimension",
-            );
-        }
-        for (a, &l) in self.box_edges.iter().enumerate() {
-            if !(l.is_finite() && l > 0.0) {
-                return bad(
-                    format!("box[{a}]"),
-                    l.to_string(),
-                    "must be positive and finite",
-                );
-            }
-        }
-        if self.positions.is_empty() {
-            return Ok(());
-        }
-        let n = self.particles;
-        for (field, len) in [
-            ("positions", self.positions.len()),
-            ("radii", self.radii.len()),
-        ] {
-            if len != n {
-                return bad(
-                    field.into(),
-                    format!("{len} entries"),
-                    "must have one entry per body (particles)",
-                );
-            }
-        }
-        for (i, r) in self.positions.iter().enumerate() {
-            if r.len() != self.dim || !r.iter().all(|x| x.is_finite()) {
-                return bad(
-                    format!("positions[{i}]"),
-                    format!("{r:?}"),
-                    "must be dim finite coordinates",
-                );
-            }
-        }
-        for (i, &r) in self.radii.iter().enumerate() {
-            if !(r.is_finite() && r > 0.0) {
-                return bad(
-                    format!("radii[{i}]"),
-                    r.to_string(),
-                    "must be positive and finite",
-                );
-            }
-        }
-        if !self.orientations.is_empty() {
-            if self.orientations.len() != n {
-                return bad(
-                    "orientations".into(),
-                    format!("{} entries", self.orientations.len()),
-                    "must be empty or have one entry per body",
-                );
-            }
-            for (i, o) in self.orientations.iter().enumerate() {
-                if !o.iter().all(|x| x.is_finite()) {
-                    return bad(
-                        format!("orientations[{i}]"),
-                        format!("{o:?}"),
-                        "must be finite",
-                    );
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// [`PackingFile::check`] as an error whose field names `whose` (a
-    /// path, or `packing <id>`).
-    pub fn check_as(&self, whose: impl std::fmt::Display) -> Result<(), ExperimentError> {
-        self.check()
-            .map_err(|(field, value, allowed)| ExperimentError::Invalid {
-                field: format!("{whose}: {field}"),
-                value,
-                allowed,
-            })
-    }
-
-    /// Load only if it was made with exactly these settings.
-    pub fn load_matching(path: &Path, settings: &serde_json::Value) -> Option<Self> {
-        Self::load(path).filter(|f| &f.settings == settings)
-    }
-
-    /// The isostatic contact number of this packing's non-rattlers,
-    /// `z_iso = 2 n_coord / N_nr`, with `n_coord` the coordinates the
-    /// margin counts (`iso_margin = N_c − (n_coord − d)`, so
-    /// `n_coord = N_c − iso_margin + d`): `2 f` when every non-rattler
-    /// counts `f` coordinates, less when bodies made of spheres are held
-    /// on one sphere only (the rank rule counts `d` coordinates for them).
-    /// `z_J − z_iso = 2 (iso_margin − d) / N_nr`. `None` without contacts
-    /// or when every body rattles.
-    pub fn z_iso(&self) -> Option<f64> {
-        let m = &self.measures;
-        let kept = self.particles.checked_sub(m.n_rattlers?)?;
-        if kept == 0 {
-            return None;
-        }
-        let coordinates = m.n_contacts? as i64 - m.iso_margin? + self.dim as i64;
-        Some(2.0 * coordinates as f64 / kept as f64)
-    }
-
-    /// The contact number corrected for rotational rattlers (Shiraishi,
-    /// Mizuno & Ikeda 2019): each free rotational coordinate counts as a
-    /// missing contact, `z_corr = z_J + 2 free_rotations / N_nr`. Since
-    /// the margin counts `Σ_b r_b = f N_nr − free_rotations` coordinates,
-    /// `z_corr = 2 f + 2 (iso_margin − d) / N_nr = z_J − z_iso + 2 f`: `2 f`
-    /// up to `O(1/N_nr)` for a packing with a small margin. Equal to `z_J`
-    /// when rattlers go by count. `None` without contacts, in files
-    /// written before `free_rotations` was recorded, or when every body
-    /// rattles.
-    pub fn z_corr(&self) -> Option<f64> {
-        let m = &self.measures;
-        let kept = self.particles.checked_sub(m.n_rattlers?)?;
-        if kept == 0 {
-            return None;
-        }
-        Some(m.z_j? + 2.0 * m.free_rotations? as f64 / kept as f64)
-    }
-
-    /// The fraction of non-rattlers that are rotational rattlers
-    /// (`None` as for [`Self::z_corr`]).
-    pub fn rot_rattler_fraction(&self) -> Option<f64> {
-        let m = &self.measures;
-        let kept = self.particles.checked_sub(m.n_rattlers?)?;
-        if kept == 0 {
-            return None;
-        }
-        Some(m.n_rot_rattlers? as f64 / kept as f64)
-    }
-}
-
-/// Quote a CSV field when needed.
-pub fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
+    let bytes = w.into_inner().expect("flushing to memory cannot fail");
+    String::from_utf8(bytes).expect("cells are UTF-8")
 }
 
 fn opt<T: ToString>(v: &Option<T>) -> String {
@@ -365,8 +59,8 @@ fn param_cells(f: &PackingFile, names: &[String]) -> Vec<String> {
             // text value its text (no JSON quotes), a number its digits.
             match f.params.get(n) {
                 None | Some(serde_json::Value::Null) => String::new(),
-                Some(serde_json::Value::String(s)) => csv_field(s),
-                Some(v) => csv_field(&v.to_string()),
+                Some(serde_json::Value::String(s)) => s.clone(),
+                Some(v) => v.to_string(),
             }
         })
         .collect()
@@ -413,7 +107,7 @@ pub fn results_csv(files: &[PackingFile]) -> String {
     if with_gaps {
         head.push("gaps".into());
     }
-    let mut out = head.join(",") + "\n";
+    let mut rows = Vec::with_capacity(files.len());
     for f in files {
         let m = &f.measures;
         let mut row = vec![
@@ -438,7 +132,7 @@ pub fn results_csv(files: &[PackingFile]) -> String {
             m.fire_steps.to_string(),
             m.minimizations.to_string(),
             format!("{:.3}", m.wall_s),
-            csv_field(&m.flag),
+            m.flag.clone(),
         ]);
         if with_escapes {
             row.push(opt(&m.saddle_escapes));
@@ -454,9 +148,9 @@ pub fn results_csv(files: &[PackingFile]) -> String {
                     .unwrap_or_default(),
             );
         }
-        out += &(row.join(",") + "\n");
+        rows.push(row);
     }
-    out
+    table(&head, rows)
 }
 
 const SPECTRUM_COLUMNS: [&str; 9] = [
@@ -505,7 +199,8 @@ impl SpectrumMeasures {
 /// `dos.csv`: `D(ω)` of each point, summed over its packings, one row per
 /// (point, bin).
 pub fn dos_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
-    let mut out = String::from("point,omega,omega_lo,omega_hi,count,dos\n");
+    let head = ["point", "omega", "omega_lo", "omega_hi", "count", "dos"].map(String::from);
+    let mut rows = Vec::new();
     for (label, files) in groups {
         let Some(h) = pooled_histogram(files) else {
             continue;
@@ -517,15 +212,17 @@ pub fn dos_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
             .zip(h.density())
             .zip(&h.counts)
         {
-            out += &format!(
-                "{},{c:e},{:e},{:e},{n},{d:e}\n",
-                csv_field(label),
-                w[0],
-                w[1]
-            );
+            rows.push(vec![
+                label.clone(),
+                format!("{c:e}"),
+                format!("{:e}", w[0]),
+                format!("{:e}", w[1]),
+                n.to_string(),
+                format!("{d:e}"),
+            ]);
         }
     }
-    out
+    table(&head, rows)
 }
 
 /// `ω₁` and `ω_*` of the pooled `D(ω)` of `files`.
@@ -551,7 +248,8 @@ pub fn pooled_histogram(files: &[&PackingFile]) -> Option<DosHistogram> {
 /// `gaps.csv`: `Z(h)` of each point from the summed counts of its
 /// packings, with `g(h)` between a sample point and the one before.
 pub fn gaps_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
-    let mut out = String::from("point,h,count_below,z,g\n");
+    let head = ["point", "h", "count_below", "z", "g"].map(String::from);
+    let mut rows = Vec::new();
     for (label, files) in groups {
         let mut it = files.iter().filter_map(|f| f.measures.gaps.as_ref());
         let Some(first) = it.next() else {
@@ -568,20 +266,17 @@ pub fn gaps_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
             } else {
                 num(g[k - 1], true)
             };
-            out += &format!(
-                "{},{h:e},{},{},{g}\n",
-                csv_field(label),
-                c.below[k],
-                num(z, true)
-            );
+            rows.push(vec![
+                label.clone(),
+                format!("{h:e}"),
+                c.below[k].to_string(),
+                num(z, true),
+                g,
+            ]);
         }
     }
-    out
+    table(&head, rows)
 }
-
-/// Mean and standard error of the mean (0 for a single value): the one
-/// definition in `jamkit_core::stats`.
-pub use jamkit_core::stats::mean_sem;
 
 /// One row of `summary.csv`.
 #[derive(Clone, Debug, PartialEq)]
@@ -709,7 +404,7 @@ pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
             .map(String::from),
         );
     }
-    let mut out = head.join(",") + "\n";
+    let mut rows = Vec::new();
     for (s, first) in summarize_points(groups).iter().zip(&firsts) {
         let mut row = vec![
             s.label.clone(),
@@ -752,9 +447,9 @@ pub fn summary_csv(groups: &[(String, Vec<&PackingFile>)]) -> String {
                 num(s.zero_extra.1, true),
             ]);
         }
-        out += &(row.join(",") + "\n");
+        rows.push(row);
     }
-    out
+    table(&head, rows)
 }
 
 #[cfg(test)]
@@ -819,11 +514,17 @@ mod tests {
         assert_eq!(cell("z_corr"), "5.75");
     }
 
+    /// A cell with a comma, quotes or a line end comes back whole through
+    /// a CSV reader; a plain cell is not quoted.
     #[test]
-    fn csv_fields_are_quoted_when_needed() {
-        assert_eq!(csv_field("a,b"), "\"a,b\"");
-        assert_eq!(csv_field("say \"x\""), "\"say \"\"x\"\"\"");
-        assert_eq!(csv_field("plain"), "plain");
-        assert_eq!(csv_field("a\"b,"), "\"a\"\"b,\"");
+    fn cells_are_quoted_where_needed_and_read_back() {
+        let cells = ["a,b", "say \"x\"", "plain", "a\"b,", "two\nlines", ""];
+        let head: Vec<String> = (0..cells.len()).map(|k| format!("c{k}")).collect();
+        let text = table(&head, vec![cells.map(String::from).to_vec()]);
+        assert!(text.ends_with('\n') && !text.contains('\r'), "{text:?}");
+        assert!(text.contains(",plain,"), "{text}");
+        let mut reader = csv::Reader::from_reader(text.as_bytes());
+        let row = reader.records().next().unwrap().unwrap();
+        assert_eq!(row.iter().collect::<Vec<_>>(), cells);
     }
 }
