@@ -27,7 +27,8 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use jamkit_experiment::grid::Shard;
 use jamkit_experiment::runner::{RunOptions, default_out, run};
-use jamkit_experiment::{Experiment, Log, grid, overrides, registry};
+use jamkit_experiment::{Experiment, Log, grid, overrides};
+use jamkit_registry as registry;
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]

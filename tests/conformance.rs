@@ -3,8 +3,8 @@
 //! family, the parameter sets that exercise other code paths, and the
 //! parameters each family must refuse.
 
-use jamkit_experiment::registry::{EXAMPLES, FAMILIES};
 use jamkit_kit::{check_bad_params, check_registered, claimed_dims};
+use jamkit_registry::{EXAMPLES, FAMILIES};
 
 /// Every family, from its example, in each dimension it claims: a family
 /// added to the registry is checked here with no line of test written.

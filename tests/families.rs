@@ -7,7 +7,7 @@
 //! or when a registered 2D family cannot be drawn from its example.
 
 use jamkit_draw::Outline;
-use jamkit_experiment::registry::{EXAMPLES, FAMILIES, supports_dim};
+use jamkit_registry::{EXAMPLES, FAMILIES, supports_dim};
 
 fn read(path: &str) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"))

@@ -11,7 +11,7 @@
 
 use crate::DrawError;
 use jamkit_core::{RoundOutline, Shape, SharedOutline};
-use jamkit_experiment::registry::{self, ParamMap, SceneVisitor};
+use jamkit_registry::{self as registry, ParamMap, SceneVisitor};
 use std::f64::consts::PI;
 use std::sync::Arc;
 

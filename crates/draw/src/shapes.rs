@@ -7,7 +7,7 @@
 
 use crate::DrawError;
 use crate::geometry::{Outline, Point};
-use jamkit_experiment::registry::{self, ParamMap};
+use jamkit_registry::{self as registry, ParamMap};
 
 /// Points on each polar curve.
 pub const CURVE_POINTS: usize = 720;

@@ -9,10 +9,10 @@
 //! same seeds at every point, so points differ only by their parameters.
 
 use crate::error::ExperimentError;
-use crate::registry::{self, ParamMap};
 use crate::schema::Experiment;
 use jamkit_core::FamilyInfo;
 use jamkit_engine::FireParams;
+use jamkit_registry::{self as registry, ParamMap};
 
 /// One parameter point of the grid.
 #[derive(Clone, Debug, PartialEq)]

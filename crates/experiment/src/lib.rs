@@ -28,7 +28,6 @@ pub mod grid;
 pub mod lock;
 pub mod merge;
 pub mod overrides;
-pub mod registry;
 pub mod reload;
 pub mod runner;
 pub mod schema;

@@ -9,11 +9,11 @@
 //! last bit or two (an angle is stored, not its cosine and sine).
 
 use crate::error::ExperimentError;
-use crate::registry::{self, SceneVisitor};
 use crate::schema::EngineParams;
 use jamkit_core::{Packing, PeriodicBox, Potential, Shape, Vector};
 use jamkit_engine::Scene;
 use jamkit_format::PackingFile;
+use jamkit_registry::{self as registry, SceneVisitor};
 
 /// Something to do with a reloaded scene.
 pub trait PackingVisitor {

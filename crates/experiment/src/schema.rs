@@ -501,7 +501,7 @@ impl Experiment {
 
     /// Every listed dimension is one the family supports, none twice.
     pub(crate) fn validate_dims(&self) -> Result<(), ExperimentError> {
-        let info = crate::registry::family_info(&self.family)?;
+        let info = jamkit_registry::family_info(&self.family)?;
         let dims = self.dim.values();
         if dims.is_empty() {
             return Err(ExperimentError::invalid(
@@ -510,19 +510,19 @@ impl Experiment {
                 format!(
                     "must list at least one dimension; family `{}` supports {}",
                     self.family,
-                    crate::registry::describe_dims(&info)
+                    jamkit_registry::describe_dims(&info)
                 ),
             ));
         }
         for (k, &d) in dims.iter().enumerate() {
-            if !crate::registry::supports_dim(&info, d) {
+            if !jamkit_registry::supports_dim(&info, d) {
                 return Err(ExperimentError::invalid(
                     "dim",
                     d,
                     format!(
                         "family `{}` supports {}",
                         self.family,
-                        crate::registry::describe_dims(&info)
+                        jamkit_registry::describe_dims(&info)
                     ),
                 ));
             }

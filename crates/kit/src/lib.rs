@@ -34,7 +34,7 @@ use jamkit_core::{Packing, Potential, Shape, SizeDistribution, Vector};
 use jamkit_engine::check::gradient_error;
 use jamkit_engine::hessian::{Hessian, HessianOptions, finite_difference};
 use jamkit_engine::{Fire, FireParams, JamParams, Objective, Scene, jam};
-use jamkit_experiment::registry;
+use jamkit_registry as registry;
 use rand::SeedableRng;
 
 /// What [`check_family`] checked: the names of the checks it ran and of

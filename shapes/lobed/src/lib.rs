@@ -94,7 +94,7 @@ pub struct LobedParams {
 }
 
 /// The `lobed` family's registration: the one line of
-/// `crates/experiment/src/registry.rs` names this type.
+/// `crates/registry/src/lib.rs` names this type.
 pub struct LobedFamily;
 
 impl Family for LobedFamily {

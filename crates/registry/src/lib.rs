@@ -1,4 +1,5 @@
-//! The registry: every shape family jamkit knows, in one readable list.
+//! The registry: every shape family jamkit knows, in one readable list
+//! (its own crate, so that drawing a packing does not pull in the runner).
 //!
 //! A family registers itself once, in its own crate, by implementing
 //! [`jamkit_core::Family`]: its info, its typed parameters, and how they
@@ -10,8 +11,7 @@
 //! in a const dimension `D`, after which everything is statically
 //! dispatched.
 
-use crate::error::ExperimentError;
-use jamkit_core::{Dims, Family, FamilyInfo};
+use jamkit_core::{Dims, Error, Family, FamilyInfo};
 use serde::de::DeserializeOwned;
 use std::collections::BTreeMap;
 
@@ -37,11 +37,11 @@ macro_rules! families {
             dim: usize,
             params: &ParamMap,
             visitor: V,
-        ) -> Result<V::Output, ExperimentError> {
+        ) -> Result<V::Output, Error> {
             $(
                 if family == <$family as Family>::INFO.name {
                     let p: <$family as Family>::Params = parse_params(family, params)?;
-                    return Ok(<$family as Family>::visit(&p, dim, visitor)?);
+                    return <$family as Family>::visit(&p, dim, visitor);
                 }
             )+
             Err(unknown_family(family))
@@ -62,7 +62,7 @@ families![
 pub const COMPILED_DIMS: &[usize] = &[2, 3, 4];
 
 /// The family called `name`.
-pub fn family_info(name: &str) -> Result<FamilyInfo, ExperimentError> {
+pub fn family_info(name: &str) -> Result<FamilyInfo, Error> {
     FAMILIES
         .iter()
         .copied()
@@ -70,9 +70,9 @@ pub fn family_info(name: &str) -> Result<FamilyInfo, ExperimentError> {
         .ok_or_else(|| unknown_family(name))
 }
 
-fn unknown_family(name: &str) -> ExperimentError {
+fn unknown_family(name: &str) -> Error {
     let known: Vec<&str> = FAMILIES.iter().map(|f| f.name).collect();
-    ExperimentError::invalid(
+    Error::invalid(
         "family",
         format!("\"{name}\""),
         format!("must be one of: {}", known.join(", ")),
@@ -111,9 +111,9 @@ pub fn params_from_ron(text: &str) -> Result<ParamMap, String> {
 /// A family's parameters as a packing file stores them (JSON) back as a
 /// parameter map. JSON `null` arrives as RON's unit `()`; in a packing file
 /// it is always an absent optional (`None`), never a bare RON name.
-pub fn params_from_json(params: &serde_json::Value) -> Result<ParamMap, ExperimentError> {
+pub fn params_from_json(params: &serde_json::Value) -> Result<ParamMap, Error> {
     let mut map: ParamMap = serde_json::from_value(params.clone()).map_err(|e| {
-        ExperimentError::invalid(
+        Error::invalid(
             "params",
             params.to_string(),
             format!("not a family parameter map: {e}"),
@@ -146,10 +146,7 @@ pub fn describe_dims(info: &FamilyInfo) -> String {
 }
 
 /// Read a family's parameter struct from the grid point's values.
-pub fn parse_params<T: DeserializeOwned>(
-    family: &str,
-    params: &ParamMap,
-) -> Result<T, ExperimentError> {
+pub fn parse_params<T: DeserializeOwned>(family: &str, params: &ParamMap) -> Result<T, Error> {
     let read = |skip: Option<&str>| -> Result<T, ron::Error> {
         let map: ron::Map = params
             .iter()
@@ -172,13 +169,13 @@ pub fn parse_params<T: DeserializeOwned>(
                     .ok()
                     .and_then(|info| info.param(name).map(|p| p.about))
                     .unwrap_or("see `jamkit shapes`");
-                ExperimentError::invalid(
+                Error::invalid(
                     format!("params.{name} (family `{family}`)"),
                     ron::to_string(value).unwrap_or_default(),
                     format!("{message}; {name}: {about}"),
                 )
             }
-            None => ExperimentError::invalid(
+            None => Error::invalid(
                 format!("params (family `{family}`)"),
                 ron::to_string(params).unwrap_or_default(),
                 message,
@@ -194,10 +191,10 @@ pub fn dispatch<V: SceneVisitor>(
     dim: usize,
     params: &ParamMap,
     visitor: V,
-) -> Result<V::Output, ExperimentError> {
+) -> Result<V::Output, Error> {
     let info = family_info(family)?;
     if !supports_dim(&info, dim) {
-        return Err(ExperimentError::invalid(
+        return Err(Error::invalid(
             "dim",
             dim,
             format!("family `{family}` supports {}", describe_dims(&info)),
