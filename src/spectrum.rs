@@ -21,7 +21,7 @@ pub fn of_file(path: &Path, options: HessianOptions, modes: bool) -> Result<(Str
     };
     let s = reload(&file, visitor)?.with_context(|| format!("spectrum of {}", path.display()))?;
     let text = if modes {
-        jamkit_experiment::runner::eigenvalue_table(&s)
+        jamkit_experiment::sample::eigenvalue_table(&s)
     } else {
         s.eigenvalues.iter().map(|l| format!("{l:e}\n")).collect()
     };

@@ -25,7 +25,7 @@
 
 use crate::error::ExperimentError;
 use crate::reload::{PackingVisitor, reload};
-use crate::runner;
+use crate::sample;
 use crate::schema::{Experiment, Observable};
 use jamkit_core::Shape;
 use jamkit_engine::{Objective, Scene};
@@ -384,6 +384,6 @@ pub fn analyze(
         list.join(", ")
     );
     let experiment = Experiment::from_ron(&text, "analyze")?;
-    let (file, table) = runner::remeasure(&experiment, file)?;
+    let (file, table) = sample::remeasure(&experiment, file)?;
     Ok((file, force, table))
 }

@@ -30,6 +30,7 @@ pub mod merge;
 pub mod overrides;
 pub mod reload;
 pub mod runner;
+pub mod sample;
 pub mod schema;
 
 pub use batchlog::Log;

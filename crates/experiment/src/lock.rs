@@ -12,7 +12,7 @@
 //! over. One left by a dead process on another host cannot be told from a
 //! live one: remove it by hand (docs/formats.md).
 //!
-//! A packing file made with other settings (`runner::settings`: family,
+//! A packing file made with other settings (`sample::settings`: family,
 //! parameters, sizes, protocol, minimiser, potential, rattlers, engine) is
 //! never overwritten: the run is refused before it starts, naming the first
 //! setting that differs, so that one directory never holds packings of two

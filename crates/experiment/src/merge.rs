@@ -11,8 +11,8 @@
 use crate::error::ExperimentError;
 use crate::grid;
 use crate::lock::first_difference;
-use crate::runner;
 use crate::schema::Experiment;
+use crate::{runner, sample};
 use jamkit_format::{self as format, PackingFile};
 use std::path::{Path, PathBuf};
 
@@ -97,7 +97,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeReport, ExperimentErro
                 continue;
             }
             let file = PackingFile::load_checked(&path)?;
-            let wanted = runner::settings(&experiment, &points[job.point], job);
+            let wanted = sample::settings(&experiment, &points[job.point], job);
             if let Some((key, here, there)) = first_difference(&wanted, &file.settings) {
                 return Err(refuse(format!(
                     "{} was made with {key} = {there}, its run's experiment.ron has {key} = \

@@ -144,7 +144,7 @@ pub enum Protocol {
         /// pressure predicts, the default; docs/physics.md) or `Bisection`
         /// (the paper's halved steps, the paper's path bit for bit). Always
         /// written to `experiment.ron`; left out of a packing's settings
-        /// when `Bisection` (`runner::settings`).
+        /// when `Bisection` (`sample::settings`).
         #[serde(default)]
         search: JamSearch,
     },

@@ -1,0 +1,517 @@
+//! One sample, from start to end: the family's shape for its point, the
+//! random start from its seed, the protocol (`jam`, `compress_to_phi`,
+//! `compress_to_pressure`, with the saddle escape when asked), the
+//! observables (contacts and rattlers, pressure, spectrum, gaps), and the
+//! packing file that records it all. Also the re-measurement of a saved
+//! packing (`remeasure`). The parallel, resumable loop over samples is the
+//! runner's (`runner`); nothing here knows about threads, locks or other
+//! samples, so a sample is the same bits whoever runs it.
+
+use crate::error::ExperimentError;
+use crate::grid::{Job, Point};
+use crate::reload::{PackingVisitor, reload};
+use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
+use jamkit_core::{Packing, Shape};
+use jamkit_engine::{
+    Fire, JamParams, PressureParams, Progress, Scene, compress_to_phi, compress_to_pressure, jam,
+};
+use jamkit_format::{Measures, PackingFile, SpectrumMeasures};
+use jamkit_observe::gaps::GapCounts;
+use jamkit_observe::saddle::{self, SaddleParams};
+use jamkit_observe::spectrum::{self, Spectrum};
+use jamkit_observe::{JammingSummary, RattlerRule, summarize_with};
+use jamkit_registry::{self as registry, SceneVisitor};
+use rand::SeedableRng;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Everything that shapes one packing, for the resume check.
+pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json::Value {
+    let e = experiment;
+    let minimizer = &point.minimizer;
+    serde_json::json!({
+        "dim": point.dim,
+        "family": e.family,
+        "params": point.params,
+        "particles": point.particles,
+        "seed": job.seed,
+        "sizes": e.sizes,
+        "protocol": protocol_settings(&e.protocol),
+        "minimizer": minimizer,
+        "potential": e.potential,
+        "rattlers": e.rattlers,
+        "engine": e.engine,
+    })
+}
+
+/// The protocol as a packing records it: as written to `experiment.ron`,
+/// except that `search: Bisection` is left out. Packings made before the
+/// field existed were bisection packings and record no `search`, so they
+/// still resume under an explicit `search: Bisection`; the default,
+/// `Extrapolated`, is always written, so no packing of one search is ever
+/// taken for the other's.
+fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
+    let mut value = serde_json::to_value(protocol).expect("protocol serialises");
+    if let Some(jam) = value.get_mut("Jam").and_then(|j| j.as_object_mut())
+        && jam.get("search") == Some(&serde_json::json!("Bisection"))
+    {
+        jam.remove("search");
+    }
+    value
+}
+
+/// The observables of `experiment`, as stored with each packing.
+pub(crate) fn observables_value(experiment: &Experiment) -> serde_json::Value {
+    serde_json::to_value(&experiment.observables).expect("observables serialise")
+}
+
+/// Make one packing; with it, the table of its eigenvalues when the
+/// experiment asks for them (`eigenvalues/<id>.csv`).
+pub fn run_job(
+    experiment: &Experiment,
+    point: &Point,
+    job: &Job,
+) -> Result<(PackingFile, Option<String>), ExperimentError> {
+    run_job_watched(experiment, point, job, None)
+}
+
+/// [`run_job`], its minimiser reporting to `progress` (a batch log's view;
+/// the packing is the same bits).
+pub fn run_job_watched(
+    experiment: &Experiment,
+    point: &Point,
+    job: &Job,
+    progress: Option<Arc<Progress>>,
+) -> Result<(PackingFile, Option<String>), ExperimentError> {
+    let visitor = SampleVisitor {
+        experiment,
+        point,
+        job,
+        progress,
+    };
+    registry::dispatch(&experiment.family, point.dim, &point.params, visitor)?
+}
+
+struct SampleVisitor<'a> {
+    experiment: &'a Experiment,
+    point: &'a Point,
+    job: &'a Job,
+    progress: Option<Arc<Progress>>,
+}
+
+impl SceneVisitor for SampleVisitor<'_> {
+    type Output = Result<(PackingFile, Option<String>), ExperimentError>;
+
+    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Self::Output {
+        let (e, job) = (self.experiment, self.job);
+        let sample_err = |source| ExperimentError::sample(job.id.clone(), source);
+        let start = Instant::now();
+        let minimizer = self.point.minimizer.clone();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(job.seed);
+        let sizes = e.sizes.sample(self.point.particles, &mut rng);
+        let min_reach = sizes
+            .iter()
+            .map(|&s| shape.bounding_radius(s))
+            .fold(f64::INFINITY, f64::min);
+        let packing = Packing::<D, S>::random(shape, sizes, e.protocol.phi_start(), &mut rng)
+            .map_err(sample_err)?;
+        let mut scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
+        let mut fire = Fire::new(minimizer);
+        if let Some(p) = &self.progress {
+            fire.watch(p.clone());
+        }
+        let mut saddle_escapes = None;
+        let outcome: Result<_, jamkit_core::Error> = match e.protocol {
+            Protocol::Jam {
+                eps,
+                energy_low,
+                energy_high,
+                max_density_steps,
+                escape_saddles,
+                search,
+                ..
+            } => {
+                let params = JamParams {
+                    eps,
+                    energy_low,
+                    energy_high,
+                    max_density_steps,
+                    search,
+                };
+                jam(&mut scene, &mut fire, &params).and_then(|mut outcome| {
+                    if escape_saddles {
+                        let threshold = e
+                            .rattlers
+                            .min_contacts
+                            .unwrap_or_else(|| scene.packing().shape.rattler_threshold());
+                        let s = saddle::escape_saddles(
+                            &mut scene,
+                            &mut fire,
+                            &params,
+                            &SaddleParams::default(),
+                            threshold,
+                        )?;
+                        outcome.phi = s.phi;
+                        outcome.energy_per_particle = s.energy_per_particle;
+                        outcome.fire_steps += s.fire_steps;
+                        outcome.minimizations += s.minimizations;
+                        saddle_escapes = Some(s.rounds);
+                    }
+                    Ok(outcome)
+                })
+            }
+            Protocol::Phi { phi, eps, .. } => compress_to_phi(&mut scene, &mut fire, phi, eps),
+            Protocol::Pressure {
+                pressure,
+                tol,
+                eps,
+                max_density_steps,
+                ..
+            } => compress_to_pressure(
+                &mut scene,
+                &mut fire,
+                &PressureParams {
+                    pressure,
+                    tol,
+                    eps,
+                    max_density_steps,
+                },
+            ),
+        };
+        let outcome = match outcome {
+            Ok(outcome) => outcome,
+            Err(source) => {
+                // Keep what the engine stopped at, for a look at why.
+                let state = self.failed_state(&mut scene, &source, start);
+                return Err(ExperimentError::Sample {
+                    sample: job.id.clone(),
+                    source: Box::new(source),
+                    state: state.map(Box::new),
+                    saved: None,
+                });
+            }
+        };
+
+        let observed = observe(e, &mut scene).map_err(sample_err)?;
+        let measures = observed.measures(
+            e,
+            Protocolled {
+                phi: outcome.phi,
+                energy_per_particle: outcome.energy_per_particle,
+                fire_steps: outcome.fire_steps,
+                minimizations: outcome.minimizations,
+                wall_s: start.elapsed().as_secs_f64(),
+                saddle_escapes,
+            },
+            &scene.packing().shape,
+        );
+        let mut file = self.file(scene.packing(), e.output.packings, measures);
+        file.rattler = observed.rattler();
+        Ok((file, observed.eigenvalue_table))
+    }
+}
+
+impl SampleVisitor<'_> {
+    /// The packing file of `p` with `measures` (the configuration only when
+    /// `write`).
+    fn file<const D: usize, S: Shape<D>>(
+        &self,
+        p: &Packing<D, S>,
+        write: bool,
+        measures: Measures,
+    ) -> PackingFile {
+        let (e, job) = (self.experiment, self.job);
+        PackingFile {
+            id: job.id.clone(),
+            experiment: e.name.clone(),
+            family: e.family.clone(),
+            params: serde_json::to_value(&self.point.params).expect("params serialise"),
+            dim: D,
+            particles: p.len(),
+            seed: job.seed,
+            protocol: e.protocol.name().to_string(),
+            settings: settings(e, self.point, job),
+            observables: observables_value(e),
+            phi: measures.phi,
+            energy_per_particle: measures.energy_per_particle,
+            measures,
+            box_edges: p.bbox.edges().iter().copied().collect(),
+            positions: if write {
+                // Centres drift out of the box between neighbour-list
+                // rebuilds; the file holds them in the primary cell.
+                p.positions
+                    .iter()
+                    .map(|r| p.bbox.wrap(*r).iter().copied().collect())
+                    .collect()
+            } else {
+                Vec::new()
+            },
+            radii: if write { p.sizes.clone() } else { Vec::new() },
+            orientations: if write && p.shape.rot_dof() > 0 {
+                p.orientations
+                    .iter()
+                    .map(|o| p.shape.orientation_coords(o))
+                    .collect()
+            } else {
+                Vec::new()
+            },
+            rattler: Vec::new(),
+            spheres: if write { sphere_rows(p) } else { Vec::new() },
+        }
+    }
+
+    /// The configuration a failed protocol stopped at, as a packing file
+    /// whose `flag` is the error: a minimisation that hit its step cap
+    /// (`fire_steps` its steps) or a jamming search that gave up
+    /// (`fire_steps` 0). `None` for errors with nothing to look at: a bad
+    /// start, a box too small, a non-finite energy.
+    fn failed_state<const D: usize, S: Shape<D>>(
+        &self,
+        scene: &mut Scene<D, S>,
+        error: &jamkit_core::Error,
+        start: Instant,
+    ) -> Option<PackingFile> {
+        let steps = match error {
+            jamkit_core::Error::NotConverged { steps, .. } => *steps,
+            jamkit_core::Error::JammingFailed { .. } => 0,
+            _ => return None,
+        };
+        let bodies = scene.packing().len().max(1) as f64;
+        let energy = scene.energy();
+        let measures = Measures {
+            phi: scene.packing().phi(),
+            energy_per_particle: energy / bodies,
+            n_contacts: None,
+            n_rattlers: None,
+            z_j: None,
+            iso_margin: None,
+            n_rot_rattlers: None,
+            free_rotations: None,
+            pressure: None,
+            fire_steps: steps,
+            minimizations: 0,
+            wall_s: start.elapsed().as_secs_f64(),
+            flag: error.to_string(),
+            saddle_escapes: None,
+            spectrum: None,
+            gaps: None,
+        };
+        Some(self.file(scene.packing(), true, measures))
+    }
+}
+
+/// What the protocol ended with, as stored.
+struct Protocolled {
+    phi: f64,
+    energy_per_particle: f64,
+    fire_steps: u64,
+    minimizations: u64,
+    wall_s: f64,
+    saddle_escapes: Option<u32>,
+}
+
+/// The observables of one packing.
+struct Observed {
+    contacts: Option<JammingSummary>,
+    pressure: Option<f64>,
+    spectrum: Option<SpectrumMeasures>,
+    eigenvalue_table: Option<String>,
+    gaps: Option<GapCounts>,
+}
+
+/// The rattler rule of `e` for this packing: an explicit
+/// `rattlers.min_contacts` counts contacts; otherwise rotating bodies made
+/// of spheres go by rank (a body held on one sphere keeps its contacts,
+/// see `jamkit_observe::find_rattlers_by_rank`), and every other family by
+/// its own count (`d + 1` for disks and near-disks).
+fn rattler_rule<const D: usize, S: Shape<D>>(e: &Experiment, p: &Packing<D, S>) -> RattlerRule {
+    let made_of_spheres = p.shape.rot_dof() > 0
+        && p.sizes
+            .first()
+            .zip(p.orientations.first())
+            .is_some_and(|(&s, o)| p.shape.sphere_decomposition(s, o).is_some());
+    match e.rattlers.min_contacts {
+        Some(t) => RattlerRule::Count(t),
+        None if made_of_spheres => RattlerRule::Rank,
+        None => RattlerRule::Count(p.shape.rattler_threshold()),
+    }
+}
+
+/// Measure what `e` asks for on a relaxed scene.
+fn observe<const D: usize, S: Shape<D>>(
+    e: &Experiment,
+    scene: &mut Scene<D, S>,
+) -> jamkit_core::Result<Observed> {
+    let contacts = e
+        .needs_contacts()
+        .then(|| summarize_with(scene, rattler_rule(e, scene.packing())));
+    let pressure = e.wants(&Observable::Pressure).then(|| scene.pressure());
+    let rattler = contacts.as_ref().map_or(&[][..], |s| &s.rattler[..]);
+    let (spectrum, eigenvalue_table) = match e.spectrum() {
+        Some(request) => {
+            let (m, table) = measure_spectrum(scene, rattler, &request)?;
+            (Some(m), table)
+        }
+        None => (None, None),
+    };
+    let gaps = e
+        .gaps()
+        .map(|params| GapCounts::of_scene(scene, rattler, &params));
+    Ok(Observed {
+        contacts,
+        pressure,
+        spectrum,
+        eigenvalue_table,
+        gaps,
+    })
+}
+
+impl Observed {
+    fn measures<const D: usize, S: Shape<D>>(
+        &self,
+        e: &Experiment,
+        run: Protocolled,
+        shape: &S,
+    ) -> Measures {
+        let contacts = self.contacts.as_ref();
+        let mut flags = shape.warnings();
+        if let (Some(s), Protocol::Jam { .. }, true) =
+            (contacts, &e.protocol, shape.expects_isostatic())
+            && s.iso_margin < 1
+        {
+            flags.push(format!(
+                "hypostatic: iso_margin = {} < 1; some contact is likely not closed (the minimisation stopped early) or the packing is not rigid",
+                s.iso_margin
+            ));
+        }
+        Measures {
+            phi: run.phi,
+            energy_per_particle: run.energy_per_particle,
+            n_contacts: contacts.map(|s| s.n_contacts),
+            n_rattlers: contacts.map(|s| s.n_rattlers),
+            z_j: contacts.map(|s| s.z_j),
+            iso_margin: contacts.map(|s| s.iso_margin),
+            pressure: self.pressure,
+            fire_steps: run.fire_steps,
+            minimizations: run.minimizations,
+            wall_s: run.wall_s,
+            flag: flags.join("; "),
+            saddle_escapes: run.saddle_escapes,
+            spectrum: self.spectrum.clone(),
+            gaps: self.gaps.clone(),
+            n_rot_rattlers: contacts.map(|s| s.n_rot_rattlers),
+            free_rotations: contacts.map(|s| s.free_rotations),
+        }
+    }
+
+    fn rattler(&self) -> Vec<bool> {
+        self.contacts
+            .as_ref()
+            .map(|s| s.rattler.clone())
+            .unwrap_or_default()
+    }
+}
+
+/// Measure the observables of `e` on a saved packing (same settings,
+/// other observables); the protocol's own figures are kept, and the
+/// measuring time is added to `wall_s`.
+pub(crate) fn remeasure(
+    e: &Experiment,
+    file: PackingFile,
+) -> Result<(PackingFile, Option<String>), ExperimentError> {
+    struct Remeasure<'a> {
+        e: &'a Experiment,
+        file: PackingFile,
+    }
+    impl PackingVisitor for Remeasure<'_> {
+        type Output = Result<(PackingFile, Option<String>), ExperimentError>;
+        fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> Self::Output {
+            let (e, mut file) = (self.e, self.file);
+            let start = Instant::now();
+            let observed = observe(e, &mut scene)
+                .map_err(|source| ExperimentError::sample(file.id.clone(), source))?;
+            let old = &file.measures;
+            let run = Protocolled {
+                phi: old.phi,
+                energy_per_particle: old.energy_per_particle,
+                fire_steps: old.fire_steps,
+                minimizations: old.minimizations,
+                wall_s: old.wall_s + start.elapsed().as_secs_f64(),
+                saddle_escapes: old.saddle_escapes,
+            };
+            file.measures = observed.measures(e, run, &scene.packing().shape);
+            file.rattler = observed.rattler();
+            file.observables = observables_value(e);
+            Ok((file, observed.eigenvalue_table))
+        }
+    }
+    let id = file.id.clone();
+    reload(&file.clone(), Remeasure { e, file })
+        .and_then(|r| r)
+        .map_err(|err| match err {
+            ExperimentError::Sample { .. } => err,
+            other => ExperimentError::invalid(format!("packing {id}"), "…", other.to_string()),
+        })
+}
+
+/// The spectrum of a jammed scene as stored, and the eigenvalue table if
+/// asked for.
+fn measure_spectrum<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    rattler: &[bool],
+    request: &SpectrumRequest,
+) -> jamkit_core::Result<(SpectrumMeasures, Option<String>)> {
+    let start = Instant::now();
+    let s = spectrum::measure(scene, rattler, request.hessian, request.modes, &request.dos)?;
+    let table = (request.eigenvalues || request.modes).then(|| eigenvalue_table(&s));
+    let measures = SpectrumMeasures {
+        coordinates: s.eigenvalues.len(),
+        zero_modes: s.zero,
+        lambda_min: s.eigenvalues.first().copied().unwrap_or(f64::NAN),
+        lambda_max: s.eigenvalues.last().copied().unwrap_or(f64::NAN),
+        histogram: s.histogram,
+        dos: request.dos.clone(),
+        wall_s: start.elapsed().as_secs_f64(),
+    };
+    Ok((measures, table))
+}
+
+/// `eigenvalues/<id>.csv`: `lambda,omega` per mode, ascending, with
+/// `participation,rotational_share` when the eigenvectors were computed.
+pub fn eigenvalue_table(s: &Spectrum) -> String {
+    let mut out = String::from(match s.modes {
+        Some(_) => "lambda,omega,participation,rotational_share\n",
+        None => "lambda,omega\n",
+    });
+    for (n, &l) in s.eigenvalues.iter().enumerate() {
+        out += &format!("{l:e},{:e}", spectrum::frequency(l));
+        if let Some(m) = &s.modes {
+            out += &format!(",{:e},{:e}", m[n].participation, m[n].rotational_share);
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// The `spheres` rows of a packing file: `[x, y(, z), radius, body]` for
+/// every sphere of every body, empty unless the family is made of spheres.
+fn sphere_rows<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> Vec<Vec<f64>> {
+    let mut rows = Vec::new();
+    for (i, (r, (&size, o))) in p
+        .positions
+        .iter()
+        .zip(p.sizes.iter().zip(&p.orientations))
+        .enumerate()
+    {
+        let Some(balls) = p.shape.sphere_decomposition(size, o) else {
+            return Vec::new();
+        };
+        let centre = p.bbox.wrap(*r);
+        for (offset, radius) in balls {
+            let mut row: Vec<f64> = (centre + offset).iter().copied().collect();
+            row.extend([radius, i as f64]);
+            rows.push(row);
+        }
+    }
+    rows
+}
