@@ -183,3 +183,84 @@ fn ellipses_carry_their_semi_axes() {
         );
     }
 }
+
+/// `output: (extxyz: true)` writes `packings/<id>.xyz` beside each packing,
+/// the same frame as `jamkit export` of that packing; a resumed run writes
+/// the ones missing and touches nothing else; without the packings'
+/// configurations the option is refused, naming both fields.
+#[test]
+fn the_run_writes_each_packing_as_extxyz_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quickstart.ron");
+    let args = |extra: &[&str]| {
+        let mut a = vec![
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--set",
+            "particles=16",
+            "--set",
+            "samples=2",
+        ];
+        a.extend(extra);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let run = |extra: &[&str]| {
+        let a = args(extra);
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        jamkit(&a)
+    };
+    let (code, _, err) = run(&["--set", "output.extxyz=true"]);
+    assert_eq!(code, 0, "{err}");
+    let packings = out.join("packings");
+    let mut jsons: Vec<PathBuf> = std::fs::read_dir(&packings)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    jsons.sort();
+    assert!(!jsons.is_empty());
+    for json in &jsons {
+        let xyz = json.with_extension("xyz");
+        let exported = dir.path().join("one.xyz");
+        let (code, _, err) = jamkit(&[
+            "export",
+            json.to_str().unwrap(),
+            "-o",
+            exported.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        assert_eq!(
+            std::fs::read_to_string(&xyz).unwrap(),
+            std::fs::read_to_string(&exported).unwrap(),
+            "{}",
+            xyz.display()
+        );
+    }
+    let gone = jsons[0].with_extension("xyz");
+    let kept = jsons[jsons.len() - 1].with_extension("xyz");
+    let kept_time = std::fs::metadata(&kept).unwrap().modified().unwrap();
+    std::fs::remove_file(&gone).unwrap();
+    let (code, text, err) = run(&["--set", "output.extxyz=true"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(text.contains("reused"), "{text}");
+    assert!(gone.exists(), "the missing frame is written again");
+    assert_eq!(
+        std::fs::metadata(&kept).unwrap().modified().unwrap(),
+        kept_time
+    );
+    let (code, _, err) = run(&[
+        "--set",
+        "output.extxyz=true",
+        "--set",
+        "output.packings=false",
+    ]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("output.extxyz") && err.contains("output.packings = true"),
+        "{err}"
+    );
+}

@@ -114,6 +114,9 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
                 .filter(|done| covers(&stored(done), experiment))
         };
         if let Some(done) = finished() {
+            if experiment.output.extxyz && !xyz_path(&path).exists() {
+                write_extxyz(&done, &path)?;
+            }
             return Ok(Outcome::Done(Box::new(done), true));
         }
         // Held until the packing is saved or has failed.
@@ -125,6 +128,9 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         let done = PackingFile::load_matching(&path, &wanted);
         let (file, eigen, reused) = match done {
             Some(done) if covers(&stored(&done), experiment) => {
+                if experiment.output.extxyz && !xyz_path(&path).exists() {
+                    write_extxyz(&done, &path)?;
+                }
                 return Ok(Outcome::Done(Box::new(done), true));
             }
             // Same packing, other observables: measure them on the saved
@@ -148,6 +154,9 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             let dir = options.out.join("eigenvalues");
             std::fs::create_dir_all(&dir).map_err(|e| ExperimentError::io(&dir, e))?;
             format::write_atomic(&dir.join(format!("{}.csv", job.id)), table.as_bytes())?;
+        }
+        if experiment.output.extxyz {
+            write_extxyz(&file, &path)?;
         }
         file.save(&path)?;
         // A stalled configuration from an earlier attempt is stale now.
@@ -243,6 +252,18 @@ fn refuse_other_settings(
             });
         }
     }
+    Ok(())
+}
+
+/// `packings/<id>.xyz` beside `packings/<id>.json`.
+fn xyz_path(json: &Path) -> PathBuf {
+    json.with_extension("xyz")
+}
+
+/// The packing's extended XYZ frame (`output.extxyz`), written atomically.
+fn write_extxyz(file: &PackingFile, json: &Path) -> Result<(), ExperimentError> {
+    let frame = crate::extxyz::frame(file)?;
+    format::write_atomic(&xyz_path(json), frame.as_bytes())?;
     Ok(())
 }
 

@@ -407,11 +407,20 @@ pub struct OutputParams {
     /// record with the measured values is written either way (it is what
     /// makes a run resumable).
     pub packings: bool,
+    /// Also write each packing as extended XYZ, `packings/<id>.xyz` (the
+    /// frame of `jamkit export`, for OVITO and ASE), before its JSON; a
+    /// resumed run writes the ones that are missing. Needs `packings`.
+    /// Not written out when off, so that earlier runs read the same.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub extxyz: bool,
 }
 
 impl Default for OutputParams {
     fn default() -> Self {
-        Self { packings: true }
+        Self {
+            packings: true,
+            extxyz: false,
+        }
     }
 }
 
@@ -450,6 +459,13 @@ impl Experiment {
             ));
         }
         self.validate_dims()?;
+        if self.output.extxyz && !self.output.packings {
+            return Err(ExperimentError::invalid(
+                "output.extxyz",
+                true,
+                "needs output.packings = true: the frame is the packing's configuration",
+            ));
+        }
         let particles = self.particles.values();
         if particles.is_empty() {
             return Err(ExperimentError::invalid(
