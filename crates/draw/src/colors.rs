@@ -80,6 +80,27 @@ pub fn size_colors(sizes: &[f64]) -> Vec<Rgb> {
     }
 }
 
+/// The colour key of bodies of `sizes`, filled as [`size_colors`] fills
+/// them: one entry per size for one or two sizes; for more, the ramp's
+/// ends and middle with their sizes.
+pub fn size_key(sizes: &[f64]) -> Vec<(Rgb, String)> {
+    let d = distinct_sizes(sizes);
+    let label = |s: f64| format!("R⁰ = {}", (s * 1e4).round() / 1e4);
+    match d.len() {
+        0 => Vec::new(),
+        1 => vec![(MONO, label(d[0]))],
+        2 => vec![(SMALL, label(d[0])), (LARGE, label(d[1]))],
+        _ => {
+            let (lo, hi) = (d[0], d[d.len() - 1]);
+            vec![
+                (ramp(0.0), label(lo)),
+                (ramp(0.5), label(0.5 * (lo + hi))),
+                (ramp(1.0), label(hi)),
+            ]
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -88,6 +109,22 @@ mod tests {
     fn binary_mixtures_get_two_colors() {
         let c = size_colors(&[0.5, 0.7, 0.5, 0.7 + 1e-13]);
         assert_eq!(c, vec![SMALL, LARGE, SMALL, LARGE]);
+    }
+
+    #[test]
+    fn the_key_names_each_colour_with_its_size() {
+        assert!(size_key(&[]).is_empty());
+        assert_eq!(size_key(&[1.0, 1.0]), vec![(MONO, "R⁰ = 1".to_string())]);
+        let binary = size_key(&[0.7, 0.5, 0.7]);
+        assert_eq!(
+            binary,
+            vec![(SMALL, "R⁰ = 0.5".into()), (LARGE, "R⁰ = 0.7".into())]
+        );
+        let poly = size_key(&[1.0, 2.0, 1.5, 1.25]);
+        assert_eq!(poly.len(), 3);
+        assert_eq!(poly[0], (ramp(0.0), "R⁰ = 1".into()));
+        assert_eq!(poly[2], (ramp(1.0), "R⁰ = 2".into()));
+        assert_eq!(poly[1].1, "R⁰ = 1.5");
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //! legends), as SVG or PNG; their text uses the bundled font.
 
 use crate::DrawError;
-use crate::colors::{EDGE, RATTLER_EDGE, RATTLER_FILL, Rgb};
+use crate::colors::{EDGE, RATTLER_EDGE, RATTLER_FILL, Rgb, size_key};
 use crate::packing::Packing2d;
 use crate::shapes::ShapePanel;
 use plotters::coord::Shift;
@@ -113,12 +113,14 @@ fn render_error(path: &Path, e: impl std::fmt::Display) -> DrawError {
 }
 
 /// Pixel layout of a packing picture: the box fills the picture but for a
-/// margin, `y` up.
+/// margin, `y` up, and a strip underneath for the colour key.
 struct Canvas {
     width: u32,
     height: u32,
     margin: f64,
     scale: f64,
+    /// Height of the key strip.
+    key: u32,
 }
 
 impl Canvas {
@@ -126,20 +128,71 @@ impl Canvas {
         let margin = (size as f64 / 50.0).round().max(4.0);
         let scale = (size as f64 - 2.0 * margin) / box_edges[0].max(box_edges[1]);
         let side = |l: f64| ((l * scale).round() + 2.0 * margin).max(1.0) as u32;
+        let key = (size as f64 / 16.0).round().max(14.0) as u32;
         Self {
             width: side(box_edges[0]),
-            height: side(box_edges[1]),
+            height: side(box_edges[1]) + key,
             margin,
             scale,
+            key,
         }
     }
 
     fn px(&self, p: [f64; 2]) -> (i32, i32) {
         (
             (self.margin + p[0] * self.scale).round() as i32,
-            (self.height as f64 - self.margin - p[1] * self.scale).round() as i32,
+            (self.height as f64 - self.key as f64 - self.margin - p[1] * self.scale).round() as i32,
         )
     }
+}
+
+/// The colour key under a packing: a swatch and its size per fill colour,
+/// and the rattlers' swatch (dashed edge) when there are rattlers.
+fn paint_key<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    packing: &Packing2d,
+    canvas: &Canvas,
+    line: u32,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let sizes: Vec<f64> = packing.bodies.iter().map(|b| b.size).collect();
+    let mut entries: Vec<(Rgb, bool, String)> = size_key(&sizes)
+        .into_iter()
+        .map(|(c, label)| (c, false, label))
+        .collect();
+    let rattlers = packing.bodies.iter().filter(|b| b.rattler).count();
+    if rattlers > 0 {
+        entries.push((RATTLER_FILL, true, format!("rattler ({rattlers})")));
+    }
+    let k = canvas.key as f64;
+    let side = (0.5 * k).round() as i32;
+    let y = canvas.height as i32 - (0.5 * k).round() as i32 - (canvas.margin * 0.5) as i32;
+    let font = ("sans-serif", (0.5 * k).round().max(8.0))
+        .into_font()
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let mut x = canvas.margin as i32;
+    for (fill, dashed, label) in entries {
+        let corners = [(x, y - side / 2), (x + side, y + side / 2)];
+        root.draw(&Rectangle::new(corners, rgb(fill).filled()))?;
+        let (x1, y1, x2, y2) = (x, y - side / 2, x + side, y + side / 2);
+        let edge = vec![(x1, y1), (x2, y1), (x2, y2), (x1, y2), (x1, y1)];
+        if dashed {
+            let dash = 2 * line;
+            root.draw(&DashedPathElement::new(
+                edge,
+                dash,
+                dash,
+                rgb(RATTLER_EDGE).stroke_width(line),
+            ))?;
+        } else {
+            root.draw(&PathElement::new(edge, rgb(EDGE).stroke_width(line)))?;
+        }
+        let at = x + side + side / 2;
+        let (w, _) = root.estimate_text_size(&label, &font)?;
+        root.draw(&Text::new(label, (at, y), font.clone()))?;
+        x = at + w as i32 + side;
+    }
+    Ok(())
 }
 
 fn paint_packing<DB: DrawingBackend>(
@@ -148,6 +201,7 @@ fn paint_packing<DB: DrawingBackend>(
     canvas: &Canvas,
     size: u32,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    crate::fonts::register();
     root.fill(&WHITE)?;
     let line = ((size as f64 / 800.0).round() as u32).max(1);
     let dash = 4 * line;
@@ -178,7 +232,7 @@ fn paint_packing<DB: DrawingBackend>(
         [canvas.px([0.0, l2]), canvas.px([l1, 0.0])],
         rgb(EDGE).stroke_width(2 * line),
     ))?;
-    Ok(())
+    paint_key(root, packing, canvas, line)
 }
 
 /// The SVG text of a packing picture whose longer side is `size` pixels.
@@ -398,8 +452,11 @@ mod tests {
             let hex = format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
             assert!(svg.contains(&hex), "{hex} missing");
         }
-        // No text in packing pictures.
-        assert!(!svg.contains("<text"));
+        // The colour key: each size and the rattlers, with their fills.
+        for label in ["R⁰ = 0.5", "R⁰ = 0.7", "rattler (1)"] {
+            assert!(svg.contains(label), "{label} missing from the key");
+        }
+        assert_eq!(svg.matches("<text").count(), 3);
     }
 
     #[test]
