@@ -242,7 +242,8 @@ impl Builder {
         let mut fr = Vec::new();
         let mut rises = Vec::new();
         let mut falls = Vec::new();
-        let mut at_largest_delta = Vec::new();
+        // φ_J with its s.e.m. per (n, Δ), for the ordering in n at each Δ.
+        let mut by_delta: Vec<(u32, Vec<(f64, f64, f64)>)> = Vec::new();
         for &n in &ns {
             let pts = self.largest(n, |s| s.phi.is_finite());
             let series = |f: &dyn Fn(&Sample) -> Option<f64>| -> Vec<(f64, f64, f64)> {
@@ -262,8 +263,8 @@ impl Builder {
                     "n = {n}: {:.4} → {:.4} (Δ = {:e} → {:e})",
                     a.1, b.1, a.0, b.0
                 ));
-                at_largest_delta.push((n, b.0, b.1));
             }
+            by_delta.push((n, p_series.clone()));
             if let (Some(a), Some(b)) = (r_series.first(), r_series.last()) {
                 falls.push((n, a.1, b.1));
             }
@@ -306,8 +307,8 @@ impl Builder {
                 },
             )?;
         }
-        // φ_J rises for every n; more slowly for larger n (compared at the
-        // largest Δ common to all n).
+        // φ_J rises for every n; more slowly for larger n (the order in n
+        // at every shared Δ, `phi_order`).
         let rise_ok = self.mode_numbers().iter().all(|&n| {
             let pts = self.largest(n, |s| s.phi.is_finite());
             let (a, b) = (pts.first(), pts.last());
@@ -319,32 +320,13 @@ impl Builder {
                 _ => false,
             }
         });
-        at_largest_delta.sort_by_key(|t| t.0);
-        let common = at_largest_delta
-            .iter()
-            .map(|t| t.1)
-            .fold(f64::INFINITY, f64::min);
-        let ordered = at_largest_delta
-            .windows(2)
-            .all(|w| w[1].2 <= w[0].2 || w[0].1 != common);
         self.claim(
             "φ_J rises with Δ for every n (Fig. 7)",
             rises.join("; "),
             if rise_ok { "yes" } else { "no" },
         );
-        let order: Vec<String> = at_largest_delta
-            .iter()
-            .map(|(n, d, p)| format!("n = {n}: {p:.4} at Δ = {d:e}"))
-            .collect();
-        self.claim(
-            "… and more slowly for larger n (Fig. 7)",
-            order.join("; "),
-            match (at_largest_delta.len() > 1, ordered) {
-                (false, _) => "needs several n",
-                (true, true) => "yes",
-                (true, false) => "no",
-            },
-        );
+        let (order, verdict) = phi_order(&by_delta);
+        self.claim("… and more slowly for larger n (Fig. 7)", order, verdict);
         let fall_text: Vec<String> = falls
             .iter()
             .map(|(n, a, b)| format!("n = {n}: {:.1} % → {:.1} %", 100.0 * a, 100.0 * b))
@@ -1052,4 +1034,128 @@ fn fit_gap_slope(p: &Point, lo: f64, hi: f64, options: &Options) -> Option<Power
         range: (xy[0].0, xy[xy.len() - 1].0),
         points: xy.len(),
     })
+}
+/// The ordering of φ_J in `n` at every Δ that all `n` share: `(n, [(Δ,
+/// φ_J, s.e.m.)])` per n, n ascending. A pair of neighbouring n is
+/// *ordered* when the larger n has the lower φ_J by more than 2 standard
+/// errors of the difference, *inverted* when it has the higher φ_J by more
+/// than 2, and *tied* otherwise. The text lists the Δ where every pair is
+/// ordered, and each inverted or tied pair at the Δ where some pair is
+/// ordered (below that, all n lie within their errors). The verdict: "no"
+/// if a pair is inverted, "partly" if a pair is tied at a Δ where others
+/// are ordered, "yes" if the order holds wherever the data can tell,
+/// "cannot tell" if no pair is told apart anywhere.
+fn phi_order(by_delta: &[(u32, Vec<(f64, f64, f64)>)]) -> (String, &'static str) {
+    if by_delta.len() < 2 {
+        return (String::new(), "needs several n");
+    }
+    let deltas: Vec<f64> = by_delta[0]
+        .1
+        .iter()
+        .map(|p| p.0)
+        .filter(|d| {
+            by_delta
+                .iter()
+                .all(|(_, pts)| pts.iter().any(|p| p.0 == *d))
+        })
+        .collect();
+    let (mut ordered, mut notes) = (Vec::new(), Vec::new());
+    let (mut told, mut tied, mut inverted) = (false, false, false);
+    for d in deltas {
+        let at: Vec<(u32, f64, f64)> = by_delta
+            .iter()
+            .map(|(n, pts)| {
+                let p = pts.iter().find(|p| p.0 == d).expect("a shared Δ");
+                (*n, p.1, p.2)
+            })
+            .collect();
+        let pairs: Vec<(u32, u32, f64)> = at
+            .windows(2)
+            .map(|w| {
+                let se = (w[0].2 * w[0].2 + w[1].2 * w[1].2).sqrt();
+                (w[0].0, w[1].0, (w[0].1 - w[1].1) / se)
+            })
+            .collect();
+        told |= pairs.iter().any(|p| p.2 > 2.0);
+        if pairs.iter().all(|p| p.2 > 2.0) {
+            ordered.push(format!("{d:e}"));
+        } else if pairs.iter().any(|p| p.2 > 2.0) {
+            for &(a, b, z) in pairs.iter().filter(|p| p.2 <= 2.0) {
+                if z < -2.0 {
+                    inverted = true;
+                    notes.push(format!(
+                        "at Δ = {d:e}, n = {b} lies above n = {a} by {:.1} s.e.",
+                        -z
+                    ));
+                } else {
+                    tied = true;
+                    notes.push(format!("at Δ = {d:e}, n = {a} and {b} tie ({z:+.1} s.e.)"));
+                }
+            }
+        }
+    }
+    let names: Vec<String> = by_delta.iter().map(|(n, _)| n.to_string()).collect();
+    let mut text = if ordered.is_empty() {
+        "no Δ where every n is told apart".to_string()
+    } else {
+        format!(
+            "φ_J(n = {}) in falling order at Δ = {}",
+            names.join(" > "),
+            ordered.join(", ")
+        )
+    };
+    if !notes.is_empty() {
+        text += "; ";
+        text += &notes.join("; ");
+    }
+    let verdict = match (told, inverted, tied) {
+        (_, true, _) => "no",
+        (false, false, _) => "cannot tell",
+        (true, false, true) => "partly",
+        (true, false, false) => "yes",
+    };
+    (text, verdict)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::phi_order;
+
+    /// Three n at two Δ, φ_J with s.e.m. 0.001: told apart by 0.01 (10
+    /// s.e.), tied by 0.001 (0.7 s.e.), inverted by 0.01.
+    #[test]
+    fn the_order_in_n_is_judged_pair_by_pair_with_its_errors() {
+        let series = |at_small: [f64; 3], at_large: [f64; 3]| {
+            (2..5)
+                .map(|n| {
+                    let k = (n - 2) as usize;
+                    (
+                        n,
+                        vec![(0.01, at_small[k], 0.001), (0.1, at_large[k], 0.001)],
+                    )
+                })
+                .collect::<Vec<_>>()
+        };
+        let (text, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.9, 0.89, 0.88]));
+        assert_eq!(verdict, "yes", "{text}");
+        assert!(
+            text.contains("at Δ = 1e-1") && !text.contains("1e-2"),
+            "{text}"
+        );
+        let (text, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.9, 0.89, 0.889]));
+        assert_eq!(verdict, "partly", "{text}");
+        assert!(text.contains("n = 3 and 4 tie (+0.7 s.e.)"), "{text}");
+        let (text, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.9, 0.88, 0.89]));
+        assert_eq!(verdict, "no", "{text}");
+        assert!(
+            text.contains("n = 4 lies above n = 3 by 7.1 s.e."),
+            "{text}"
+        );
+        let (_, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.85, 0.85, 0.85]));
+        assert_eq!(verdict, "cannot tell");
+        assert_eq!(
+            phi_order(&series([0.9; 3], [0.9; 3])[..1]).1,
+            "needs several n"
+        );
+    }
 }
