@@ -243,7 +243,7 @@ impl Builder {
         let mut rises = Vec::new();
         let mut falls = Vec::new();
         // φ_J with its s.e.m. per (n, Δ), for the ordering in n at each Δ.
-        let mut by_delta: Vec<(u32, Vec<(f64, f64, f64)>)> = Vec::new();
+        let mut by_delta: Vec<(u32, PhiSeries)> = Vec::new();
         for &n in &ns {
             let pts = self.largest(n, |s| s.phi.is_finite());
             let series = |f: &dyn Fn(&Sample) -> Option<f64>| -> Vec<(f64, f64, f64)> {
@@ -1035,6 +1035,9 @@ fn fit_gap_slope(p: &Point, lo: f64, hi: f64, options: &Options) -> Option<Power
         points: xy.len(),
     })
 }
+/// `(Δ, φ_J, s.e.m.)` of one n, Δ ascending.
+type PhiSeries = Vec<(f64, f64, f64)>;
+
 /// The ordering of φ_J in `n` at every Δ that all `n` share: `(n, [(Δ,
 /// φ_J, s.e.m.)])` per n, n ascending. A pair of neighbouring n is
 /// *ordered* when the larger n has the lower φ_J by more than 2 standard
@@ -1045,7 +1048,7 @@ fn fit_gap_slope(p: &Point, lo: f64, hi: f64, options: &Options) -> Option<Power
 /// if a pair is inverted, "partly" if a pair is tied at a Δ where others
 /// are ordered, "yes" if the order holds wherever the data can tell,
 /// "cannot tell" if no pair is told apart anywhere.
-fn phi_order(by_delta: &[(u32, Vec<(f64, f64, f64)>)]) -> (String, &'static str) {
+fn phi_order(by_delta: &[(u32, PhiSeries)]) -> (String, &'static str) {
     if by_delta.len() < 2 {
         return (String::new(), "needs several n");
     }
