@@ -120,6 +120,9 @@ pub enum MassesArg {
     Plain,
     /// Each body's own stiffness block (block-preconditioned FIRE).
     Blocks,
+    /// The blocks only where a minimisation starts from a decompressed
+    /// jammed state (`masses: Blocks((jammed_only: true))`).
+    BlocksJammed,
 }
 
 /// Which bodies `bench packing` jams.
@@ -311,6 +314,10 @@ pub fn run(what: BenchCommand) -> Result<()> {
             fire.masses = match masses {
                 MassesArg::Plain => Masses::Plain,
                 MassesArg::Blocks => Masses::Blocks(blocks),
+                MassesArg::BlocksJammed => Masses::Blocks(PreconParams {
+                    jammed_only: true,
+                    ..blocks
+                }),
             };
             fire.dt_max = dt_max.or(fire.dt_max);
             fire.validate("minimizer")?;

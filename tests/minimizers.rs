@@ -480,3 +480,49 @@ fn a_family_without_hessian_is_minimised_by_fire_alone() {
     let reference = Fire::new(FireParams::paper()).minimize(&mut paper).unwrap();
     assert_eq!((out.steps, out.energy), (reference.steps, reference.energy));
 }
+
+/// `masses: Blocks((jammed_only: true))`: the blocks act only in the
+/// jamming search's minimisations that start from a decompressed jammed
+/// state. A minimisation with no such start (here the first one, from a
+/// compressed random state) is bit for bit the plain masses'; the jamming
+/// search then ends in the paper's window; and the always-on blocks give a
+/// different first minimisation (else the check would be empty).
+#[test]
+fn jammed_only_blocks_leave_other_minimisations_to_the_plain_masses() {
+    let dimer = Nmer::<2>::new(&NmerParams {
+        alpha: Some(1.5),
+        spheres: None,
+        inertia: None,
+    })
+    .unwrap();
+    let with = |masses: Masses| {
+        let mut scene = compressed::<2, _>(dimer.clone(), 24, 5, 0.9);
+        let mut fire = Fire::new(FireParams {
+            masses,
+            ..FireParams::default()
+        });
+        let out = fire.minimize(&mut scene).unwrap();
+        (out.steps, out.energy.to_bits())
+    };
+    let jammed_only = Masses::Blocks(PreconParams {
+        jammed_only: true,
+        ..PreconParams::default()
+    });
+    assert_eq!(with(jammed_only.clone()), with(Masses::Plain));
+    assert_ne!(
+        with(Masses::Blocks(PreconParams::default())),
+        with(Masses::Plain)
+    );
+    let mut scene = compressed::<2, _>(dimer, 24, 5, 0.3);
+    let mut fire = Fire::new(FireParams {
+        masses: jammed_only,
+        ..FireParams::default()
+    });
+    let params = jamkit_engine::JamParams::default();
+    let out = jamkit_engine::jam(&mut scene, &mut fire, &params).unwrap();
+    assert!(
+        out.energy_per_particle > params.energy_low && out.energy_per_particle < params.energy_high,
+        "V/N = {:e}",
+        out.energy_per_particle
+    );
+}

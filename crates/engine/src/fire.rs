@@ -439,6 +439,9 @@ pub struct Fire {
     trace: Option<Vec<(f64, MinimizeOutcome)>>,
     /// With [`Fire::watch`]: where the minimiser stands, for another thread.
     progress: Option<Arc<Progress>>,
+    /// The next minimisation starts from a decompressed jammed state (set
+    /// by the jamming search; read by `masses: Blocks((jammed_only: true))`).
+    from_jammed: bool,
 }
 
 /// Where a minimiser stands, written after every minimisation and read by
@@ -493,6 +496,12 @@ impl Fire {
             params,
             ..Self::default()
         }
+    }
+
+    /// Say whether the next minimisations start from a decompressed jammed
+    /// state (the jamming search does; see [`PreconParams::jammed_only`]).
+    pub fn set_from_jammed(&mut self, from_jammed: bool) {
+        self.from_jammed = from_jammed;
     }
 
     /// Keep `(φ, outcome)` of every minimisation from now on (a step trace:
@@ -562,7 +571,11 @@ impl Fire {
         let (inv_m, mass) = (&self.inv_mass, &self.mass);
         let unit = inv_m.iter().all(|&m| m == 1.0);
         let precon = match &p.masses {
-            Masses::Blocks(pc) if p.variant == FireVariant::Fire => Some(pc),
+            Masses::Blocks(pc)
+                if p.variant == FireVariant::Fire && (self.from_jammed || !pc.jammed_only) =>
+            {
+                Some(pc)
+            }
             _ => None,
         };
         let (blocks, w) = (&mut self.blocks, &mut self.precon_grad);

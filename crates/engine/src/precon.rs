@@ -71,6 +71,14 @@ pub struct PreconParams {
     /// `κ`: that typical stiffness is taken no smaller than `κ` times the
     /// coordinate's own mass (see the module's note on the stress part).
     pub least_mass: f64,
+    /// Use the blocks only in the minimisations of the jamming search that
+    /// start from a decompressed jammed state (after a relaxed state above
+    /// the window), and the bodies' own masses everywhere else: the
+    /// compression that picks the basin runs with the paper's masses, the
+    /// relaxations inside a jammed basin with the blocks. Not written out
+    /// when off.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub jammed_only: bool,
 }
 
 impl Default for PreconParams {
@@ -79,6 +87,7 @@ impl Default for PreconParams {
             refresh: 100,
             floor: 0.25,
             least_mass: 0.03,
+            jammed_only: false,
         }
     }
 }

@@ -231,11 +231,15 @@ fn bisect<const D: usize, S: Shape<D>>(
     let mut steps = 0;
     // The largest φ found short of the target so far.
     let mut under_at = f64::NEG_INFINITY;
+    fire.set_from_jammed(false);
     loop {
         let e = tally.relax(scene, fire)?;
         let (verdict, state) = judge(scene, e);
         let over = match verdict {
-            Verdict::Done => return Ok(tally.outcome(scene.phi(), e)),
+            Verdict::Done => {
+                fire.set_from_jammed(false);
+                return Ok(tally.outcome(scene.phi(), e));
+            }
             Verdict::Over => true,
             Verdict::Under => false,
         };
@@ -243,6 +247,7 @@ fn bisect<const D: usize, S: Shape<D>>(
         if over == (eps > 0.0) {
             eps *= -0.5;
         }
+        fire.set_from_jammed(over);
         if !over {
             under_at = under_at.max(scene.phi());
         } else if let Some(step) = leap(scene, e) {
