@@ -1,0 +1,44 @@
+//! The Python module (`python/`, docs/python.md): `tests/python/run.sh`
+//! installs it with pip into a venv under `target/` (numpy, pytest and
+//! maturin from PyPI) and runs `python/tests` with pytest, which checks the
+//! module's packings, contacts and spectra against this build's `jamkit`
+//! command line, bit for bit.
+//!
+//! Building the extension takes about three minutes of CPU on a clean
+//! checkout, so the test runs under CI (`CI` set, where a failure to set
+//! up is a test failure) or when `JAMKIT_TEST_PYTHON` is set; otherwise it
+//! says that it did not run and passes.
+
+use std::path::Path;
+use std::process::Command;
+
+#[test]
+fn the_python_module_passes_its_pytest_suite() {
+    let ci = std::env::var_os("CI").is_some_and(|v| !v.is_empty());
+    let asked = std::env::var_os("JAMKIT_TEST_PYTHON").is_some_and(|v| !v.is_empty());
+    if !ci && !asked {
+        eprintln!("python test not run: set CI or JAMKIT_TEST_PYTHON to build and test python/");
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new("bash")
+        .arg(root.join("tests/python/run.sh"))
+        .arg(env!("CARGO_BIN_EXE_jamkit"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "python tests failed:\n{text}\n{err}");
+    // pytest's summary line, "N passed in …": all of python/tests ran
+    // (5 tests today), none skipped or failed.
+    let summary = text.lines().last().unwrap_or_default();
+    let passed: usize = summary
+        .split_whitespace()
+        .next()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0);
+    assert!(
+        passed >= 5 && summary.contains(" passed") && !summary.contains("skipped"),
+        "{text}"
+    );
+}
