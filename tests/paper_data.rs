@@ -94,7 +94,14 @@ fn the_report_regenerates_from_a_slice_of_the_data() {
     let dz = dz.unwrap_or_else(|| panic!("no δz_J fit: {:?}", r.fits));
     assert!(dz.fit.points >= 4 && dz.fit.exponent.is_finite());
     assert!(r.fits.iter().all(|f| f.n == 2), "{:?}", r.fits);
-    let printed = format!("{mean:.4} at Δ = {largest:e}");
+    // The claim "φ_J rises with Δ" quotes φ_J at the smallest and the
+    // largest Δ: the latter is the mean over the slice's packings there.
+    let printed = format!("→ {mean:.4} (Δ = ");
+    assert!(
+        r.markdown.contains(&format!("→ {largest:e})")),
+        "{}",
+        r.markdown
+    );
     assert!(
         r.markdown.contains(&printed),
         "φ_J {printed} not in the report:\n{}",
