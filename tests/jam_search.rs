@@ -211,12 +211,7 @@ fn bisection_packings_are_refused_under_the_default_and_resume_as_bisection() {
     let bisection = experiment(", protocol: Jam(search: Bisection)");
     let made = common::run_ok(&bisection, dir.path(), 1);
     assert_eq!((made.packings.len(), made.reused), (2, 0));
-    let options = runner::RunOptions {
-        out: dir.path().to_path_buf(),
-        jobs: Some(1),
-        log: jamkit_experiment::Log::Quiet,
-        shard: None,
-    };
+    let options = common::options(dir.path(), 1);
     let err = runner::run(&experiment(""), &options)
         .unwrap_err()
         .to_string();

@@ -99,12 +99,7 @@ fn packings_are_reproducible_and_runs_resume() {
     // Changed settings are neither served from the old files nor mixed
     // with them: the run is refused, naming the setting.
     let changed = jamkit_experiment::overrides::apply(&e, &["protocol.eps=2e-3".into()]).unwrap();
-    let options = jamkit_experiment::runner::RunOptions {
-        out: two.path().to_path_buf(),
-        jobs: Some(2),
-        log: jamkit_experiment::Log::Quiet,
-        shard: None,
-    };
+    let options = common::options(two.path(), 2);
     let refused = jamkit_experiment::runner::run(&changed, &options).unwrap_err();
     let message = refused.to_string();
     assert!(

@@ -2,9 +2,9 @@
 //! engine: the conformance kit on blunt to sharp lobes, and its example
 //! experiment end to end.
 
-use jamkit_experiment::runner::{RunOptions, run};
 use jamkit_experiment::{Experiment, overrides};
 use jamkit_lobed::{Lobed, LobedParams};
+mod common;
 use std::path::Path;
 
 fn lobed(delta: f64, kappa: f64) -> Lobed {
@@ -43,22 +43,11 @@ fn blunt_to_sharp_lobes_pass_the_kit() {
 /// jams every packing into the paper's window 1e-16 < V/N < 2e-16.
 #[test]
 fn example_experiment_jams() {
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/examples/lobed.ron");
-    let e = Experiment::from_file(&file).unwrap();
-    let e = overrides::apply(&e, &["particles=32".into(), "samples=1".into()]).unwrap();
-    e.validate().unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let report = run(
-        &e,
-        &RunOptions {
-            out: dir.path().to_path_buf(),
-            jobs: Some(2),
-            log: jamkit_experiment::Log::Quiet,
-            shard: None,
-        },
-    )
-    .unwrap();
-    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let report = common::run_file(
+        "experiments/examples/lobed.ron",
+        &["particles=32", "samples=1"],
+        2,
+    );
     assert_eq!(report.packings.len(), 2, "one packing per Δ");
     for p in &report.packings {
         assert_eq!(p.family, "lobed");

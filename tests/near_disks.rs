@@ -6,7 +6,6 @@
 use jamkit_core::{Packing, Potential, SizeDistribution, Vector};
 use jamkit_engine::{Objective, Scene, check::gradient_error};
 use jamkit_experiment::Experiment;
-use jamkit_experiment::runner::{RunOptions, run};
 use jamkit_fourier::{FourierParams, NearDisk};
 use rand::SeedableRng;
 
@@ -68,17 +67,7 @@ fn delta_zero_reproduces_the_sphere_packing() {
         );
         let dir = tempfile::tempdir().unwrap();
         let e = Experiment::from_ron(&text, "inline").unwrap();
-        run(
-            &e,
-            &RunOptions {
-                out: dir.path().to_path_buf(),
-                jobs: Some(1),
-                log: jamkit_experiment::Log::Quiet,
-                shard: None,
-            },
-        )
-        .unwrap()
-        .packings
+        common::run_ok(&e, dir.path(), 1).packings
     };
     let disks = run_with(r#""sphere""#);
     let near = run_with(r#""fourier", params: {"n": 3, "delta": 0.0}"#);

@@ -6,11 +6,9 @@
 
 use jamkit_core::{Contact, GapHessian, Packing, Potential, Shape, SizeDistribution, Vector};
 use jamkit_engine::{Objective, Scene, check::gradient_error};
-use jamkit_experiment::runner::{RunOptions, run};
-use jamkit_experiment::{Experiment, overrides};
 use jamkit_nmer::{Angle, Nmer, NmerParams, Quaternion, SphereSpec};
 use rand::SeedableRng;
-use std::path::Path;
+mod common;
 
 fn dimer<const D: usize>(alpha: f64) -> Nmer<D> {
     Nmer::<D>::new(&NmerParams {
@@ -423,24 +421,7 @@ fn gap_second_derivatives_match_finite_differences() {
 /// Run `file` (under `experiments/`) with overrides into a temporary
 /// directory; no sample may fail.
 fn run_small(file: &str, sets: &[&str]) -> Vec<jamkit_format::PackingFile> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
-    let e = Experiment::from_file(&path).unwrap();
-    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    let e = overrides::apply(&e, &sets).unwrap();
-    e.validate().unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let report = run(
-        &e,
-        &RunOptions {
-            out: dir.path().to_path_buf(),
-            jobs: Some(2),
-            log: jamkit_experiment::Log::Quiet,
-            shard: None,
-        },
-    )
-    .unwrap();
-    assert!(report.failures.is_empty(), "{:?}", report.failures);
-    report.packings
+    common::run_file(file, sets, 2).packings
 }
 
 /// Contacts among non-rattlers recomputed from the packing file's `spheres`

@@ -36,18 +36,32 @@ pub fn multi_mode() -> NearDisk {
     .unwrap()
 }
 
+/// Options of a quiet run into `dir` on `jobs` threads, unsharded.
+pub fn options(dir: &Path, jobs: usize) -> RunOptions {
+    RunOptions {
+        out: dir.to_path_buf(),
+        jobs: Some(jobs),
+        log: jamkit_experiment::Log::Quiet,
+        shard: None,
+    }
+}
+
 /// Run `e` into `dir` without a progress bar.
 pub fn run_into(e: &Experiment, dir: &Path, jobs: usize) -> RunReport {
-    run(
-        e,
-        &RunOptions {
-            out: dir.to_path_buf(),
-            jobs: Some(jobs),
-            log: jamkit_experiment::Log::Quiet,
-            shard: None,
-        },
-    )
-    .unwrap()
+    run(e, &options(dir, jobs)).unwrap()
+}
+
+/// Run the experiment file `file` (relative to the workspace root) with
+/// the `--set` overrides `sets` into a temporary directory; every sample
+/// must succeed.
+pub fn run_file(file: &str, sets: &[&str], jobs: usize) -> RunReport {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+    let e = Experiment::from_file(&path).unwrap();
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let e = jamkit_experiment::overrides::apply(&e, &sets).unwrap();
+    e.validate().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    run_ok(&e, dir.path(), jobs)
 }
 
 /// [`run_into`], and every sample must succeed.
