@@ -377,7 +377,7 @@ impl Builder {
                 .collect();
             let row = FitRow::new("δz_J", n, big, 0.5, 0.1);
             if let Some(g) = self.fit_and_record(&fit_points, mean, row) {
-                guides.push(g);
+                guides.push(g.fitting(series.len() - 1));
             }
         }
         if series
@@ -786,7 +786,7 @@ impl Builder {
                 });
                 let row = FitRow::new(name, n, big, expected, 0.15);
                 if let Some(g) = self.fit_and_record(&values, stat, row) {
-                    guides.push(g);
+                    guides.push(g.fitting(omega.len() - 1));
                 }
             }
         }

@@ -33,6 +33,9 @@ pub struct Guide {
     pub label: String,
     /// Points of the curve (two suffice for a power law).
     pub points: Vec<(f64, f64)>,
+    /// Draw it in the colour of this series (a fit to that series'
+    /// points); `None`: a colour of its own.
+    pub series: Option<usize>,
 }
 
 impl Guide {
@@ -41,7 +44,14 @@ impl Guide {
         Self {
             label: label.into(),
             points: vec![(x0, a * x0.powf(b)), (x1, a * x1.powf(b))],
+            series: None,
         }
+    }
+
+    /// The same guide in the colour of series `k` (the series it fits).
+    pub fn fitting(mut self, k: usize) -> Self {
+        self.series = Some(k);
+        self
     }
 
     /// `y ∝ x^b` through the point `at`, between `x0` and `x1`.
@@ -186,7 +196,7 @@ impl Figure {
         let label = |log: bool, span: f64, whole: bool| {
             move |v: &f64| {
                 if log {
-                    power_of_ten(*v)
+                    log_label(*v, span)
                 } else {
                     linear_label(*v, span, whole)
                 }
@@ -256,7 +266,7 @@ impl Figure {
             chart.draw_series(bars)?;
         }
         for (k, g) in self.guides.iter().enumerate() {
-            let color = COLORS[(k + 1) % COLORS.len()].mix(0.7);
+            let color = COLORS[g.series.unwrap_or(k + 1) % COLORS.len()].mix(0.7);
             let pts: Vec<(f64, f64)> = g
                 .points
                 .iter()
@@ -310,6 +320,17 @@ fn power_of_ten(e: f64) -> String {
         }
     } else {
         format!("{:.1e}", 10f64.powf(e))
+    }
+}
+
+/// A tick label at `log₁₀ v = e` on a log axis spanning `span` decades:
+/// over two decades or more only whole decades are labelled (the other
+/// ticks keep their grid lines), below that every tick.
+fn log_label(e: f64, span: f64) -> String {
+    if span >= 2.0 && (e - e.round()).abs() >= 1e-9 {
+        String::new()
+    } else {
+        power_of_ten(e)
     }
 }
 
@@ -379,6 +400,10 @@ mod tests {
         assert_eq!(power_of_ten(-3.0), "1e-3");
         assert_eq!(power_of_ten(0.0), "1");
         assert_eq!(power_of_ten(-0.5), "3.2e-1");
+        // Half decades are labelled on a short log axis only.
+        assert_eq!(log_label(-0.5, 1.5), "3.2e-1");
+        assert_eq!(log_label(-0.5, 4.0), "");
+        assert_eq!(log_label(-2.0, 4.0), "1e-2");
     }
 
     #[test]
