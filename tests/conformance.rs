@@ -142,10 +142,19 @@ fn harmonic_single_modes_sums_and_the_sphere_limit() {
             ("(l: 2, delta: 2.0)", "params.delta"),
             ("(l: 2, delta: 0.0, inertia: Some(0.0))", "params.inertia"),
             ("(delta: 0.1)", "params"),
-            ("(l: 2, modes: [(l: 2, m: 0, c: 1.0)], delta: 0.1)", "params.l"),
+            (
+                "(l: 2, modes: [(l: 2, m: 0, c: 1.0)], delta: 0.1)",
+                "params.l",
+            ),
             ("(modes: [], delta: 0.1)", "params.modes"),
-            ("(modes: [(l: 2, m: 0, c: 1.0), (l: 2, m: 0, c: 0.5)], delta: 0.1)", "params.modes[1]"),
-            ("(modes: [(l: 3, m: 5, c: 1.0)], delta: 0.1)", "params.modes[0].m"),
+            (
+                "(modes: [(l: 2, m: 0, c: 1.0), (l: 2, m: 0, c: 0.5)], delta: 0.1)",
+                "params.modes[1]",
+            ),
+            (
+                "(modes: [(l: 3, m: 5, c: 1.0)], delta: 0.1)",
+                "params.modes[0].m",
+            ),
             ("(l: 2, delta: 0.1, inertia: Some(-1.0))", "params.inertia"),
             ("(l: 2, delta: 0.1, colour: 3)", "colour"),
         ],

@@ -34,8 +34,16 @@ fn mixed(delta: f64) -> Harmonic {
         m: None,
         modes: Some(vec![
             Mode { l: 2, m: 0, c: 1.0 },
-            Mode { l: 2, m: 1, c: -0.3 },
-            Mode { l: 4, m: -2, c: 0.5 },
+            Mode {
+                l: 2,
+                m: 1,
+                c: -0.3,
+            },
+            Mode {
+                l: 4,
+                m: -2,
+                c: 0.5,
+            },
             Mode { l: 6, m: 3, c: 0.2 },
         ]),
         delta,
@@ -79,8 +87,7 @@ fn energy_is_invariant_under_a_general_rotation() {
     for shape in [single(2, 0, 0.25), single(3, 2, 0.2), mixed(0.2)] {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let sizes = SizeDistribution::default().sample(30, &mut rng);
-        let mut p =
-            Packing::<3, Harmonic>::random(shape.clone(), sizes, 0.01, &mut rng).unwrap();
+        let mut p = Packing::<3, Harmonic>::random(shape.clone(), sizes, 0.01, &mut rng).unwrap();
         let centre = *p.bbox.edges() * 0.5;
         for (k, r) in p.positions.iter_mut().enumerate() {
             let a = k as f64 * 2.399;
@@ -139,7 +146,9 @@ fn delta_zero_reproduces_the_sphere_packing() {
         format!(r#"(name: "z", dim: 3, family: {family}, particles: 32, samples: 2, seed: 4)"#)
     };
     let spheres = run_inline(&text(r#""sphere""#));
-    let near = run_inline(&text(r#""harmonic", params: {"l": 3, "m": 1, "delta": 0.0}"#));
+    let near = run_inline(&text(
+        r#""harmonic", params: {"l": 3, "m": 1, "delta": 0.0}"#,
+    ));
     assert_eq!(spheres.len(), 2);
     for (a, b) in spheres.iter().zip(&near) {
         assert_eq!(a.positions, b.positions);
@@ -157,7 +166,10 @@ fn delta_zero_reproduces_the_sphere_packing() {
 /// otherwise. Packings of N = 64 at Δ = 0.2, one seed each.
 #[test]
 fn rattlers_and_the_isostatic_count_use_the_real_coordinates() {
-    for (params, f) in [(r#"{"l": 2, "m": 0, "delta": 0.2}"#, 5), (r#"{"l": 2, "m": 2, "delta": 0.2}"#, 6)] {
+    for (params, f) in [
+        (r#"{"l": 2, "m": 0, "delta": 0.2}"#, 5),
+        (r#"{"l": 2, "m": 2, "delta": 0.2}"#, 6),
+    ] {
         let text = format!(
             r#"(name: "r", dim: 3, family: "harmonic", params: {params}, particles: 64, samples: 1, seed: 2, observables: [Contacts])"#
         );

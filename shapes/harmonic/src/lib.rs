@@ -223,12 +223,7 @@ pub struct Harmonic {
 /// `x` and zero rotation.
 #[derive(Clone, Copy, Debug)]
 struct BodyJet {
-    value: f64,
-    /// `∇_x G̃`.
-    grad: Vector<3>,
-    /// `∂G̃/∂q_p`.
-    rot: RotVec,
-    /// `∇_x∇_x G̃` (only with second derivatives).
+    /// `∇_x∇_x G̃`.
     hess: Matrix<3>,
     /// `∂²G̃/∂x∂q_p`.
     x_rot: [Vector<3>; MAX_ROT],
@@ -459,11 +454,34 @@ impl Harmonic {
         area.powi(3) / (36.0 * PI * self.unit_volume * self.unit_volume)
     }
 
-    /// `G̃(x) = F(Qᵀx/|x|)` and its derivatives (crate documentation), with
-    /// `columns` those of `R(Q)`, `axes` the rotation axes `e_p`, `m` the
-    /// number of rotational coordinates, and second derivatives when
-    /// `second`.
+    /// `G̃(x) = F(Qᵀx/|x|)` and `∇G̃` in the world frame (crate
+    /// documentation), with `columns` those of `R(Q)`; also the body-frame
+    /// direction `y = Qᵀx/|x|`. The first-derivative path of the pair loop;
+    /// [`Harmonic::body_jet`] adds the second derivatives to the same bits.
     #[inline(always)]
+    fn value_grad(
+        &self,
+        columns: &[Vector<3>; 3],
+        x: &Vector<3>,
+        inv_r: f64,
+    ) -> (f64, Vector<3>, Vector<3>) {
+        let [c0, c1, c2] = columns;
+        let u = x * inv_r;
+        let y = Vector::<3>::new(c0.dot(&u), c1.dot(&u), c2.dot(&u));
+        let mut value = 0.0;
+        let mut gb = Vector::<3>::zeros();
+        for (l, p) in &self.by_degree {
+            let (v, g) = p.value_grad(&y);
+            value += v;
+            gb += g - y * (*l as f64 * v);
+        }
+        let grad = (c0 * gb[0] + c1 * gb[1] + c2 * gb[2]) * inv_r;
+        (value, grad, y)
+    }
+
+    /// `G̃(x) = F(Qᵀx/|x|)` and all its derivatives (crate documentation),
+    /// with `axes` the rotation axes `e_p` and `m` the number of rotational
+    /// coordinates.
     fn body_jet(
         &self,
         columns: &[Vector<3>; 3],
@@ -471,60 +489,51 @@ impl Harmonic {
         m: usize,
         x: &Vector<3>,
         inv_r: f64,
-        second: bool,
     ) -> BodyJet {
-        let [c0, c1, c2] = columns;
-        let u = x * inv_r;
-        let y = Vector::<3>::new(c0.dot(&u), c1.dot(&u), c2.dot(&u));
-        let mut value = 0.0;
-        let mut gb = Vector::<3>::zeros();
+        let (_, grad, y) = self.value_grad(columns, x, inv_r);
         let mut hb = Matrix::<3>::zeros();
         for (l, p) in &self.by_degree {
             let lf = *l as f64;
-            let (v, g, h) = p.jet(&y, second);
-            value += v;
-            gb += g - y * (lf * v);
-            if second {
-                let gy = g * y.transpose();
-                hb += h - (gy + gy.transpose()) * lf - Matrix::<3>::identity() * (lf * v)
-                    + y * y.transpose() * (lf * (lf + 2.0) * v);
-            }
+            let (v, g) = p.value_grad(&y);
+            let h = p.hessian(&y);
+            let gy = g * y.transpose();
+            hb += h - (gy + gy.transpose()) * lf - Matrix::<3>::identity() * (lf * v)
+                + y * y.transpose() * (lf * (lf + 2.0) * v);
         }
-        let to_world = |b: &Vector<3>| c0 * b[0] + c1 * b[1] + c2 * b[2];
-        let grad = to_world(&gb) * inv_r;
         let mut jet = BodyJet {
-            value,
-            grad,
-            rot: [0.0; MAX_ROT],
             hess: Matrix::<3>::zeros(),
             x_rot: [Vector::<3>::zeros(); MAX_ROT],
             rot_rot: [[0.0; MAX_ROT]; MAX_ROT],
         };
-        // g · t_p = g · (x × e_p) = e_p · (g × x).
-        let torque = grad.cross(x);
+        let rot_m = Matrix::<3>::from_columns(columns);
+        let hess = rot_m * hb * rot_m.transpose() * (inv_r * inv_r);
+        jet.hess = hess;
+        let t: [Vector<3>; 3] = std::array::from_fn(|p| x.cross(&axes[p]));
         for p in 0..m {
-            jet.rot[p] = axes[p].dot(&torque);
+            jet.x_rot[p] = axes[p].cross(&grad) + hess * t[p];
         }
-        if second {
-            let rot_m = Matrix::<3>::from_columns(columns);
-            let hess = rot_m * hb * rot_m.transpose() * (inv_r * inv_r);
-            jet.hess = hess;
-            let t: [Vector<3>; 3] = std::array::from_fn(|p| x.cross(&axes[p]));
-            for p in 0..m {
-                jet.x_rot[p] = axes[p].cross(&grad) + hess * t[p];
-            }
-            for p in 0..m {
-                for q in p..m {
-                    let w = t[p].dot(&(hess * t[q]))
-                        + 0.5
-                            * (grad.dot(&axes[q]) * axes[p].dot(x)
-                                + grad.dot(&axes[p]) * axes[q].dot(x));
-                    jet.rot_rot[p][q] = w;
-                    jet.rot_rot[q][p] = w;
-                }
+        for p in 0..m {
+            for q in p..m {
+                let w = t[p].dot(&(hess * t[q]))
+                    + 0.5
+                        * (grad.dot(&axes[q]) * axes[p].dot(x)
+                            + grad.dot(&axes[p]) * axes[q].dot(x));
+                jet.rot_rot[p][q] = w;
+                jet.rot_rot[q][p] = w;
             }
         }
         jet
+    }
+
+    /// `∂G̃/∂q_p = g · t_p = g · (x × e_p) = e_p · (g × x)`.
+    #[inline(always)]
+    fn torques(&self, axes: &[Vector<3>; 3], m: usize, grad: &Vector<3>, x: &Vector<3>) -> RotVec {
+        let torque = grad.cross(x);
+        let mut rot = [0.0; MAX_ROT];
+        for p in 0..m {
+            rot[p] = axes[p].dot(&torque);
+        }
+        rot
     }
 
     /// The rotation axes `e_p`: the world axes, or `Q x̂, Q ŷ` for an
@@ -538,20 +547,17 @@ impl Harmonic {
         }
     }
 
-    /// The contact of a pair (first or also second derivatives), `None`
-    /// when the bounding test says it is certainly farther than `max_gap`.
-    #[allow(clippy::too_many_arguments)]
+    /// The separation, its inverse length (0 at coincident centres) and
+    /// the unit vector, or `None` when the bounding test says the pair is
+    /// certainly farther apart than `max_gap`.
     #[inline(always)]
-    fn pair(
+    fn direction(
         &self,
         size_i: f64,
-        o_i: &Quaternion,
         size_j: f64,
-        o_j: &Quaternion,
         r_ij: &Vector<3>,
         max_gap: f64,
-        second: bool,
-    ) -> Option<GapHessian<3>> {
+    ) -> Option<(f64, Vector<3>, f64, Vector<3>)> {
         let r = r_ij.norm();
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return None;
@@ -559,49 +565,50 @@ impl Harmonic {
         // NOTE: coincident centres have no direction: take x̂ and 1/r → 0
         // (such a pair overlaps deeply; any direction pushes it apart, and
         // a fixed one keeps the run deterministic).
-        let (x, inv_r) = if r > 0.0 {
-            (*r_ij, 1.0 / r)
+        Some(if r > 0.0 {
+            let inv_r = 1.0 / r;
+            (r, *r_ij, inv_r, r_ij * inv_r)
         } else {
-            (Vector::<3>::x(), 0.0)
-        };
+            (r, Vector::<3>::x(), 0.0, Vector::<3>::x())
+        })
+    }
+
+    /// The first-order contact of a pair with its first derivatives.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn contact(
+        &self,
+        size_i: f64,
+        c_i: &[Vector<3>; 3],
+        size_j: f64,
+        c_j: &[Vector<3>; 3],
+        r: f64,
+        x: &Vector<3>,
+        inv_r: f64,
+        u: &Vector<3>,
+    ) -> Contact<3> {
         let m = Shape::<3>::rot_dof(self);
-        let (c_i, c_j) = (o_i.columns(), o_j.columns());
-        let (e_i, e_j) = (self.axes(&c_i), self.axes(&c_j));
-        let ji = self.body_jet(&c_i, &e_i, m, &x, inv_r, second);
-        let jj = self.body_jet(&c_j, &e_j, m, &(-x), inv_r, second);
-        let d = self.delta;
-        let (a_i, a_j) = (d * size_i, d * size_j);
-        let u = x * inv_r;
-        let gap = r - size_i - size_j - (a_i * ji.value + a_j * jj.value);
-        let u = if r > 0.0 { u } else { Vector::<3>::x() };
-        let grad_r = u - ji.grad * a_i + jj.grad * a_j;
+        let (f_i, g_i, _) = self.value_grad(c_i, x, inv_r);
+        let (f_j, g_j, _) = self.value_grad(c_j, &(-x), inv_r);
+        let (a_i, a_j) = (self.delta * size_i, self.delta * size_j);
+        let gap = r - size_i - size_j - (a_i * f_i + a_j * f_j);
+        let grad_r = u - g_i * a_i + g_j * a_j;
+        let (t_i, t_j) = (
+            self.torques(&self.axes(c_i), m, &g_i, x),
+            self.torques(&self.axes(c_j), m, &g_j, &(-x)),
+        );
         let mut grad_rot_i = [0.0; MAX_ROT];
         let mut grad_rot_j = [0.0; MAX_ROT];
         for p in 0..m {
-            grad_rot_i[p] = -a_i * ji.rot[p];
-            grad_rot_j[p] = -a_j * jj.rot[p];
+            grad_rot_i[p] = -a_i * t_i[p];
+            grad_rot_j[p] = -a_j * t_j[p];
         }
-        let contact = Contact {
+        Contact {
             gap,
             grad_r,
             grad_rot_i,
             grad_rot_j,
-        };
-        let mut out = GapHessian::translational(gap, grad_r, Matrix::<3>::zeros());
-        out.contact = contact;
-        if second {
-            let sphere = (Matrix::<3>::identity() - u * u.transpose()) * inv_r;
-            out.rr = sphere - ji.hess * a_i - jj.hess * a_j;
-            for p in 0..m {
-                out.r_qi[p] = -ji.x_rot[p] * a_i;
-                out.r_qj[p] = jj.x_rot[p] * a_j;
-                for q in 0..m {
-                    out.qi_qi[p][q] = -a_i * ji.rot_rot[p][q];
-                    out.qj_qj[p][q] = -a_j * jj.rot_rot[p][q];
-                }
-            }
         }
-        Some(out)
     }
 }
 
@@ -716,11 +723,15 @@ impl Shape<3> for Harmonic {
         max_gap: f64,
         mut visit: F,
     ) {
-        if let Some(h) = self.pair(size_i, o_i, size_j, o_j, r_ij, max_gap, false) {
-            visit(h.contact);
+        if let Some((r, x, inv_r, u)) = self.direction(size_i, size_j, r_ij, max_gap) {
+            let (c_i, c_j) = (o_i.columns(), o_j.columns());
+            visit(self.contact(size_i, &c_i, size_j, &c_j, r, &x, inv_r, &u));
         }
     }
 
+    /// Body `i`'s term enters with `x = r_ij`, body `j`'s with `x = −r_ij`
+    /// (odd derivatives in `r_ij` change sign), each times `−Δ R⁰`; the
+    /// sphere's `(1 − r̂ r̂ᵀ)/r` is added; the bodies' rotations do not mix.
     fn gap_hessians<F: FnMut(GapHessian<3>)>(
         &self,
         size_i: f64,
@@ -731,9 +742,31 @@ impl Shape<3> for Harmonic {
         max_gap: f64,
         mut visit: F,
     ) -> jamkit_core::Result<()> {
-        if let Some(h) = self.pair(size_i, o_i, size_j, o_j, r_ij, max_gap, true) {
-            visit(h);
+        let Some((r, x, inv_r, u)) = self.direction(size_i, size_j, r_ij, max_gap) else {
+            return Ok(());
+        };
+        let (c_i, c_j) = (o_i.columns(), o_j.columns());
+        let contact = self.contact(size_i, &c_i, size_j, &c_j, r, &x, inv_r, &u);
+        let m = Shape::<3>::rot_dof(self);
+        let ji = self.body_jet(&c_i, &self.axes(&c_i), m, &x, inv_r);
+        let jj = self.body_jet(&c_j, &self.axes(&c_j), m, &(-x), inv_r);
+        let (a_i, a_j) = (self.delta * size_i, self.delta * size_j);
+        let sphere = (Matrix::<3>::identity() - u * u.transpose()) * inv_r;
+        let mut out = GapHessian::translational(
+            contact.gap,
+            contact.grad_r,
+            sphere - ji.hess * a_i - jj.hess * a_j,
+        );
+        out.contact = contact;
+        for p in 0..m {
+            out.r_qi[p] = -ji.x_rot[p] * a_i;
+            out.r_qj[p] = jj.x_rot[p] * a_j;
+            for q in 0..m {
+                out.qi_qi[p][q] = -a_i * ji.rot_rot[p][q];
+                out.qj_qj[p][q] = -a_j * jj.rot_rot[p][q];
+            }
         }
+        visit(out);
         Ok(())
     }
 }

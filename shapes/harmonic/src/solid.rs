@@ -156,52 +156,86 @@ impl Poly {
         pi.mul(&Self::from_map(azimuthal))
     }
 
-    /// Value, gradient and (when `hessian`) Hessian at `v`.
+    /// The largest exponent of any variable (the powers a jet needs).
+    fn top_power(&self) -> usize {
+        self.terms
+            .iter()
+            .flat_map(|(_, e)| e.iter().copied())
+            .max()
+            .unwrap_or(0) as usize
+    }
+
+    /// `v_a^k` for `k = 0 … top` (`top ≤ LMAX`).
     #[inline(always)]
-    pub fn jet(&self, v: &Vector<3>, hessian: bool) -> (f64, Vector<3>, Matrix<3>) {
-        // Powers v_a^k for k = 0 … LMAX.
+    fn powers(v: &Vector<3>, top: usize) -> [[f64; LMAX as usize + 1]; 3] {
         let mut pw = [[1.0f64; LMAX as usize + 1]; 3];
         for a in 0..3 {
-            for k in 1..=LMAX as usize {
+            for k in 1..=top {
                 pw[a][k] = pw[a][k - 1] * v[a];
             }
         }
-        let p = |a: usize, k: u8| if k == 0 { 1.0 } else { pw[a][k as usize] };
-        let pm = |a: usize, k: u8, d: u8| -> f64 {
-            // d/dv_a^d of v_a^k: k (k−1) … v_a^{k−d}.
+        pw
+    }
+
+    /// Value and gradient at `v` (the pair loop's path).
+    #[inline(always)]
+    pub fn value_grad(&self, v: &Vector<3>) -> (f64, Vector<3>) {
+        let pw = Self::powers(v, self.top_power());
+        let mut val = 0.0;
+        let mut g = Vector::<3>::zeros();
+        for (c, e) in &self.terms {
+            let (i, j, k) = (e[0] as usize, e[1] as usize, e[2] as usize);
+            let (x, y, z) = (pw[0][i], pw[1][j], pw[2][k]);
+            val += c * x * y * z;
+            if i > 0 {
+                g[0] += c * (i as f64 * pw[0][i - 1]) * y * z;
+            }
+            if j > 0 {
+                g[1] += c * x * (j as f64 * pw[1][j - 1]) * z;
+            }
+            if k > 0 {
+                g[2] += c * x * y * (k as f64 * pw[2][k - 1]);
+            }
+        }
+        (val, g)
+    }
+
+    /// The Hessian at `v`.
+    pub fn hessian(&self, v: &Vector<3>) -> Matrix<3> {
+        let pw = Self::powers(v, self.top_power());
+        // d^d/dv^d of v^k: k (k−1) … v^{k−d}.
+        let der = |a: usize, k: u8, d: u8| -> f64 {
             if k < d {
                 return 0.0;
             }
-            let mut f = 1.0;
-            for i in 0..d {
-                f *= (k - i) as f64;
-            }
-            f * p(a, k - d)
+            let f: f64 = (0..d).map(|i| (k - i) as f64).product();
+            f * pw[a][(k - d) as usize]
         };
-        let mut val = 0.0;
-        let mut g = Vector::<3>::zeros();
         let mut h = Matrix::<3>::zeros();
         for (c, e) in &self.terms {
-            let (x, y, z) = (p(0, e[0]), p(1, e[1]), p(2, e[2]));
-            val += c * x * y * z;
-            let (dx, dy, dz) = (pm(0, e[0], 1), pm(1, e[1], 1), pm(2, e[2], 1));
-            g[0] += c * dx * y * z;
-            g[1] += c * x * dy * z;
-            g[2] += c * x * y * dz;
-            if hessian {
-                h[(0, 0)] += c * pm(0, e[0], 2) * y * z;
-                h[(1, 1)] += c * x * pm(1, e[1], 2) * z;
-                h[(2, 2)] += c * x * y * pm(2, e[2], 2);
-                h[(0, 1)] += c * dx * dy * z;
-                h[(0, 2)] += c * dx * y * dz;
-                h[(1, 2)] += c * x * dy * dz;
-            }
+            let (x, y, z) = (der(0, e[0], 0), der(1, e[1], 0), der(2, e[2], 0));
+            let (dx, dy, dz) = (der(0, e[0], 1), der(1, e[1], 1), der(2, e[2], 1));
+            h[(0, 0)] += c * der(0, e[0], 2) * y * z;
+            h[(1, 1)] += c * x * der(1, e[1], 2) * z;
+            h[(2, 2)] += c * x * y * der(2, e[2], 2);
+            h[(0, 1)] += c * dx * dy * z;
+            h[(0, 2)] += c * dx * y * dz;
+            h[(1, 2)] += c * x * dy * dz;
         }
-        if hessian {
-            h[(1, 0)] = h[(0, 1)];
-            h[(2, 0)] = h[(0, 2)];
-            h[(2, 1)] = h[(1, 2)];
-        }
+        h[(1, 0)] = h[(0, 1)];
+        h[(2, 0)] = h[(0, 2)];
+        h[(2, 1)] = h[(1, 2)];
+        h
+    }
+
+    /// Value, gradient and (when `hessian`; else zero) Hessian at `v`.
+    pub fn jet(&self, v: &Vector<3>, hessian: bool) -> (f64, Vector<3>, Matrix<3>) {
+        let (val, g) = self.value_grad(v);
+        let h = if hessian {
+            self.hessian(v)
+        } else {
+            Matrix::<3>::zeros()
+        };
         (val, g, h)
     }
 
