@@ -955,7 +955,8 @@ mod tests {
 
     /// The pair loop's gap against the printed formula
     /// `r − R_i − R_j − Δ[R_i F(Q_iᵀ r̂) + R_j F(−Q_jᵀ r̂)]`, written with the
-    /// quaternion's inverse rotation: the same arithmetic up to order, 1e-14.
+    /// conjugate quaternion's rotation (not the pair loop's transposed
+    /// columns): 1e-14, round-off of the two ways of rotating.
     #[test]
     fn gap_matches_the_printed_formula() {
         for s in shapes() {
@@ -968,8 +969,8 @@ mod tests {
                             - ri
                             - rj
                             - s.delta
-                                * (ri * s.f(&o_i.apply_inverse(&u))
-                                    + rj * s.f(&(-o_j.apply_inverse(&u))));
+                                * (ri * s.f(&o_i.conjugate().apply(&u))
+                                    + rj * s.f(&(-o_j.conjugate().apply(&u))));
                         let c = s.pair_contacts(ri, &o_i, rj, &o_j, &r, f64::INFINITY);
                         assert_eq!(c.len(), 1);
                         assert_relative_eq!(c[0].gap, want, epsilon = 1e-14);
