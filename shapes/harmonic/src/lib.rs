@@ -421,6 +421,37 @@ impl Harmonic {
         self.mean_squares.iter().sum()
     }
 
+    /// Whether the body is convex, sampled on the Gauss–Legendre ×
+    /// trapezoid grid of `n × 2n` directions. A star-shaped surface
+    /// `ρ(ŷ) ŷ` (`ρ = 1 + ΔF`) is convex where the tangential matrix
+    /// `ρ² 1 + 2 ∇_Sρ ∇_Sρᵀ − ρ ∇_S∇_Sρ` is positive definite (the 3D form
+    /// of the planar `r² + 2r'² − r r'' > 0`; for an axisymmetric body its
+    /// two eigenvalues are the meridian's condition and the parallels'
+    /// `ρ(ρ − ρ' cot θ) > 0`). `∇_S∇_S F` is the tangential block of the
+    /// Hessian of `F(x/|x|)`, constant along rays.
+    pub fn is_convex(&self, n: usize) -> bool {
+        let (nodes, _) = gauss_legendre(n);
+        let frame = [Vector::<3>::x(), Vector::<3>::y(), Vector::<3>::z()];
+        nodes.iter().all(|z| {
+            let s = (1.0 - z * z).sqrt();
+            (0..2 * n).all(|k| {
+                let phi = PI * k as f64 / n as f64;
+                let (sp, cp) = phi.sin_cos();
+                let y = Vector::<3>::new(s * cp, s * sp, *z);
+                let e1 = Vector::<3>::new(z * cp, z * sp, -s);
+                let e2 = Vector::<3>::new(-sp, cp, 0.0);
+                let (f, g, _) = self.value_grad(&frame, &y, 1.0);
+                let h = self.body_jet(&frame, &frame, 0, &y, 1.0).hess;
+                let rho = 1.0 + self.delta * f;
+                let (g1, g2) = (self.delta * g.dot(&e1), self.delta * g.dot(&e2));
+                let m11 = rho * rho + 2.0 * g1 * g1 - rho * self.delta * e1.dot(&(h * e1));
+                let m22 = rho * rho + 2.0 * g2 * g2 - rho * self.delta * e2.dot(&(h * e2));
+                let m12 = 2.0 * g1 * g2 - rho * self.delta * e1.dot(&(h * e2));
+                m11 > 0.0 && m11 * m22 - m12 * m12 > 0.0
+            })
+        })
+    }
+
     /// The asphericity `A = S³/(36π V²)` to second order in `Δ`:
     /// `1 + (3/2) Δ² Σ_l (l − 1)(l + 2) ⟨P_l²⟩`.
     pub fn asphericity_second_order(&self) -> f64 {
@@ -710,6 +741,19 @@ impl Shape<3> for Harmonic {
     /// Near-spheres jam hypostatic, like the paper's near-disks.
     fn expects_isostatic(&self) -> bool {
         false
+    }
+
+    /// A non-convex body (sampled on 48 × 96 directions), named: the
+    /// first-order gap assumes convex bodies with one contact per pair.
+    fn warnings(&self) -> Vec<String> {
+        if self.is_convex(48) {
+            Vec::new()
+        } else {
+            vec![format!(
+                "non-convex body (Δ = {}): the first-order gap assumes convex bodies with one contact per pair",
+                self.delta
+            )]
+        }
     }
 
     #[inline(always)]
@@ -1125,6 +1169,40 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Convexity against the axisymmetric conditions written out for
+    /// `Ŷ_20`, `ρ(θ) = 1 + Δ(3cos²θ − 1)/3`: the meridian's
+    /// `ρ² + 2ρ'² − ρρ'' > 0` and the parallels' `ρ − ρ' cot θ > 0`, on
+    /// 20 001 latitudes; the first Δ (step 10⁻³) where they fail is
+    /// 3/7 ≈ 0.4286 (at the equator, `ρ = 1 − Δ/3`, `ρ'' = 2Δ`), and
+    /// `is_convex` agrees 0.005 below and above it; a sum with l = 6 turns
+    /// non-convex much earlier and gets the warning.
+    #[test]
+    fn convexity_matches_the_axisymmetric_conditions() {
+        let written_out = |d: f64| {
+            (0..=20_000).all(|k| {
+                let t = PI * k as f64 / 20_000.0;
+                let (st, ct) = t.sin_cos();
+                let rho = 1.0 + d * (3.0 * ct * ct - 1.0) / 3.0;
+                let d1 = -2.0 * d * st * ct;
+                let d2 = -2.0 * d * (ct * ct - st * st);
+                let meridian = rho * rho + 2.0 * d1 * d1 - rho * d2 > 0.0;
+                let parallel = st < 1e-9 || rho * st - d1 * ct > 0.0;
+                meridian && parallel
+            })
+        };
+        let mut dc = 0.0;
+        while written_out(dc + 1e-3) {
+            dc += 1e-3;
+        }
+        assert!((dc - 3.0 / 7.0).abs() < 2e-3, "threshold {dc}");
+        assert!(single(2, 0, dc - 0.005).is_convex(48));
+        assert!(!single(2, 0, dc + 0.005).is_convex(48));
+        assert!(Shape::<3>::warnings(&single(2, 0, 0.3)).is_empty());
+        let bumpy = single(6, 3, 0.2);
+        assert!(!bumpy.is_convex(48));
+        assert_eq!(Shape::<3>::warnings(&bumpy).len(), 1);
     }
 
     /// Bad parameters are refused with the field named (the registry's
