@@ -120,3 +120,43 @@ fn ellipses_from_round_to_long() {
         ],
     );
 }
+
+#[test]
+fn harmonic_single_modes_sums_and_the_sphere_limit() {
+    assert_eq!(claimed_dims("harmonic"), [3]);
+    // A zonal mode: two rotational coordinates (the kit's rotation about z
+    // needs three and is skipped; tests/harmonic.rs turns about skew axes).
+    check_registered("harmonic", 3, "(l: 2, delta: 0.2)");
+    let tesseral = check_registered("harmonic", 3, "(l: 4, m: -3, delta: 0.1)");
+    assert!(tesseral.ran.contains(&"rotation"), "{tesseral:?}");
+    // Δ = 0 runs as the sphere family.
+    check_registered("harmonic", 3, "(l: 3, m: 1, delta: 0.0)");
+    check_bad_params(
+        "harmonic",
+        3,
+        &[
+            ("(l: 1, delta: 0.1)", "params.l"),
+            ("(l: 9, delta: 0.1)", "params.l"),
+            ("(l: 2, m: 3, delta: 0.1)", "params.m"),
+            ("(l: 2, delta: -0.1)", "params.delta"),
+            ("(l: 2, delta: 2.0)", "params.delta"),
+            ("(l: 2, delta: 0.0, inertia: Some(0.0))", "params.inertia"),
+            ("(delta: 0.1)", "params"),
+            (
+                "(l: 2, modes: [(l: 2, m: 0, c: 1.0)], delta: 0.1)",
+                "params.l",
+            ),
+            ("(modes: [], delta: 0.1)", "params.modes"),
+            (
+                "(modes: [(l: 2, m: 0, c: 1.0), (l: 2, m: 0, c: 0.5)], delta: 0.1)",
+                "params.modes[1]",
+            ),
+            (
+                "(modes: [(l: 3, m: 5, c: 1.0)], delta: 0.1)",
+                "params.modes[0].m",
+            ),
+            ("(l: 2, delta: 0.1, inertia: Some(-1.0))", "params.inertia"),
+            ("(l: 2, delta: 0.1, colour: 3)", "colour"),
+        ],
+    );
+}

@@ -13,6 +13,8 @@
 //!   [`Outline`] ability;
 //! * [`rotation`]: [`Rotation2`] and [`Angle`], the planar orientations shared by the 2D
 //!   families (the 2D near-disk gaps live in `jamkit-planar`);
+//! * [`quaternion`]: [`Quaternion`], the 3D orientation of the rigid 3D
+//!   families (`nmer`, `harmonic`);
 //! * [`potential`]: scalar contact potentials `v(h)` (harmonic, Hertzian);
 //! * [`sizes`]: size distributions (binary, monodisperse, uniform);
 //! * [`packing`]: a configuration of bodies in a box, in flat generalised
@@ -28,6 +30,7 @@ pub mod math;
 pub mod packing;
 pub mod periodic;
 pub mod potential;
+pub mod quaternion;
 pub mod rotation;
 pub mod shape;
 pub mod sizes;
@@ -41,6 +44,7 @@ pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use packing::Packing;
 pub use periodic::PeriodicBox;
 pub use potential::Potential;
+pub use quaternion::Quaternion;
 pub use rotation::{Angle, Rotation2};
 pub use shape::{Contact, ContactLanes, GapHessian, PairLanes, Shape, contacts_one_by_one};
 pub use sizes::SizeDistribution;

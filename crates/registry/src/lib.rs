@@ -56,6 +56,7 @@ families![
     jamkit_lobed::LobedFamily,
     jamkit_nmer::NmerFamily,
     jamkit_ellipse::EllipseFamily,
+    jamkit_harmonic::HarmonicFamily,
 ];
 
 /// Dimensions the engine is compiled for (families with `Dims::Any`).

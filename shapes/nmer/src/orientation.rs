@@ -17,126 +17,20 @@
 //! Quaternions are renormalised after every increment, so `|o| = 1` to
 //! round-off however many steps accumulate.
 
-use jamkit_core::Vector;
-
 /// A 2D orientation: the shared planar rotation `e^{iθ}`
 /// ([`jamkit_core::Rotation2`]); bodies made of spheres turn it by
 /// [`Rotation2::turned_exact`](jamkit_core::Rotation2::turned_exact).
 pub type Angle = jamkit_core::Rotation2;
 
-/// A 3D orientation: the unit quaternion `w + x i + y j + z k`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Quaternion {
-    w: f64,
-    x: f64,
-    y: f64,
-    z: f64,
-}
-
-impl Quaternion {
-    /// The identity rotation.
-    pub const IDENTITY: Self = Self {
-        w: 1.0,
-        x: 0.0,
-        y: 0.0,
-        z: 0.0,
-    };
-
-    /// `(w, x, y, z)` normalised; `None` for a zero or non-finite input.
-    pub fn normalized(w: f64, x: f64, y: f64, z: f64) -> Option<Self> {
-        let n = (w * w + x * x + y * y + z * z).sqrt();
-        (n > 0.0 && n.is_finite()).then(|| Self {
-            w: w / n,
-            x: x / n,
-            y: y / n,
-            z: z / n,
-        })
-    }
-
-    /// `(w, x, y, z)`.
-    pub fn coords(&self) -> [f64; 4] {
-        [self.w, self.x, self.y, self.z]
-    }
-
-    /// `exp(ω)`: the rotation by the angle `|ω|` about `ω̂`,
-    /// `(cos(|ω|/2), sin(|ω|/2) ω̂)`.
-    ///
-    /// NOTE: for `|ω| < 10⁻⁴` the Taylor series `sin(a/2)/a = ½ − a²/48`
-    /// (next term `a⁴/3840 < 3·10⁻²⁰`) avoids dividing by a tiny angle.
-    pub fn exp(omega: &Vector<3>) -> Self {
-        let a2 = omega.norm_squared();
-        let (c, k) = if a2 < 1e-8 {
-            (1.0 - a2 / 8.0, 0.5 - a2 / 48.0)
-        } else {
-            let a = a2.sqrt();
-            let (s, c) = (0.5 * a).sin_cos();
-            (c, s / a)
-        };
-        Self {
-            w: c,
-            x: k * omega[0],
-            y: k * omega[1],
-            z: k * omega[2],
-        }
-    }
-
-    /// The Hamilton product `self ∘ other` (apply `other` first).
-    pub fn mul(&self, o: &Self) -> Self {
-        Self {
-            w: self.w * o.w - self.x * o.x - self.y * o.y - self.z * o.z,
-            x: self.w * o.x + self.x * o.w + self.y * o.z - self.z * o.y,
-            y: self.w * o.y - self.x * o.z + self.y * o.w + self.z * o.x,
-            z: self.w * o.z + self.x * o.y - self.y * o.x + self.z * o.w,
-        }
-    }
-
-    /// Rescale to unit norm (after a product, `|q| = 1 + O(10⁻¹⁶)`).
-    pub fn renormalized(self) -> Self {
-        let n2 = self.w * self.w + self.x * self.x + self.y * self.y + self.z * self.z;
-        let inv = 1.0 / n2.sqrt();
-        Self {
-            w: self.w * inv,
-            x: self.x * inv,
-            y: self.y * inv,
-            z: self.z * inv,
-        }
-    }
-
-    /// The rotation matrix `R(o)`, as its three columns `R x̂, R ŷ, R ẑ`.
-    #[inline(always)]
-    pub fn columns(&self) -> [Vector<3>; 3] {
-        let (w, x, y, z) = (self.w, self.x, self.y, self.z);
-        [
-            Vector::<3>::new(
-                1.0 - 2.0 * (y * y + z * z),
-                2.0 * (x * y + w * z),
-                2.0 * (x * z - w * y),
-            ),
-            Vector::<3>::new(
-                2.0 * (x * y - w * z),
-                1.0 - 2.0 * (x * x + z * z),
-                2.0 * (y * z + w * x),
-            ),
-            Vector::<3>::new(
-                2.0 * (x * z + w * y),
-                2.0 * (y * z - w * x),
-                1.0 - 2.0 * (x * x + y * y),
-            ),
-        ]
-    }
-
-    /// `R(o) s`.
-    #[inline(always)]
-    pub fn apply(&self, s: &Vector<3>) -> Vector<3> {
-        let [a, b, c] = self.columns();
-        a * s[0] + b * s[1] + c * s[2]
-    }
-}
+/// A 3D orientation: the unit quaternion, shared with the other 3D
+/// families ([`jamkit_core::Quaternion`]).
+pub use jamkit_core::Quaternion;
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use jamkit_core::Vector;
 
     /// `exp(ω)` rotates a vector by Rodrigues' formula, for angles on both
     /// sides of the series threshold.

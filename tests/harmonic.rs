@@ -1,0 +1,264 @@
+//! The `harmonic` family (3D near-spheres with spherical-harmonic modes)
+//! in the engine: the conformance kit over single modes (axisymmetric or
+//! not, low and high degree) and a mixed sum; the energy's invariance
+//! under a general rotation of a cluster (the kit turns about the z axis
+//! only, and skips bodies with two rotational coordinates); Δ = 0 as the
+//! sphere family, bit for bit; the rattler convention and the isostatic
+//! count with the body's real coordinates; the shipped experiment.
+//! The pair-level checks (every first and second derivative against finite
+//! differences near ±Q e_z and generic, h_ij = h_ji, the printed formula,
+//! volume, asphericity) are the crate's unit tests.
+
+use jamkit_core::{Packing, Potential, Quaternion, Shape, SizeDistribution, Vector};
+use jamkit_engine::{Objective, Scene};
+use jamkit_experiment::runner::{RunOptions, run};
+use jamkit_experiment::{Experiment, overrides};
+use jamkit_harmonic::{Harmonic, HarmonicParams, Mode};
+use rand::SeedableRng;
+use std::path::Path;
+
+fn single(l: u32, m: i32, delta: f64) -> Harmonic {
+    Harmonic::new(&HarmonicParams {
+        l: Some(l),
+        m: Some(m),
+        modes: None,
+        delta,
+        inertia: None,
+    })
+    .unwrap()
+}
+
+fn mixed(delta: f64) -> Harmonic {
+    Harmonic::new(&HarmonicParams {
+        l: None,
+        m: None,
+        modes: Some(vec![
+            Mode { l: 2, m: 0, c: 1.0 },
+            Mode {
+                l: 2,
+                m: 1,
+                c: -0.3,
+            },
+            Mode {
+                l: 4,
+                m: -2,
+                c: 0.5,
+            },
+            Mode { l: 6, m: 3, c: 0.2 },
+        ]),
+        delta,
+        inertia: None,
+    })
+    .unwrap()
+}
+
+/// The kit's forces and torques, Hessian (central differences of the
+/// analytic gradient on dense overlapping configurations) and
+/// `h_ij = h_ji` (tolerances and their reasons in `crates/kit`) for
+/// single modes l = 2…6, zonal (two rotational coordinates) and not
+/// (three), and a mixed sum; the whole kit (with a jamming run and the
+/// rotation about z) for one non-axisymmetric mode.
+#[test]
+fn modes_and_sums_pass_the_kit() {
+    for shape in [
+        single(2, 0, 0.2),
+        single(2, 2, 0.2),
+        single(3, -1, 0.15),
+        single(4, 0, 0.1),
+        single(6, -5, 0.1),
+        mixed(0.15),
+    ] {
+        jamkit_kit::check_gradient::<3, _>(&shape);
+        assert!(jamkit_kit::check_hessian::<3, _>(&shape));
+        jamkit_kit::check_symmetry::<3, _>(&shape);
+    }
+    let done = jamkit_kit::check_family::<3, _>(single(3, 2, 0.2));
+    for check in ["gradient", "hessian", "symmetry", "rotation", "jamming"] {
+        assert!(done.ran.contains(&check), "{check}: {done:?}");
+    }
+}
+
+/// A compact overlapping cluster turned by a rotation about a skew axis
+/// (centres about the middle, every orientation `Q → U Q`) keeps its
+/// energy to 1e-12 relative (only the order of round-off changes):
+/// zonal, tesseral and mixed `F`.
+#[test]
+fn energy_is_invariant_under_a_general_rotation() {
+    for shape in [single(2, 0, 0.25), single(3, 2, 0.2), mixed(0.2)] {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let sizes = SizeDistribution::default().sample(30, &mut rng);
+        let mut p = Packing::<3, Harmonic>::random(shape.clone(), sizes, 0.01, &mut rng).unwrap();
+        let centre = *p.bbox.edges() * 0.5;
+        for (k, r) in p.positions.iter_mut().enumerate() {
+            let a = k as f64 * 2.399;
+            let rho = 0.5 * (k as f64).cbrt();
+            let z = 0.9 * ((k * 7) as f64).sin();
+            *r = centre + Vector::<3>::new(rho * a.cos(), rho * a.sin(), z);
+        }
+        let energy = |p: Packing<3, Harmonic>| {
+            let mut s = Scene::new(p, Potential::Harmonic, 0.2);
+            let mut g = vec![0.0; s.dof()];
+            s.energy_gradient(&mut g)
+        };
+        let e0 = energy(p.clone());
+        assert!(e0 > 1e-3, "the cluster should overlap: V = {e0}");
+        for u in [
+            Quaternion::normalized(0.4, 0.7, -0.3, 0.5).unwrap(),
+            Quaternion::normalized(-0.1, 0.2, 0.9, -0.4).unwrap(),
+        ] {
+            let mut q = p.clone();
+            for (r, o) in q.positions.iter_mut().zip(q.orientations.iter_mut()) {
+                *r = centre + u.apply(&(*r - centre));
+                *o = u.mul(o).renormalized();
+            }
+            let e1 = energy(q);
+            assert!(
+                (e1 - e0).abs() < 1e-12 * e0,
+                "{shape:?}: V {e0} → {e1} after turning"
+            );
+        }
+    }
+}
+
+fn run_inline(text: &str) -> Vec<jamkit_format::PackingFile> {
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    e.validate().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(
+        &e,
+        &RunOptions {
+            out: dir.path().to_path_buf(),
+            jobs: Some(1),
+            log: jamkit_experiment::Log::Quiet,
+            shard: None,
+        },
+    )
+    .unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    report.packings
+}
+
+/// Δ = 0 is the sphere family: the same packings for the same seeds, bit
+/// for bit, with no orientations.
+#[test]
+fn delta_zero_reproduces_the_sphere_packing() {
+    let text = |family: &str| {
+        format!(r#"(name: "z", dim: 3, family: {family}, particles: 32, samples: 2, seed: 4)"#)
+    };
+    let spheres = run_inline(&text(r#""sphere""#));
+    let near = run_inline(&text(
+        r#""harmonic", params: {"l": 3, "m": 1, "delta": 0.0}"#,
+    ));
+    assert_eq!(spheres.len(), 2);
+    for (a, b) in spheres.iter().zip(&near) {
+        assert_eq!(a.positions, b.positions);
+        assert_eq!(a.phi.to_bits(), b.phi.to_bits());
+        assert!(b.orientations.is_empty());
+    }
+}
+
+/// The rattler convention and the isostatic count, recomputed from the
+/// packing file alone: contacts are the pairs with a negative first-order
+/// gap (minimum image), bodies with fewer than d + 1 = 4 contacts are
+/// removed until none is left, and the remaining set must be the file's
+/// non-rattlers with its contact count; the margin is
+/// `N_c − (f N_nr − 3)` with `f = 3 + 2` for a zonal mode and `3 + 3`
+/// otherwise. Packings of N = 64 at Δ = 0.2, one seed each.
+#[test]
+fn rattlers_and_the_isostatic_count_use_the_real_coordinates() {
+    for (params, f) in [
+        (r#"{"l": 2, "m": 0, "delta": 0.2}"#, 5),
+        (r#"{"l": 2, "m": 2, "delta": 0.2}"#, 6),
+    ] {
+        let text = format!(
+            r#"(name: "r", dim: 3, family: "harmonic", params: {params}, particles: 64, samples: 1, seed: 2, observables: [Contacts])"#
+        );
+        let packings = run_inline(&text);
+        let p = &packings[0];
+        let map = jamkit_registry::params_from_json(&p.params).unwrap();
+        let shape: HarmonicParams = jamkit_registry::parse_params("harmonic", &map).unwrap();
+        let shape = Harmonic::new(&shape).unwrap();
+        assert_eq!(Shape::<3>::rot_dof(&shape) + 3, f);
+        let n = p.particles;
+        let o: Vec<Quaternion> = p
+            .orientations
+            .iter()
+            .map(|c| shape.orientation_from_coords(c).unwrap())
+            .collect();
+        let mut pairs = Vec::new();
+        for i in 0..n {
+            for j in i + 1..n {
+                let r = Vector::<3>::from_fn(|a, _| {
+                    let (d, l) = (p.positions[j][a] - p.positions[i][a], p.box_edges[a]);
+                    d - l * (d / l).round()
+                });
+                for c in shape.pair_contacts(p.radii[i], &o[i], p.radii[j], &o[j], &r, 0.0) {
+                    if c.gap < 0.0 {
+                        pairs.push((i, j));
+                    }
+                }
+            }
+        }
+        let mut alive = vec![true; n];
+        loop {
+            let mut count = vec![0usize; n];
+            for &(i, j) in &pairs {
+                if alive[i] && alive[j] {
+                    count[i] += 1;
+                    count[j] += 1;
+                }
+            }
+            let drop: Vec<usize> = (0..n).filter(|&i| alive[i] && count[i] < 4).collect();
+            if drop.is_empty() {
+                break;
+            }
+            for i in drop {
+                alive[i] = false;
+            }
+        }
+        let rattler: Vec<bool> = alive.iter().map(|a| !a).collect();
+        assert_eq!(rattler, p.rattler, "rattlers of {params}");
+        let n_c = pairs.iter().filter(|(i, j)| alive[*i] && alive[*j]).count();
+        let n_nr = alive.iter().filter(|a| **a).count();
+        assert_eq!(p.measures.n_contacts, Some(n_c));
+        assert_eq!(
+            p.measures.iso_margin,
+            Some(n_c as i64 - (f as i64 * n_nr as i64 - 3)),
+            "{params}"
+        );
+        assert!(p.orientations.iter().all(|q| q.len() == 4));
+    }
+}
+
+/// `experiments/paper3d/quick.ron`, shrunk to N = 64 (32 bodies make the
+/// box at Δ = 0.3 shorter than twice the interaction range, which the
+/// runner refuses) and one sample per Δ,
+/// jams every packing into the paper's window 1e-16 < V/N < 2e-16.
+#[test]
+fn quick_experiment_jams() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper3d/quick.ron");
+    let e = Experiment::from_file(&file).unwrap();
+    let e = overrides::apply(&e, &["particles=64".into(), "samples=1".into()]).unwrap();
+    e.validate().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(
+        &e,
+        &RunOptions {
+            out: dir.path().to_path_buf(),
+            jobs: Some(2),
+            log: jamkit_experiment::Log::Quiet,
+            shard: None,
+        },
+    )
+    .unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    assert_eq!(report.packings.len(), 5, "one packing per Δ");
+    for p in &report.packings {
+        assert!(
+            p.energy_per_particle > 1e-16 && p.energy_per_particle < 2e-16,
+            "{}: V/N = {}",
+            p.id,
+            p.energy_per_particle
+        );
+    }
+}
