@@ -7,7 +7,7 @@
 //! * `jamkit spectrum PACKING.json [--stiffness-only] [--remove-rattlers] [--modes] -o FILE.csv`
 //! * `jamkit report DIR… -o OUT`
 //! * `jamkit draw PACKING.json -o FILE.svg|FILE.png [--size PIXELS]`
-//! * `jamkit draw-shape [FAMILY] [--panel RON …] [--curve RON …] [--n 2,3] [--delta 0,0.1] [--modes RON …] -o FILE.svg|FILE.png`
+//! * `jamkit draw-shape [FAMILY] [--dim 2|3] [--panel RON …] [--curve RON …] [--n 2,3] [--delta 0,0.1] [--modes RON …] -o FILE.svg|FILE.png`
 
 /// `println!` that ignores a closed pipe (`jamkit validate … | head`)
 /// instead of panicking.
@@ -189,7 +189,8 @@ enum Command {
         #[arg(short, long, value_name = "FILE")]
         out: PathBuf,
     },
-    /// Draw a 2D packing file: true outlines, periodic images, rattlers.
+    /// Draw a 2D packing file (true outlines, periodic images, rattlers) or
+    /// a 3D one (an orthographic ray-cast of the box seen along z).
     Draw {
         /// A packing file written by `run` (DIR/packings/<id>.json).
         packing: PathBuf,
@@ -199,14 +200,24 @@ enum Command {
         /// Length in pixels of the picture's longer side.
         #[arg(long, value_name = "PIXELS", default_value_t = jamkit_draw::render::DEFAULT_SIZE)]
         size: u32,
+        /// 3D only: draw the content of the periodic box, every body cut to
+        /// 0 ≤ z ≤ L3 (cross-sections on the top face), instead of the
+        /// whole bodies whose centres lie in the box.
+        #[arg(long)]
+        cut: bool,
     },
     /// Polar plots R(θ)/R0 of a family's shapes (SVG or PNG): one panel per
     /// parameter set (--panel, --n, --modes), one curve per parameter set
     /// (--curve, --delta); unset parameters come from the family's example.
     DrawShape {
-        /// Any family whose 2D bodies have an outline (`jamkit shapes`).
+        /// Any family whose 2D bodies have an outline, or any 3D family
+        /// (`jamkit shapes`).
         #[arg(default_value = "fourier")]
         family: String,
+        /// 2: polar plots of outlines; 3: shaded 3D bodies. Default: 2 when
+        /// the family has 2D bodies, else 3.
+        #[arg(long)]
+        dim: Option<usize>,
         /// One panel's parameters, in RON, repeatable: --panel '(n: 3)'.
         #[arg(long, value_name = "RON")]
         panel: Vec<String>,
@@ -530,8 +541,46 @@ fn real_main() -> Result<()> {
             }
             Ok(())
         }
-        Command::Draw { packing, out, size } => {
-            let p = jamkit_draw::Packing2d::load(&packing)?;
+        Command::Draw {
+            packing,
+            out,
+            size,
+            cut,
+        } => {
+            let file = jamkit_draw::packing::read_file(&packing)?;
+            if file.dim == 3 {
+                let p = jamkit_draw::Packing3d::from_file(&file)?;
+                let view = if cut {
+                    jamkit_draw::scene3d::View::Cut
+                } else {
+                    jamkit_draw::scene3d::View::Whole
+                };
+                jamkit_draw::draw_packing_3d(&p, view, &out, size)?;
+                let images = p
+                    .primitives(view)
+                    .iter()
+                    .filter(|q| q.shift != [0, 0, 0])
+                    .map(|q| q.image_id())
+                    .collect::<std::collections::BTreeSet<_>>()
+                    .len();
+                out!(
+                    "{}: {} {} bodies in 3D ({} periodic images, {} rattlers), seen along z, drawn to {}",
+                    packing.display(),
+                    p.bodies.len(),
+                    p.family,
+                    images,
+                    p.bodies.iter().filter(|b| b.rattler).count(),
+                    out.display()
+                );
+                return Ok(());
+            }
+            if cut {
+                bail!(
+                    "--cut: only for 3D packings (this one has dim = {})",
+                    file.dim
+                );
+            }
+            let p = jamkit_draw::Packing2d::from_file(&file)?;
             jamkit_draw::draw_packing(&p, &out, size)?;
             let images = p
                 .pieces(jamkit_draw::render::POINTS_PER_BODY)
@@ -551,6 +600,7 @@ fn real_main() -> Result<()> {
         }
         Command::DrawShape {
             family,
+            dim,
             panel,
             curve,
             n,
@@ -576,6 +626,28 @@ fn real_main() -> Result<()> {
                 .collect::<Result<Vec<_>, _>>()?;
             for d in &delta {
                 curves.push(parse(&format!("(delta: {d:?})"))?);
+            }
+            let info = registry::family_info(&family)?;
+            let dim = dim.unwrap_or(if registry::supports_dim(&info, 2) {
+                2
+            } else {
+                3
+            });
+            if !matches!(dim, 2 | 3) || !registry::supports_dim(&info, dim) {
+                bail!(
+                    "--dim = {dim}: family `{family}` is drawn in dim 2 or 3 where it exists ({:?})",
+                    info.dims
+                );
+            }
+            if dim == 3 {
+                let panels = jamkit_draw::render3d::body_panels(&family, &panels, &curves)?;
+                jamkit_draw::draw_bodies(&panels, &out, size)?;
+                out!(
+                    "{} row(s) of 3D bodies drawn to {}",
+                    panels.len(),
+                    out.display()
+                );
+                return Ok(());
             }
             let panels = jamkit_draw::shapes::panels(&family, &panels, &curves)?;
             jamkit_draw::draw_shapes(&panels, &out, size)?;

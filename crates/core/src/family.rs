@@ -17,7 +17,8 @@
 //! [`ShapeVisitor`], after which all is statically dispatched. What a
 //! family can do beyond the [`Shape`] contract is an optional ability of
 //! its shape: a planar [`Outline`] for drawing
-//! ([`Shape::outline`]), a sphere decomposition, second derivatives.
+//! ([`Shape::outline`]), a 3D [`Surface`] ([`Shape::surface`]), a sphere
+//! decomposition, second derivatives.
 
 use crate::Shape;
 use serde::de::DeserializeOwned;
@@ -121,6 +122,29 @@ impl Outline for RoundOutline {
 
 /// A shared outline (what [`Shape::outline`] returns).
 pub type SharedOutline = Arc<dyn Outline>;
+
+/// The surface of a star-shaped 3D body, for drawing (the 3D counterpart
+/// of [`Outline`]): its radius in the body-frame direction `y` (a unit
+/// vector), in units of its size `R⁰`, and how the body frame is turned
+/// by the orientation a packing file stores. A body of size `R⁰`, centre
+/// `c` and rotation `M` (body to world) is the set of points `c + s M y`
+/// with `0 ≤ s ≤ R⁰ ρ(y)`. Bodies made of spheres have none; they are
+/// drawn from [`Shape::sphere_decomposition`](crate::Shape::sphere_decomposition).
+pub trait Surface: Debug + Send + Sync {
+    /// `ρ(y) = R(y)/R⁰` at the body-frame unit vector `y`.
+    fn relative_radius(&self, y: [f64; 3]) -> f64;
+    /// Certain bounds `(min, max)` on `ρ` over the unit sphere, with
+    /// `0 < min ≤ max`.
+    fn relative_radius_bounds(&self) -> (f64, f64);
+    /// The rotation from body to world frame, as a matrix (rows), of a body
+    /// whose orientation is written `coords`
+    /// ([`Shape::orientation_coords`](crate::Shape::orientation_coords));
+    /// `None` if the numbers are not an orientation.
+    fn rotation(&self, coords: &[f64]) -> Option<[[f64; 3]; 3]>;
+}
+
+/// A shared surface (what [`Shape::surface`](crate::Shape::surface) returns).
+pub type SharedSurface = Arc<dyn Surface>;
 
 impl FamilyInfo {
     /// The spec of parameter `name`, if the family has one.

@@ -39,6 +39,7 @@ pub mod stats;
 pub use error::{Error, Result};
 pub use family::{
     Dims, Family, FamilyInfo, Outline, ParamSpec, RoundOutline, ShapeVisitor, SharedOutline,
+    SharedSurface, Surface,
 };
 pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use packing::Packing;

@@ -385,6 +385,14 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         None
     }
 
+    /// The surface of the family's star-shaped 3D bodies, for drawing (an
+    /// optional ability: `None` where the family has none; balls are drawn
+    /// as balls, bodies made of spheres from
+    /// [`Shape::sphere_decomposition`]).
+    fn surface(&self) -> Option<crate::family::SharedSurface> {
+        None
+    }
+
     /// Whether the random start must be free of overlaps. Non-convex
     /// bodies (bodies made of spheres) can interpenetrate into a *locked*
     /// pair at a random start (two dimers crossed at their centres feel no

@@ -22,6 +22,8 @@ pub mod fonts;
 pub mod geometry;
 pub mod packing;
 pub mod render;
+pub mod render3d;
+pub mod scene3d;
 pub mod shapes;
 
 use std::path::PathBuf;
@@ -45,8 +47,9 @@ pub enum DrawError {
         /// What the JSON reader said.
         message: String,
     },
-    /// The packing is not two-dimensional.
-    #[error("dim = {0}: only 2D packings can be drawn")]
+    /// The packing is neither two- nor three-dimensional (or not the
+    /// dimension a reader expects).
+    #[error("dim = {0}: only 2D and 3D packings can be drawn")]
     Dimension(usize),
     /// A family this crate does not know how to outline.
     #[error(
@@ -92,4 +95,6 @@ pub enum DrawError {
 pub use geometry::{Outline, Point};
 pub use packing::{Body, Packing2d, Piece};
 pub use render::{Format, draw_packing, draw_shapes, packing_svg, shapes_svg};
+pub use render3d::{draw_bodies, draw_packing_3d, packing_3d_svg};
+pub use scene3d::Packing3d;
 pub use shapes::{ShapeCurve, ShapePanel};

@@ -12,6 +12,18 @@ use crate::geometry::{Outline, Point, periodic_pieces};
 use jamkit_format::PackingFile;
 use std::path::Path;
 
+/// Read a packing file (any dimension) from disk.
+pub fn read_file(path: &Path) -> Result<PackingFile, DrawError> {
+    let text = std::fs::read(path).map_err(|error| DrawError::Io {
+        path: path.to_path_buf(),
+        error,
+    })?;
+    serde_json::from_slice(&text).map_err(|e| DrawError::Parse {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
+}
+
 /// One body: centre (wrapped into the box), size `R⁰`, orientation `θ`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Body {
@@ -65,15 +77,7 @@ pub struct Packing2d {
 impl Packing2d {
     /// Read a packing file from disk.
     pub fn load(path: &Path) -> Result<Self, DrawError> {
-        let text = std::fs::read(path).map_err(|error| DrawError::Io {
-            path: path.to_path_buf(),
-            error,
-        })?;
-        let file: PackingFile = serde_json::from_slice(&text).map_err(|e| DrawError::Parse {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
-        Self::from_file(&file)
+        Self::from_file(&read_file(path)?)
     }
 
     /// Check a packing record and turn it into bodies.

@@ -93,11 +93,11 @@ pub const CURVE_STYLES: [CurveStyle; 6] = [
     },
 ];
 
-fn rgb(c: Rgb) -> RGBColor {
+pub(crate) fn rgb(c: Rgb) -> RGBColor {
     RGBColor(c.0, c.1, c.2)
 }
 
-fn check_size(size: u32) -> Result<(), DrawError> {
+pub(crate) fn check_size(size: u32) -> Result<(), DrawError> {
     if (MIN_SIZE..=MAX_SIZE).contains(&size) {
         Ok(())
     } else {
@@ -105,7 +105,7 @@ fn check_size(size: u32) -> Result<(), DrawError> {
     }
 }
 
-fn render_error(path: &Path, e: impl std::fmt::Display) -> DrawError {
+pub(crate) fn render_error(path: &Path, e: impl std::fmt::Display) -> DrawError {
     DrawError::Render {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -114,17 +114,17 @@ fn render_error(path: &Path, e: impl std::fmt::Display) -> DrawError {
 
 /// Pixel layout of a packing picture: the box fills the picture but for a
 /// margin, `y` up, and a strip underneath for the colour key.
-struct Canvas {
-    width: u32,
-    height: u32,
-    margin: f64,
-    scale: f64,
+pub(crate) struct Canvas {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) margin: f64,
+    pub(crate) scale: f64,
     /// Height of the key strip.
-    key: u32,
+    pub(crate) key: u32,
 }
 
 impl Canvas {
-    fn new(box_edges: [f64; 2], size: u32) -> Self {
+    pub(crate) fn new(box_edges: [f64; 2], size: u32) -> Self {
         let margin = (size as f64 / 50.0).round().max(4.0);
         let scale = (size as f64 - 2.0 * margin) / box_edges[0].max(box_edges[1]);
         let side = |l: f64| ((l * scale).round() + 2.0 * margin).max(1.0) as u32;
@@ -138,7 +138,7 @@ impl Canvas {
         }
     }
 
-    fn px(&self, p: [f64; 2]) -> (i32, i32) {
+    pub(crate) fn px(&self, p: [f64; 2]) -> (i32, i32) {
         (
             (self.margin + p[0] * self.scale).round() as i32,
             (self.height as f64 - self.key as f64 - self.margin - p[1] * self.scale).round() as i32,
@@ -148,18 +148,17 @@ impl Canvas {
 
 /// The colour key under a packing: a swatch and its size per fill colour,
 /// and the rattlers' swatch (dashed edge) when there are rattlers.
-fn paint_key<DB: DrawingBackend>(
+pub(crate) fn paint_key<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
-    packing: &Packing2d,
+    sizes: &[f64],
+    rattlers: usize,
     canvas: &Canvas,
     line: u32,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    let sizes: Vec<f64> = packing.bodies.iter().map(|b| b.size).collect();
-    let mut entries: Vec<(Rgb, bool, String)> = size_key(&sizes)
+    let mut entries: Vec<(Rgb, bool, String)> = size_key(sizes)
         .into_iter()
         .map(|(c, label)| (c, false, label))
         .collect();
-    let rattlers = packing.bodies.iter().filter(|b| b.rattler).count();
     if rattlers > 0 {
         entries.push((RATTLER_FILL, true, format!("rattler ({rattlers})")));
     }
@@ -232,7 +231,9 @@ fn paint_packing<DB: DrawingBackend>(
         [canvas.px([0.0, l2]), canvas.px([l1, 0.0])],
         rgb(EDGE).stroke_width(2 * line),
     ))?;
-    paint_key(root, packing, canvas, line)
+    let sizes: Vec<f64> = packing.bodies.iter().map(|b| b.size).collect();
+    let rattlers = packing.bodies.iter().filter(|b| b.rattler).count();
+    paint_key(root, &sizes, rattlers, canvas, line)
 }
 
 /// The SVG text of a packing picture whose longer side is `size` pixels.
@@ -264,7 +265,7 @@ pub fn draw_packing(packing: &Packing2d, path: &Path, size: u32) -> Result<(), D
     }
 }
 
-fn write_file(path: &Path, bytes: &[u8]) -> Result<(), DrawError> {
+pub(crate) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), DrawError> {
     std::fs::write(path, bytes).map_err(|error| DrawError::Io {
         path: path.to_path_buf(),
         error,

@@ -81,6 +81,41 @@ pub fn panels(
     panels: &[Params],
     curves: &[Params],
 ) -> Result<Vec<ShapePanel>, DrawError> {
+    merged_params(family, panels, curves)?
+        .into_iter()
+        .map(|(title, row)| {
+            let curves = row
+                .into_iter()
+                .map(|(label, params)| {
+                    let outline = Outline::of(family, &params)?;
+                    if !matches!(outline, Outline::Polar { .. }) {
+                        return Err(DrawError::Params {
+                            family: family.into(),
+                            message: "its bodies are made of spheres and have no polar outline R(θ) to plot; draw a packing instead (jamkit draw)".into(),
+                        });
+                    }
+                    Ok(ShapeCurve {
+                        label,
+                        points: outline.polar_curve(CURVE_POINTS),
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok(ShapePanel { title, curves })
+        })
+        .collect()
+}
+
+/// The parameter sets of a shape plot, merged: per panel its title and,
+/// per curve, its label and parameters (the family's example
+/// ([`jamkit_core::Family::EXAMPLE`]), overridden by the panel's,
+/// overridden by the curve's). An empty list stands for one set with
+/// nothing to override.
+#[allow(clippy::type_complexity)]
+pub fn merged_params(
+    family: &str,
+    panels: &[Params],
+    curves: &[Params],
+) -> Result<Vec<(String, Vec<(String, Params)>)>, DrawError> {
     let info = registry::family_info(family).map_err(|e| DrawError::Params {
         family: family.into(),
         message: e.to_string(),
@@ -94,43 +129,31 @@ pub fn panels(
     let one = [Params::new()];
     let panels = if panels.is_empty() { &one[..] } else { panels };
     let curves = if curves.is_empty() { &one[..] } else { curves };
-    panels
+    Ok(panels
         .iter()
         .map(|panel| {
-            let curves = curves
+            let row = curves
                 .iter()
                 .map(|curve| {
                     let mut params = example.clone();
                     params.extend(panel.clone());
                     params.extend(curve.clone());
-                    let outline = Outline::of(family, &params)?;
-                    if !matches!(outline, Outline::Polar { .. }) {
-                        return Err(DrawError::Params {
-                            family: family.into(),
-                            message: "its bodies are made of spheres and have no polar outline R(θ) to plot; draw a packing instead (jamkit draw)".into(),
-                        });
-                    }
                     let label = if curve.is_empty() {
                         describe(&params)
                     } else {
                         describe(curve)
                     };
-                    Ok(ShapeCurve {
-                        label,
-                        points: outline.polar_curve(CURVE_POINTS),
-                    })
+                    (label, params)
                 })
-                .collect::<Result<Vec<_>, _>>()?;
-            Ok(ShapePanel {
-                title: if panel.is_empty() {
-                    family.to_string()
-                } else {
-                    describe(panel)
-                },
-                curves,
-            })
+                .collect();
+            let title = if panel.is_empty() {
+                family.to_string()
+            } else {
+                describe(panel)
+            };
+            (title, row)
         })
-        .collect()
+        .collect())
 }
 
 #[cfg(test)]

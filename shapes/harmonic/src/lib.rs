@@ -673,6 +673,31 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     (nodes, weights)
 }
 
+/// The drawing surface of a `harmonic` body (`jamkit draw`):
+/// `ρ(y) = 1 + Δ F(y)` in the body frame, the rotation of the quaternion
+/// `[w, x, y, z]` the packing file stores.
+#[derive(Clone, Debug)]
+pub struct HarmonicSurface(Harmonic);
+
+impl jamkit_core::Surface for HarmonicSurface {
+    fn relative_radius(&self, y: [f64; 3]) -> f64 {
+        1.0 + self.0.delta * self.0.f(&Vector::<3>::new(y[0], y[1], y[2]))
+    }
+
+    /// `1 ∓ Δ max|F|` with the certain bound on `|F|` (positive: checked
+    /// by [`Harmonic::new`]).
+    fn relative_radius_bounds(&self) -> (f64, f64) {
+        let b = self.0.delta * self.0.f_bound;
+        (1.0 - b, 1.0 + b)
+    }
+
+    fn rotation(&self, coords: &[f64]) -> Option<[[f64; 3]; 3]> {
+        let q = Shape::<3>::orientation_from_coords(&self.0, coords)?;
+        let c = q.columns();
+        Some(std::array::from_fn(|r| std::array::from_fn(|k| c[k][r])))
+    }
+}
+
 impl Shape<3> for Harmonic {
     type Orientation = Quaternion;
 
@@ -731,6 +756,11 @@ impl Shape<3> for Harmonic {
             }
             _ => None,
         }
+    }
+
+    /// `1 + Δ F`, for drawing ([`HarmonicSurface`]).
+    fn surface(&self) -> Option<jamkit_core::SharedSurface> {
+        Some(std::sync::Arc::new(HarmonicSurface(self.clone())))
     }
 
     /// `d + 1 = 4`, the paper's convention carried to 3D.
