@@ -82,12 +82,12 @@ impl Outline {
         };
         let info = registry::family_info(family).map_err(|e| bad(e.to_string()))?;
         if !registry::supports_dim(&info, 2) {
-            return Err(DrawError::UnknownFamily(family.to_string()));
+            return Err(DrawError::UnknownFamily(family.to_string(), 2));
         }
         let params = registry::with_defaults(&info, params);
         registry::dispatch(family, 2, &params, OutlineOf)
             .map_err(|e| bad(e.to_string()))?
-            .ok_or_else(|| DrawError::UnknownFamily(family.to_string()))
+            .ok_or_else(|| DrawError::UnknownFamily(family.to_string(), 2))
     }
 
     /// The outline of a registered family from its parameters as stored in

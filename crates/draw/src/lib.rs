@@ -1,19 +1,24 @@
 //! # Pictures of packings and shapes
 //!
 //! `jamkit-draw` turns a 2D packing file (`packings/<id>.json`) into an SVG
-//! or PNG picture of every body's true outline in the periodic box, and
-//! draws polar plots `R(θ)/R⁰ = 1 + Δ F(θ)` of near-disk shapes. It backs
+//! or PNG picture of every body's true outline in the periodic box, a 3D
+//! one into a shaded orthographic ray-cast of the box seen along `z`
+//! ([`scene3d`], [`render3d`]), and draws polar plots
+//! `R(θ)/R⁰ = 1 + Δ F(θ)` of near-disk shapes (shaded bodies in 3D). It backs
 //! the `jamkit draw` and `jamkit draw-shape` commands (`docs/drawing.md`).
 //!
 //! The crate is split in two layers:
 //!
 //! * geometry, free of any plotting: [`geometry`] (outlines of the
 //!   families, periodic images, clipping to the box), [`packing`] (a
-//!   packing file as bodies with outlines), [`shapes`] (the curves of a
-//!   shape plot) and [`colors`] (fill colours by size);
-//! * plotting with `plotters`: [`render`] (SVG and PNG output).
+//!   packing file as bodies with outlines), [`scene3d`] (a 3D packing file
+//!   as bodies, and the ray-cast), [`shapes`] (the curves of a shape plot)
+//!   and [`colors`] (fill colours by size);
+//! * plotting with `plotters`: [`render`] (SVG and PNG output) and
+//!   [`render3d`] (shading, the 3D pictures, the ray-cast embedded in SVG
+//!   as a PNG image).
 //!
-//! Packing pictures carry no text; shape panels have titles, axes and
+//! Packing pictures carry text only in their colour key; shape panels have titles, axes and
 //! legends, drawn (in PNG) and measured (in SVG) with the bundled DejaVu
 //! Sans ([`fonts`]).
 
@@ -51,11 +56,11 @@ pub enum DrawError {
     /// dimension a reader expects).
     #[error("dim = {0}: only 2D and 3D packings can be drawn")]
     Dimension(usize),
-    /// A family this crate does not know how to outline.
+    /// A family this crate does not know how to draw in this dimension.
     #[error(
-        "family `{0}`: cannot draw it (only families with a 2D shape that has an outline, or is made of spheres, can be drawn; see `jamkit shapes`)"
+        "family `{0}` in dim {1}: cannot draw it (drawn are 2D shapes with an outline, 3D balls, 3D shapes with a surface, and bodies made of spheres; see `jamkit shapes`)"
     )]
-    UnknownFamily(String),
+    UnknownFamily(String, usize),
     /// The family's parameters do not describe a valid shape.
     #[error("params (family `{family}`): {message}")]
     Params {

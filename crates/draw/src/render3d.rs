@@ -333,11 +333,15 @@ pub fn body_panels(
         .map(|(title, row)| {
             let bodies = row
                 .into_iter()
-                .map(|(label, params)| {
-                    Ok(ShapeBody {
-                        label,
-                        primitives: body_primitives(family, &params, view_rotation())?,
-                    })
+                .map(|(label, params, own)| {
+                    // The example fills in what the user's sets leave out;
+                    // where they clash with it (`l` given against the
+                    // example's `modes`), the user's sets alone are used.
+                    let primitives =
+                        body_primitives(family, &params, view_rotation()).or_else(|e| {
+                            body_primitives(family, &own, view_rotation()).map_err(|_| e)
+                        })?;
+                    Ok(ShapeBody { label, primitives })
                 })
                 .collect::<Result<Vec<_>, DrawError>>()?;
             Ok(BodyPanel { title, bodies })
@@ -491,5 +495,126 @@ pub fn draw_bodies(panels: &[BodyPanel], path: &Path, cell: u32) -> Result<(), D
                 format!("{}{background}{}", &svg[..open], &svg[open..]).as_bytes(),
             )
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::parse_params;
+
+    #[test]
+    fn base64_is_the_standard_alphabet_with_padding() {
+        assert_eq!(base64(b"Man"), "TWFu");
+        assert_eq!(base64(b"Ma"), "TWE=");
+        assert_eq!(base64(b"M"), "TQ==");
+        assert_eq!(base64(b""), "");
+        // PNG's magic number, as every embedded picture starts.
+        assert_eq!(&base64(b"\x89PNG\r\n\x1a\n")[..11], "iVBORw0KGgo");
+    }
+
+    /// The view of `draw-shape` is a proper rotation that keeps the body's
+    /// x axis along the picture's x and tilts its z axis 20° to the viewer.
+    #[test]
+    fn the_shape_view_is_a_rotation() {
+        let m = view_rotation();
+        for a in 0..3 {
+            for b in 0..3 {
+                let d: f64 = (0..3).map(|r| m[r][a] * m[r][b]).sum();
+                assert!((d - if a == b { 1.0 } else { 0.0 }).abs() < 1e-15);
+            }
+        }
+        let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+        assert!((det - 1.0).abs() < 1e-15);
+        let z = mat_vec(&m, [0.0, 0.0, 1.0]);
+        assert!((z[2] - 20f64.to_radians().sin()).abs() < 1e-15 && z[1] > 0.0);
+    }
+
+    /// `draw-shape harmonic`: one row per panel, one body per curve; the
+    /// `Δ = 0` body (a ball, run as the sphere family) covers `π (s R⁰)²`
+    /// pixels within 1 % (lattice-point error, see scene3d's tests); the
+    /// `Δ = 0.3` `Ŷ_20` body, its axis tilted 20° towards the viewer,
+    /// stands taller than wide. A family with no 3D bodies is refused.
+    #[test]
+    fn harmonic_bodies_are_drawn_one_per_delta() {
+        let panel = parse_params("harmonic", "(l: 2)").unwrap();
+        let curves: Vec<_> = ["(delta: 0.0)", "(delta: 0.3)"]
+            .iter()
+            .map(|c| parse_params("harmonic", c).unwrap())
+            .collect();
+        let panels = body_panels("harmonic", &[panel], &curves).unwrap();
+        assert_eq!((panels.len(), panels[0].bodies.len()), (1, 2));
+        assert_eq!(panels[0].bodies[1].label, "Δ = 0.3");
+        let scale = 60.0;
+        let ball = body_raster(&panels[0].bodies[0], 1.5, scale);
+        let area = std::f64::consts::PI * scale * scale;
+        let n = ball.count_body(0) as f64;
+        assert!((n - area).abs() < 0.01 * area, "{n} vs {area}");
+        let body = body_raster(&panels[0].bodies[1], 1.5, scale);
+        let mid = body.width / 2;
+        let wide = (0..body.width)
+            .filter(|&c| body.at(c, mid).is_some())
+            .count();
+        let tall = (0..body.height)
+            .filter(|&r| body.at(mid, r).is_some())
+            .count();
+        // Width 2 · 0.9 R⁰ = 108 px; height above 2 · 0.9 and below 2 · 1.2.
+        assert!((wide as f64 - 108.0).abs() <= 2.0, "{wide}");
+        assert!(tall as f64 > 118.0 && (tall as f64) < 144.0, "{tall}");
+        let e = body_panels("fourier", &[], &[]).unwrap_err();
+        assert!(e.to_string().contains("family `fourier`"), "{e}");
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["b.png", "b.svg"] {
+            draw_bodies(&panels, &dir.path().join(name), 160).unwrap();
+        }
+        let svg = std::fs::read_to_string(dir.path().join("b.svg")).unwrap();
+        assert_eq!(svg.matches("data:image/png;base64,iVBORw0KGgo").count(), 2);
+        assert!(svg.contains("l = 2; Δ = 0.3"), "caption missing");
+    }
+
+    /// A small 3D packing to PNG and SVG: the SVG embeds the ray-cast as a
+    /// PNG and carries the key as text; the PNG is a real PNG.
+    #[test]
+    fn a_3d_packing_is_written_as_png_and_svg() {
+        let f: jamkit_format::PackingFile = serde_json::from_value(serde_json::json!({
+            "id": "t", "experiment": "t", "family": "sphere", "params": {},
+            "dim": 3, "particles": 2, "seed": 1, "protocol": "jam",
+            "settings": {}, "phi": 0.6, "energy_per_particle": 0.0,
+            "measures": {
+                "phi": 0.6, "energy_per_particle": 0.0, "n_contacts": null,
+                "n_rattlers": null, "z_j": null, "iso_margin": null, "pressure": null,
+                "fire_steps": 0, "minimizations": 0, "wall_s": 0.0, "flag": ""
+            },
+            "box": [3.0, 3.0, 3.0], "positions": [[1.0, 1.0, 1.0], [2.9, 2.0, 2.0]],
+            "radii": [0.5, 0.7], "orientations": [], "rattler": [false, true]
+        }))
+        .unwrap();
+        let p = Packing3d::from_file(&f).unwrap();
+        let svg = packing_3d_svg(&p, View::Whole, 300).unwrap();
+        assert_eq!(svg.matches("<image").count(), 1);
+        assert!(svg.contains("data:image/png;base64,iVBORw0KGgo"));
+        for label in ["R⁰ = 0.5", "R⁰ = 0.7", "rattler (1)"] {
+            assert!(svg.contains(label), "{label} missing from the key");
+        }
+        let dir = tempfile::tempdir().unwrap();
+        draw_packing_3d(&p, View::Cut, &dir.path().join("p.png"), 200).unwrap();
+        let png = std::fs::read(dir.path().join("p.png")).unwrap();
+        assert_eq!(&png[..4], b"\x89PNG");
+        let e = draw_packing_3d(&p, View::Whole, &dir.path().join("p.jpg"), 200).unwrap_err();
+        assert!(e.to_string().contains(".svg or .png"), "{e}");
+        let e = draw_packing_3d(&p, View::Whole, &dir.path().join("p.png"), 20).unwrap_err();
+        assert!(e.to_string().contains("--size = 20"), "{e}");
+        // The rattler is grey: its shaded pixels are grey (r = g = b).
+        let pic = picture_3d(&p, View::Whole, 300).unwrap();
+        let r = pic.raster();
+        let k = (0..r.seen.len())
+            .find(|&k| matches!(r.seen[k], Some(s) if s.body == 1))
+            .unwrap();
+        let k = k + 3 * r.width; // inside, away from the outline
+        assert_eq!(r.seen[k].unwrap().body, 1);
+        let px = &pic.rgb[3 * k..3 * k + 3];
+        assert!(px[0] == px[1] && px[1] == px[2], "{px:?}");
     }
 }

@@ -74,12 +74,12 @@ impl Solid {
         };
         let info = registry::family_info(family).map_err(|e| bad(e.to_string()))?;
         if !registry::supports_dim(&info, 3) {
-            return Err(DrawError::UnknownFamily(family.to_string()));
+            return Err(DrawError::UnknownFamily(family.to_string(), 3));
         }
         let params = registry::with_defaults(&info, params);
         registry::dispatch(family, 3, &params, SolidOf)
             .map_err(|e| bad(e.to_string()))?
-            .ok_or_else(|| DrawError::UnknownFamily(family.to_string()))
+            .ok_or_else(|| DrawError::UnknownFamily(family.to_string(), 3))
     }
 
     /// As [`Solid::of`], from the parameters a packing file stores.
@@ -120,7 +120,7 @@ impl Solid {
                 family: family.into(),
                 message: e.to_string(),
             })?
-            .ok_or_else(|| DrawError::UnknownFamily(family.to_string()))
+            .ok_or_else(|| DrawError::UnknownFamily(family.to_string(), 3))
     }
 }
 
@@ -693,4 +693,267 @@ pub fn lambert(n: P3) -> f64 {
     let l = LIGHT;
     let norm = dot(l, l).sqrt();
     0.3 + 0.7 * (dot(n, l) / norm).max(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 3D packing record with placeholder metadata.
+    pub(crate) fn record3(
+        family: &str,
+        params: serde_json::Value,
+        box_edges: [f64; 3],
+        positions: Vec<[f64; 3]>,
+        radii: Vec<f64>,
+        orientations: Vec<Vec<f64>>,
+    ) -> PackingFile {
+        let n = positions.len();
+        serde_json::from_value(serde_json::json!({
+            "id": "test", "experiment": "test", "family": family, "params": params,
+            "dim": 3, "particles": n, "seed": 1, "protocol": "jam",
+            "settings": {}, "phi": 0.6, "energy_per_particle": 0.0,
+            "measures": {
+                "phi": 0.6, "energy_per_particle": 0.0, "n_contacts": null,
+                "n_rattlers": null, "z_j": null, "iso_margin": null, "pressure": null,
+                "fire_steps": 0, "minimizations": 0, "wall_s": 0.0, "flag": ""
+            },
+            "box": box_edges, "positions": positions, "radii": radii,
+            "orientations": orientations, "rattler": vec![false; n]
+        }))
+        .unwrap()
+    }
+
+    fn cast(p: &Packing3d, view: View, scale: f64) -> Raster {
+        raycast(&p.primitives(view), p.box_edges, view, scale)
+    }
+
+    /// A ball of radius 1 at the centre of a 4³ box, at 50 pixels per unit:
+    /// its picture is a disk of radius 50 px. The pixels whose centre lies
+    /// in it number `π 50² = 7854` up to the lattice-point error of a circle
+    /// (rigorously below the `√2`-pixel-wide ring round it, 444 px = 5.7 %;
+    /// in practice of order `r^{2/3}` ≈ 14 px), so 1 % is a real test of
+    /// the scale and of the centre. The height met at a pixel is the
+    /// sphere's, `z = 2 + √(1 − ρ²)`, to rounding.
+    #[test]
+    fn a_ball_covers_the_disk_of_its_radius() {
+        let f = record3(
+            "sphere",
+            serde_json::json!({}),
+            [4.0; 3],
+            vec![[2.0; 3]],
+            vec![1.0],
+            vec![],
+        );
+        let p = Packing3d::from_file(&f).unwrap();
+        let r = cast(&p, View::Whole, 50.0);
+        assert_eq!((r.width, r.height), (200, 200));
+        let area = std::f64::consts::PI * 50.0 * 50.0;
+        let count = r.count_body(0) as f64;
+        assert!(
+            (count - area).abs() < 0.01 * area,
+            "{count} pixels vs {area}"
+        );
+        let s = r.at(120, 90).unwrap();
+        let (x, y): (f64, f64) = (120.5 / 50.0 - 2.0, 2.0 - 90.5 / 50.0);
+        let z = 2.0 + (1.0 - x * x - y * y).sqrt();
+        assert!(
+            (s.hit.z - z).abs() < 1e-12 && !s.hit.cut,
+            "{:?} vs {z}",
+            s.hit
+        );
+        // The corners of the box see nothing.
+        assert!(r.at(0, 0).is_none() && r.at(199, 199).is_none());
+    }
+
+    /// A ball across the face x = 0 is seen on both sides of the box, and
+    /// the two pieces make up its whole disk (same 1 % as above); in the
+    /// `Cut` view a ball across the floor shows its image's flat cut on the
+    /// top face (the image at z + L₃ crosses it), in the `Whole` view its
+    /// own top.
+    #[test]
+    fn a_ball_across_a_face_appears_on_both_sides() {
+        let f = record3(
+            "sphere",
+            serde_json::json!({}),
+            [4.0; 3],
+            vec![[0.2, 2.0, 0.1]],
+            vec![0.5],
+            vec![],
+        );
+        let p = Packing3d::from_file(&f).unwrap();
+        let r = cast(&p, View::Whole, 50.0);
+        let row = 100; // y = 1.99
+        let left = (0..r.width)
+            .filter(|&c| c < 100 && r.at(c, row).is_some())
+            .count();
+        let right = (0..r.width)
+            .filter(|&c| c >= 100 && r.at(c, row).is_some())
+            .count();
+        // Chord at |y − 2| = 0.01: x ∈ 0.2 ± 0.4999 → 35 px left of 0.7,
+        // 15 px right of 3.7 (4 − 0.2999).
+        assert!(
+            (left as i64 - 35).abs() <= 1 && (right as i64 - 15).abs() <= 1,
+            "{left} {right}"
+        );
+        let area = std::f64::consts::PI * 25.0 * 25.0;
+        let count = r.count_body(0) as f64;
+        assert!((count - area).abs() < 0.01 * area, "{count} vs {area}");
+        let images: std::collections::BTreeSet<u32> =
+            r.seen.iter().flatten().map(|s| s.image).collect();
+        assert_eq!(images.len(), 2);
+        // Whole: the body's own top at z = 0.6; Cut: the image's cut at z = 4.
+        let top = r.at(10, 100).unwrap().hit;
+        assert!(!top.cut && (top.z - 0.6).abs() < 1e-3, "{top:?}");
+        let c = cast(&p, View::Cut, 50.0);
+        let cut = c.at(10, 100).unwrap().hit;
+        assert!(
+            cut.cut && cut.z == 4.0 && cut.normal == [0.0, 0.0, 1.0],
+            "{cut:?}"
+        );
+    }
+
+    /// A `harmonic` body `Ŷ_20`, `Δ = 0.3`, its axis turned onto world x
+    /// (quaternion of a quarter turn about y): seen along z, its silhouette
+    /// reaches `R⁰(1 + Δ F(pole)) = 1.2` along x and `R⁰(1 − Δ/3) = 0.9`
+    /// along y (the waist is the widest section for Δ < 3/7: d²/dθ² of
+    /// `R(θ) sin θ` at the equator is `2Δ − (1 − Δ/3) < 0`). At 100 px per
+    /// unit: 240 px by 180 px through the centre, each within 2 px (one
+    /// pixel of quantisation at each end; the march and bisection pin the
+    /// surface to far below a pixel). The radii come from the family's own
+    /// surface, checked against its documented `Ŷ_20 = (3cos²θ − 1)/3`.
+    #[test]
+    fn a_harmonic_body_has_its_true_silhouette() {
+        let params = serde_json::json!({"l": 2, "delta": 0.3});
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let f = record3(
+            "harmonic",
+            params.clone(),
+            [4.0; 3],
+            vec![[2.0; 3]],
+            vec![1.0],
+            vec![vec![h, 0.0, h, 0.0]],
+        );
+        let p = Packing3d::from_file(&f).unwrap();
+        let Solid::Star(surface) = &p.solid else {
+            panic!("harmonic draws as a star-shaped body: {:?}", p.solid)
+        };
+        let pole = surface.relative_radius([0.0, 0.0, 1.0]);
+        let waist = surface.relative_radius([1.0, 0.0, 0.0]);
+        assert!(
+            (pole - 1.2).abs() < 1e-12 && (waist - 0.9).abs() < 1e-12,
+            "{pole} {waist}"
+        );
+        let r = cast(&p, View::Whole, 100.0);
+        let row = (0..r.width).filter(|&c| r.at(c, 199).is_some()).count() as f64;
+        let col = (0..r.height).filter(|&k| r.at(199, k).is_some()).count() as f64;
+        assert!(
+            (row - 200.0 * pole).abs() <= 2.0,
+            "{row} px along x, expected {}",
+            200.0 * pole
+        );
+        assert!(
+            (col - 200.0 * waist).abs() <= 2.0,
+            "{col} px along y, expected {}",
+            200.0 * waist
+        );
+        // Seen along its axis (no turn) the same body is round: 180 px both ways.
+        let mut g = f.clone();
+        g.orientations = vec![vec![1.0, 0.0, 0.0, 0.0]];
+        let r = cast(&Packing3d::from_file(&g).unwrap(), View::Whole, 100.0);
+        let row = (0..r.width).filter(|&c| r.at(c, 199).is_some()).count() as f64;
+        assert!((row - 180.0).abs() <= 2.0, "{row}");
+        // The top of the pole-on body is the pole, at z = 2 + 1.2.
+        assert!((r.at(199, 199).unwrap().hit.z - 3.2).abs() < 1e-3);
+    }
+
+    /// A 3D dimer is drawn from its `spheres` rows: two overlapping balls
+    /// of radius 0.5 at distance 0.5 along x; its silhouette spans
+    /// 1.5 along x, 1 along y through a sphere's centre and less at the
+    /// neck (2 px tolerance at 100 px per unit: a pixel at each end).
+    #[test]
+    fn a_dimer_is_drawn_from_its_spheres() {
+        let mut f = record3(
+            "nmer",
+            serde_json::json!({"alpha": 1.5}),
+            [4.0; 3],
+            vec![[2.0; 3]],
+            vec![0.5],
+            vec![vec![1.0, 0.0, 0.0, 0.0]],
+        );
+        f.spheres = vec![
+            vec![1.75, 2.0, 2.0, 0.5, 0.0],
+            vec![2.25, 2.0, 2.0, 0.5, 0.0],
+        ];
+        let p = Packing3d::from_file(&f).unwrap();
+        assert!(matches!(p.solid, Solid::Spheres));
+        let r = cast(&p, View::Whole, 100.0);
+        let row = (0..r.width).filter(|&c| r.at(c, 199).is_some()).count() as f64;
+        let col = |c: usize| (0..r.height).filter(|&k| r.at(c, k).is_some()).count() as f64;
+        // Through a sphere's centre (x = 1.745): its diameter, 100 px; at
+        // the neck (x = 1.995) the chord 2√(0.25 − 0.245²) = 0.872: 87 px.
+        let (full, neck) = (col(174), col(199));
+        assert!((row - 150.0).abs() <= 2.0, "{row}");
+        assert!(
+            (full - 100.0).abs() <= 2.0 && (neck - 87.2).abs() <= 2.0,
+            "{full} {neck}"
+        );
+        let images: std::collections::BTreeSet<u32> =
+            r.seen.iter().flatten().map(|s| s.image).collect();
+        assert_eq!(images.len(), 1, "the two spheres are one body image");
+    }
+
+    #[test]
+    fn bad_3d_files_are_errors_naming_the_key() {
+        let ok = record3(
+            "sphere",
+            serde_json::json!({}),
+            [4.0; 3],
+            vec![[2.0; 3]],
+            vec![1.0],
+            vec![],
+        );
+        let check = |f: PackingFile, needle: &str| {
+            let e = Packing3d::from_file(&f).unwrap_err().to_string();
+            assert!(e.contains(needle), "{e} lacks {needle}");
+        };
+        let mut f = ok.clone();
+        f.dim = 2;
+        check(f, "dim = 2");
+        let mut f = ok.clone();
+        f.box_edges = vec![4.0, 4.0];
+        check(f, "box = [4.0, 4.0]: must hold 3 positive");
+        let mut f = ok.clone();
+        f.positions = vec![vec![1.0, 2.0]];
+        check(f, "positions[0] = [1.0, 2.0]: must be 3 finite numbers");
+        let mut f = ok.clone();
+        f.radii = vec![-1.0];
+        check(f, "radii[0] = -1");
+        let mut f = ok.clone();
+        f.family = "ellipse".into();
+        f.params = serde_json::json!({"aspect": 1.5});
+        check(f, "family `ellipse`");
+        let mut f = ok.clone();
+        f.spheres = vec![vec![1.0, 1.0, 1.0, 0.5, 0.0]];
+        check(f, "spheres[0]");
+        let h = record3(
+            "harmonic",
+            serde_json::json!({"l": 2, "delta": 0.1}),
+            [4.0; 3],
+            vec![[2.0; 3]],
+            vec![1.0],
+            vec![],
+        );
+        check(h.clone(), "orientations has 0 entries for 1 positions");
+        let mut f = h.clone();
+        f.orientations = vec![vec![2.0, 0.0, 0.0, 0.0]];
+        check(
+            f,
+            "orientations[0] = [2.0, 0.0, 0.0, 0.0]: not an orientation",
+        );
+        let mut f = h;
+        f.params = serde_json::json!({"l": 2, "delta": 5.0});
+        f.orientations = vec![vec![1.0, 0.0, 0.0, 0.0]];
+        check(f, "params.delta");
+    }
 }

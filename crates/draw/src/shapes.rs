@@ -86,7 +86,7 @@ pub fn panels(
         .map(|(title, row)| {
             let curves = row
                 .into_iter()
-                .map(|(label, params)| {
+                .map(|(label, params, _)| {
                     let outline = Outline::of(family, &params)?;
                     if !matches!(outline, Outline::Polar { .. }) {
                         return Err(DrawError::Params {
@@ -108,14 +108,14 @@ pub fn panels(
 /// The parameter sets of a shape plot, merged: per panel its title and,
 /// per curve, its label and parameters (the family's example
 /// ([`jamkit_core::Family::EXAMPLE`]), overridden by the panel's,
-/// overridden by the curve's). An empty list stands for one set with
-/// nothing to override.
+/// overridden by the curve's), and the panel's and curve's alone. An
+/// empty list stands for one set with nothing to override.
 #[allow(clippy::type_complexity)]
 pub fn merged_params(
     family: &str,
     panels: &[Params],
     curves: &[Params],
-) -> Result<Vec<(String, Vec<(String, Params)>)>, DrawError> {
+) -> Result<Vec<(String, Vec<(String, Params, Params)>)>, DrawError> {
     let info = registry::family_info(family).map_err(|e| DrawError::Params {
         family: family.into(),
         message: e.to_string(),
@@ -135,15 +135,16 @@ pub fn merged_params(
             let row = curves
                 .iter()
                 .map(|curve| {
+                    let mut own = panel.clone();
+                    own.extend(curve.clone());
                     let mut params = example.clone();
-                    params.extend(panel.clone());
-                    params.extend(curve.clone());
+                    params.extend(own.clone());
                     let label = if curve.is_empty() {
                         describe(&params)
                     } else {
                         describe(curve)
                     };
-                    (label, params)
+                    (label, params, own)
                 })
                 .collect();
             let title = if panel.is_empty() {
