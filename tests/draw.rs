@@ -1,6 +1,7 @@
 //! `jamkit draw` and `jamkit draw-shape` through the binary: pictures of
-//! freshly jammed packings (disks and near-disks) in SVG and PNG, shape
-//! panels, and clear errors (never panics) for what cannot be drawn.
+//! freshly jammed packings (disks and near-disks; 3D spheres, dimers and
+//! `harmonic` near-spheres) in SVG and PNG, shape panels (3D bodies too),
+//! and clear errors (never panics) for what cannot be drawn.
 
 use std::path::{Path, PathBuf};
 
@@ -106,7 +107,9 @@ fn draw_refuses_what_it_cannot_draw() {
     let out = dir.path().join("x.svg");
     let out = out.to_str().unwrap();
     for (key, value, message) in [
-        ("dim", serde_json::json!(3), "dim = 3"),
+        ("dim", serde_json::json!(4), "dim = 4: only 2D and 3D"),
+        // A 2D record labelled 3D: its box has two edges.
+        ("dim", serde_json::json!(3), "box = ["),
         ("family", serde_json::json!("dimer"), "family `dimer`"),
     ] {
         let mut bad = json.clone();
@@ -120,6 +123,9 @@ fn draw_refuses_what_it_cannot_draw() {
             "{err}"
         );
     }
+    let (code, _, err) = jamkit(&["draw", packing.to_str().unwrap(), "-o", out, "--cut"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--cut: only for 3D"), "{err}");
     let (code, _, err) = jamkit(&["draw", packing.to_str().unwrap(), "-o", "x.jpg"]);
     assert_eq!(code, 1);
     assert!(err.contains(".svg or .png"), "{err}");
@@ -186,4 +192,132 @@ fn draw_shape_writes_one_panel_per_n() {
     let (code, _, err) = jamkit(&["draw-shape", "dimer", "-o", svg.to_str().unwrap()]);
     assert_eq!(code, 1);
     assert!(err.contains("must be one of"), "{err}");
+}
+
+/// Every 3D family jams (64 bodies: fewer do not fit the box twice the
+/// interaction range) and draws: PNG (a real PNG, far larger
+/// than an empty canvas of its size: a white 300 × 325 PNG compresses to
+/// under 2 kB) and SVG (the ray-cast embedded, the key as text), the whole
+/// view and the `--cut` view.
+#[test]
+fn draw_3d_packings_of_every_3d_family() {
+    for (family, params) in [
+        ("sphere", "{}"),
+        ("nmer", r#"{"alpha": 1.5}"#),
+        ("harmonic", r#"{"l": 2, "delta": 0.2}"#),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let family_set = format!("family={family}");
+        let params_set = format!("params={params}");
+        let packing = jam(
+            &dir.path().join("run"),
+            &[
+                "--set",
+                "dim=3",
+                "--set",
+                "particles=64",
+                "--set",
+                &family_set,
+                "--set",
+                &params_set,
+            ],
+        );
+        let png = dir.path().join("p.png");
+        let svg = dir.path().join("p.svg");
+        for (out, extra) in [(&png, None), (&svg, None), (&png, Some("--cut"))] {
+            let mut args = vec![
+                "draw",
+                packing.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--size",
+                "300",
+            ];
+            args.extend(extra);
+            let (code, stdout, err) = jamkit(&args);
+            assert_eq!(code, 0, "{family}: {err}");
+            assert!(
+                stdout.contains(&format!("64 {family} bodies in 3D")),
+                "{stdout}"
+            );
+        }
+        let bytes = std::fs::read(&png).unwrap();
+        assert_eq!(&bytes[..4], b"\x89PNG", "{family}");
+        assert!(bytes.len() > 10_000, "{family}: {} bytes", bytes.len());
+        let text = std::fs::read_to_string(&svg).unwrap();
+        assert!(
+            text.contains("data:image/png;base64,iVBORw0KGgo"),
+            "{family}"
+        );
+        assert!(
+            text.contains("R⁰ = 0.5") && text.contains("R⁰ = 0.7"),
+            "{family}: key"
+        );
+    }
+}
+
+/// `draw-shape` of a 3D family: shaded bodies, one per Δ, in PNG and SVG;
+/// 3D dimers with `--dim 3`; a dimension the family lacks is refused.
+#[test]
+fn draw_shape_draws_3d_bodies() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("bodies.svg");
+    let (code, stdout, err) = jamkit(&[
+        "draw-shape",
+        "harmonic",
+        "--panel",
+        "(l: 2)",
+        "--panel",
+        "(l: 3, m: 2)",
+        "--delta",
+        "0,0.1,0.3",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("2 row(s) of 3D bodies"), "{stdout}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert_eq!(text.matches("<image").count(), 6);
+    assert!(text.contains("l = 3, m = 2; Δ = 0.3"), "caption missing");
+    let png = dir.path().join("bodies.png");
+    let (code, _, err) = jamkit(&["draw-shape", "harmonic", "-o", png.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(&std::fs::read(&png).unwrap()[..4], b"\x89PNG");
+    let (code, _, err) = jamkit(&[
+        "draw-shape",
+        "nmer",
+        "--dim",
+        "3",
+        "--curve",
+        "(alpha: 1.5)",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = jamkit(&[
+        "draw-shape",
+        "fourier",
+        "--dim",
+        "3",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("--dim = 3") && !err.contains("panicked"),
+        "{err}"
+    );
+    let (code, _, err) = jamkit(&[
+        "draw-shape",
+        "harmonic",
+        "--delta",
+        "5",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("params.delta") && !err.contains("panicked"),
+        "{err}"
+    );
 }
