@@ -15,7 +15,7 @@ use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
     Fire, JamParams, PressureParams, Progress, Scene, compress_to_phi, compress_to_pressure, jam,
 };
-use jamkit_format::{Measures, PackingFile, SpectrumMeasures};
+use jamkit_format::{Measures, ModuliMeasures, PackingFile, SpectrumMeasures};
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::saddle::{self, SaddleParams};
 use jamkit_observe::spectrum::{self, Spectrum};
@@ -295,6 +295,7 @@ impl SampleVisitor<'_> {
             saddle_escapes: None,
             spectrum: None,
             gaps: None,
+            moduli: None,
         };
         Some(self.file(scene.packing(), true, measures))
     }
@@ -317,6 +318,7 @@ struct Observed {
     spectrum: Option<SpectrumMeasures>,
     eigenvalue_table: Option<String>,
     gaps: Option<GapCounts>,
+    moduli: Option<ModuliMeasures>,
 }
 
 /// The rattler rule of `e` for this packing: an explicit
@@ -357,12 +359,25 @@ fn observe<const D: usize, S: Shape<D>>(
     let gaps = e
         .gaps()
         .map(|params| GapCounts::of_scene(scene, rattler, &params));
+    let moduli = match e.moduli() {
+        Some(params) => {
+            let start = Instant::now();
+            let moduli = jamkit_observe::moduli::measure(scene, rattler, &params)?;
+            Some(ModuliMeasures {
+                moduli,
+                params,
+                wall_s: start.elapsed().as_secs_f64(),
+            })
+        }
+        None => None,
+    };
     Ok(Observed {
         contacts,
         pressure,
         spectrum,
         eigenvalue_table,
         gaps,
+        moduli,
     })
 }
 
@@ -401,6 +416,7 @@ impl Observed {
             gaps: self.gaps.clone(),
             n_rot_rattlers: contacts.map(|s| s.n_rot_rattlers),
             free_rotations: contacts.map(|s| s.free_rotations),
+            moduli: self.moduli.clone(),
         }
     }
 

@@ -26,6 +26,7 @@ use jamkit_core::{Potential, SizeDistribution};
 use jamkit_engine::{FireParams, JamParams, JamSearch, PressureParams};
 use jamkit_observe::gaps::GapParams;
 use jamkit_observe::hessian::HessianOptions;
+use jamkit_observe::moduli::ModuliParams;
 use jamkit_observe::spectrum::DosParams;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -282,6 +283,19 @@ pub enum Observable {
         #[serde(default = "default_points_per_decade")]
         points_per_decade: usize,
     },
+    /// The shear and bulk moduli `G`, `B` by linear response
+    /// (`jamkit_observe::moduli`; rattlers removed; `results.csv`).
+    /// Written `Moduli()` for the defaults.
+    Moduli {
+        /// Modes with `ω ≤ omega_zero` are zero modes, left out of `H⁺`
+        /// (the spectrum's threshold, 10⁻⁵).
+        #[serde(default = "default_moduli_omega_zero")]
+        omega_zero: f64,
+    },
+}
+
+fn default_moduli_omega_zero() -> f64 {
+    ModuliParams::default().omega_zero
 }
 
 fn yes() -> bool {
@@ -356,10 +370,21 @@ impl Experiment {
         })
     }
 
+    /// The moduli asked for, if any.
+    pub fn moduli(&self) -> Option<ModuliParams> {
+        self.observables.iter().find_map(|o| match *o {
+            Observable::Moduli { omega_zero } => Some(ModuliParams { omega_zero }),
+            _ => None,
+        })
+    }
+
     /// Whether contacts and rattlers must be found (for themselves, or for
-    /// the spectrum and the gaps, which leave rattlers out).
+    /// the spectrum, the gaps and the moduli, which leave rattlers out).
     pub fn needs_contacts(&self) -> bool {
-        self.wants(&Observable::Contacts) || self.spectrum().is_some() || self.gaps().is_some()
+        self.wants(&Observable::Contacts)
+            || self.spectrum().is_some()
+            || self.gaps().is_some()
+            || self.moduli().is_some()
     }
 
     fn validate_observables(&self) -> Result<(), ExperimentError> {
@@ -380,6 +405,9 @@ impl Experiment {
         }
         if let Some(g) = self.gaps() {
             g.validate("observables.Gaps")?;
+        }
+        if let Some(m) = self.moduli() {
+            m.validate("observables.Moduli")?;
         }
         Ok(())
     }
