@@ -2,7 +2,8 @@
 //! tools"): `tests/interop/run.sh` installs ASE from PyPI into a venv under
 //! `target/` and runs `tests/interop/check.py`, which reads with
 //! `ase.io.read` the extended XYZ that `jamkit export` writes for a packing
-//! of every family (N, box, positions to 1e-12, radii exactly), and runs
+//! of every registered family in D = 2 and 3, from the family's example
+//! (N, box, positions to 1e-12, radii exactly), and runs
 //! `jamkit analyze` on sphere packings written by a small script as plain
 //! text (the run's contacts and rattlers must come back) and by
 //! `ase.io.write` (ASE's bodies and box must come back as ASE reads them;
@@ -14,6 +15,7 @@
 //! did not run and passes.
 
 use jamkit_experiment::Experiment;
+use jamkit_registry::{EXAMPLES, FAMILIES, params_from_ron, supports_dim};
 use std::path::Path;
 use std::process::Command;
 mod common;
@@ -34,18 +36,27 @@ fn ase_reads_our_exports_and_we_analyze_its_files() {
         return;
     }
     let work = tempfile::tempdir().unwrap();
-    for (name, family, dim, params) in [
-        ("sphere2", "sphere", 2, "{}"),
-        ("sphere3", "sphere", 3, "{}"),
-        ("fourier", "fourier", 2, r#"{"n": 3, "delta": 0.1}"#),
-        ("ellipse", "ellipse", 2, r#"{"aspect": 1.3}"#),
-        ("nmer", "nmer", 2, r#"{"alpha": 1.5}"#),
-    ] {
-        let text = format!(
-            r#"(name: "{name}", family: "{family}", dim: {dim}, params: {params}, particles: 24, samples: 1, seed: 2, observables: [Contacts])"#
-        );
-        let e = Experiment::from_ron(&text, "inline").unwrap();
-        common::run_ok(&e, &work.path().join("runs").join(name), 1);
+    // Every registered family, from its own example, in each of D = 2, 3
+    // it supports (extended XYZ has three columns of positions).
+    let mut runs = 0;
+    for (info, example) in FAMILIES.iter().zip(EXAMPLES) {
+        for dim in [2, 3] {
+            if !supports_dim(info, dim) {
+                continue;
+            }
+            let params = params_from_ron(example).unwrap();
+            let params = ron::to_string(&params).unwrap();
+            let name = format!("{}{dim}", info.name);
+            // 24 bodies leave too small a box for 3D dimers.
+            let particles = if dim == 3 { 64 } else { 24 };
+            let text = format!(
+                r#"(name: "{name}", family: "{}", dim: {dim}, params: {params}, particles: {particles}, samples: 1, seed: 2, observables: [Contacts])"#,
+                info.name
+            );
+            let e = Experiment::from_ron(&text, "inline").unwrap();
+            common::run_ok(&e, &work.path().join("runs").join(&name), 1);
+            runs += 1;
+        }
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let out = Command::new("bash")
@@ -61,7 +72,10 @@ fn ase_reads_our_exports_and_we_analyze_its_files() {
         return;
     }
     assert!(out.status.success(), "{text}\n{err}");
-    assert!(text.contains("ase read 5 packings"), "{text}\n{err}");
+    assert!(
+        text.contains(&format!("ase read {runs} packings")),
+        "{text}\n{err}"
+    );
     assert!(
         text.contains("analyze of files from other code: ok"),
         "{text}\n{err}"

@@ -130,10 +130,15 @@ impl Figure {
         let mut xs = Vec::new();
         let mut ys = Vec::new();
         for s in &self.series {
-            for &(x, y, _) in &s.points {
+            for &(x, y, e) in &s.points {
                 if let (Some(x), Some(y)) = (self.tx(x), self.ty(y)) {
                     xs.push(x);
                     ys.push(y);
+                    // The error bars are part of the data: keep them inside.
+                    if e > 0.0 {
+                        ys.extend(self.ty(y + e));
+                        ys.extend(self.ty(y - e));
+                    }
                 }
             }
         }
@@ -168,16 +173,29 @@ impl Figure {
             .x_label_area_size(48)
             .y_label_area_size(72)
             .build_cartesian_2d(x0..x1, y0..y1)?;
-        let label = |log: bool| {
+        // A linear axis whose data are all whole numbers (seeds, n) is
+        // labelled at whole numbers only.
+        let whole = |log: bool, y: bool| {
+            !log && self.series.iter().all(|s| {
+                s.points.iter().all(|p| {
+                    let v = if y { p.1 } else { p.0 };
+                    !v.is_finite() || (v == v.round() && v.abs() < 1e9)
+                })
+            })
+        };
+        let label = |log: bool, span: f64, whole: bool| {
             move |v: &f64| {
                 if log {
                     power_of_ten(*v)
                 } else {
-                    format!("{v:.3}")
+                    linear_label(*v, span, whole)
                 }
             }
         };
-        let (fx, fy) = (label(self.log_x), label(self.log_y));
+        let (fx, fy) = (
+            label(self.log_x, x1 - x0, whole(self.log_x, false)),
+            label(self.log_y, y1 - y0, whole(self.log_y, true)),
+        );
         chart
             .configure_mesh()
             .x_desc(&self.x_label)
@@ -295,6 +313,33 @@ fn power_of_ten(e: f64) -> String {
     }
 }
 
+/// A tick label on a linear axis spanning `span`: as many decimals as
+/// tell ticks about a tenth of the span apart from each other, trailing
+/// zeros dropped; on an axis of whole numbers, only whole ticks are
+/// labelled.
+fn linear_label(v: f64, span: f64, whole: bool) -> String {
+    if whole {
+        let r = v.round();
+        return if (v - r).abs() <= 1e-9 * span.max(1.0) {
+            format!("{r:.0}")
+        } else {
+            String::new()
+        };
+    }
+    let decimals = if span > 0.0 && span.is_finite() {
+        (1.0 - (span / 10.0).log10().floor()).clamp(0.0, 15.0) as usize
+    } else {
+        3
+    };
+    let s = format!("{v:.decimals$}");
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    };
+    if s == "-0" { "0".into() } else { s }
+}
+
 /// The part of the straight segments through `pts` inside the box (guides
 /// are straight lines in drawing coordinates, so two end points suffice).
 fn clip_line(pts: &[(f64, f64)], (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> Vec<(f64, f64)> {
@@ -334,6 +379,39 @@ mod tests {
         assert_eq!(power_of_ten(-3.0), "1e-3");
         assert_eq!(power_of_ten(0.0), "1");
         assert_eq!(power_of_ten(-0.5), "3.2e-1");
+    }
+
+    #[test]
+    fn linear_tick_labels_resolve_the_span() {
+        // A span of 1e-4 around 5.984 needs 5 decimals to tell ticks apart.
+        assert_eq!(linear_label(5.98412, 1e-4, false), "5.98412");
+        assert_eq!(linear_label(5.98413, 1e-4, false), "5.98413");
+        assert_eq!(linear_label(1.5, 1.0, false), "1.5");
+        assert_eq!(linear_label(1.0, 1.0, false), "1");
+        assert_eq!(linear_label(-0.0001, 1.0, false), "0");
+        // Whole-number axes (seeds): half-way ticks carry no label.
+        assert_eq!(linear_label(2.0, 3.0, true), "2");
+        assert_eq!(linear_label(2.5, 3.0, true), "");
+    }
+
+    #[test]
+    fn error_bars_are_inside_the_ranges() {
+        let f = Figure {
+            title: "t".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            log_x: false,
+            log_y: false,
+            series: vec![Series {
+                label: "s".into(),
+                points: vec![(1.0, 5.0, 0.5), (2.0, 5.001, 0.0)],
+                line: false,
+            }],
+            guides: vec![],
+            legend: SeriesLabelPosition::UpperLeft,
+        };
+        let (_, (y0, y1)) = f.ranges().expect("points");
+        assert!(y0 < 4.5 && y1 > 5.5, "{y0} {y1}");
     }
 
     #[test]
