@@ -451,3 +451,38 @@ fn negative_shear_modulus_is_confirmed_by_deformation() {
         "{lr:?} {def:?}"
     );
 }
+
+/// `AboveJam(delta_phi: …)`: the jamming search of `Jam` (the same φ_J as
+/// a `Jam` run with the same seeds), then a compression to φ_J + δφ: the
+/// final φ minus the `Jam` run's φ_J is δφ to 1e-12 (round-off of φ
+/// through the box volume), and the
+/// packing has a positive pressure and finite moduli with `B > 0`.
+#[test]
+fn above_jam_protocol_compresses_from_each_packings_own_jamming_point() {
+    let jam = r#"(name: "j", family: "sphere", particles: 32, samples: 2, seed: 4,
+        observables: [Contacts, Pressure])"#;
+    let above = r#"(name: "a", family: "sphere", particles: 32, samples: 2, seed: 4,
+        protocol: AboveJam(delta_phi: 1e-3),
+        observables: [Contacts, Pressure, Moduli()])"#;
+    let parse = |t: &str| jamkit_experiment::Experiment::from_ron(t, "inline").unwrap();
+    let (d1, d2) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let jammed = common::run_ok(&parse(jam), d1.path(), 1);
+    let compressed = common::run_ok(&parse(above), d2.path(), 1);
+    assert_eq!(jammed.packings.len(), 2);
+    for (j, a) in jammed.packings.iter().zip(&compressed.packings) {
+        assert_eq!(a.protocol, "above_jam");
+        assert!((a.phi - j.phi - 1e-3).abs() < 1e-12, "{} {}", a.phi, j.phi);
+        let p = a.measures.pressure.unwrap();
+        assert!(p > 1e-4 && p < 1e-1, "p = {p}");
+        let m = &a.measures.moduli.as_ref().unwrap().moduli;
+        assert!(m.shear.is_finite() && m.bulk > 0.0, "{m:?}");
+        assert!((m.pressure - p).abs() < 1e-9 * p);
+    }
+    let bad = r#"(name: "a", family: "sphere", particles: 32,
+        protocol: AboveJam(delta_phi: -1e-3))"#;
+    let e = parse(bad).validate().unwrap_err().to_string();
+    assert!(
+        e.contains("protocol.delta_phi") && e.contains("-0.001"),
+        "{e}"
+    );
+}

@@ -160,6 +160,36 @@ impl SceneVisitor for SampleVisitor<'_> {
                     Ok(outcome)
                 })
             }
+            Protocol::AboveJam {
+                eps,
+                energy_low,
+                energy_high,
+                max_density_steps,
+                search,
+                delta_phi,
+                compress_eps,
+                ..
+            } => {
+                let params = JamParams {
+                    eps,
+                    energy_low,
+                    energy_high,
+                    max_density_steps,
+                    search,
+                };
+                jam(&mut scene, &mut fire, &params).and_then(|jammed| {
+                    let target = jammed.phi + delta_phi;
+                    compress_to_phi(&mut scene, &mut fire, target, compress_eps).map(|above| {
+                        jamkit_engine::ProtocolOutcome {
+                            phi: above.phi,
+                            energy_per_particle: above.energy_per_particle,
+                            fire_steps: jammed.fire_steps + above.fire_steps,
+                            minimizations: jammed.minimizations + above.minimizations,
+                            newton_iterations: jammed.newton_iterations + above.newton_iterations,
+                        }
+                    })
+                })
+            }
             Protocol::Phi { phi, eps, .. } => compress_to_phi(&mut scene, &mut fire, phi, eps),
             Protocol::Pressure {
                 pressure,

@@ -177,6 +177,35 @@ pub enum Protocol {
         #[serde(default = "default_max_density_steps")]
         max_density_steps: u64,
     },
+    /// Jam (as `Jam`), then compress the jammed packing by `delta_phi`
+    /// in steps of at most `compress_eps`, relaxing after each: a packing
+    /// at a chosen distance `φ − φ_J = delta_phi` above its own jamming
+    /// point (issue 21).
+    AboveJam {
+        /// Packing fraction of the random start.
+        #[serde(default = "default_phi_start")]
+        phi_start: f64,
+        /// Initial step of φ of the jamming search.
+        #[serde(default = "default_eps")]
+        eps: f64,
+        /// Lower edge of the window for `V/N` at φ_J.
+        #[serde(default = "default_energy_low")]
+        energy_low: f64,
+        /// Upper edge of the window for `V/N` at φ_J.
+        #[serde(default = "default_energy_high")]
+        energy_high: f64,
+        /// Give up after this many changes of φ in the jamming search.
+        #[serde(default = "default_max_density_steps")]
+        max_density_steps: u64,
+        /// The jamming search (as `Jam`'s).
+        #[serde(default)]
+        search: JamSearch,
+        /// `δφ = φ − φ_J`.
+        delta_phi: f64,
+        /// Largest step of φ on the way from φ_J to φ_J + δφ.
+        #[serde(default = "default_eps")]
+        compress_eps: f64,
+    },
 }
 
 fn default_phi_start() -> f64 {
@@ -218,7 +247,8 @@ impl Protocol {
         match *self {
             Protocol::Jam { phi_start, .. }
             | Protocol::Phi { phi_start, .. }
-            | Protocol::Pressure { phi_start, .. } => phi_start,
+            | Protocol::Pressure { phi_start, .. }
+            | Protocol::AboveJam { phi_start, .. } => phi_start,
         }
     }
 
@@ -228,6 +258,7 @@ impl Protocol {
             Protocol::Jam { .. } => "jam",
             Protocol::Phi { .. } => "phi",
             Protocol::Pressure { .. } => "pressure",
+            Protocol::AboveJam { .. } => "above_jam",
         }
     }
 }
@@ -598,6 +629,14 @@ impl Experiment {
                 max_density_steps,
                 search,
                 ..
+            }
+            | Protocol::AboveJam {
+                eps,
+                energy_low,
+                energy_high,
+                max_density_steps,
+                search,
+                ..
             } => {
                 JamParams {
                     eps,
@@ -616,6 +655,27 @@ impl Experiment {
                         self.minimizer.energy_tol,
                         format!("must not exceed protocol.energy_low = {energy_low:e}"),
                     ));
+                }
+                if let Protocol::AboveJam {
+                    delta_phi,
+                    compress_eps,
+                    ..
+                } = self.protocol
+                {
+                    if !(delta_phi > 0.0 && delta_phi < 0.5) {
+                        return Err(ExperimentError::invalid(
+                            "protocol.delta_phi",
+                            delta_phi,
+                            "must lie in (0, 0.5) (φ − φ_J above the jamming point)",
+                        ));
+                    }
+                    if !(compress_eps > 0.0 && compress_eps < 1.0) {
+                        return Err(ExperimentError::invalid(
+                            "protocol.compress_eps",
+                            compress_eps,
+                            "must lie in (0, 1)",
+                        ));
+                    }
                 }
             }
             Protocol::Phi { phi, eps, .. } => {
