@@ -486,3 +486,30 @@ fn above_jam_protocol_compresses_from_each_packings_own_jamming_point() {
         "{e}"
     );
 }
+
+/// A compression by δφ can rearrange a barely jammed packing into a state
+/// that jams above φ_J + δφ (N = 64 disks, seed 1, δφ = 3·10⁻³: V/N fell
+/// to 7·10⁻¹⁷ with no contact left). `AboveJam` then fails that sample,
+/// naming what happened, instead of recording an unjammed packing as one
+/// δφ above jamming; δφ = 10⁻³ on the same seed succeeds.
+#[test]
+fn above_jam_refuses_a_packing_that_unjammed() {
+    let text = |dphi: &str| {
+        format!(
+            r#"(name: "a", family: "sphere", particles: 64, samples: 1, seed: 1,
+            protocol: AboveJam(delta_phi: {dphi}), observables: [Contacts])"#
+        )
+    };
+    let parse = |t: &str| jamkit_experiment::Experiment::from_ron(t, "inline").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let report = common::run_into(&parse(&text("3e-3")), dir.path(), 1);
+    assert_eq!(report.failures.len(), 1);
+    let message = report.failures[0].to_string();
+    assert!(
+        message.contains("unjammed while compressed by delta_phi = 3e-3"),
+        "{message}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&parse(&text("1e-3")), dir.path(), 1);
+    assert!(report.packings[0].measures.energy_per_particle > 1e-10);
+}

@@ -1,16 +1,18 @@
 #!/usr/bin/env python3
 """Tables and power-law fits of the moduli runs of docs/elasticity.md.
 
-    python3 experiments/elasticity/fit.py [--pmin P] [--pmax P] DIR...
+    python3 experiments/elasticity/fit.py [--x p|dphi] [--pmin X] [--pmax X] DIR...
 
 Reads `results.csv` of every DIR (one run per pressure, made with
-`--set protocol.pressure=<p>`), groups the packings by family parameters
-and target pressure, and prints per group: the mean pressure, phi, z_J,
+`--set protocol.pressure=<p>`, or with `--x dphi` one `AboveJam` run per
+delta_phi, read from the DIR's `experiment.ron`), groups the packings by
+family parameters and x (target pressure or delta_phi), and prints per
+group: x, the mean pressure, phi, z_J,
 dz = 2 iso_margin / N_nr (= z - z_iso with the finite-N isostatic count),
 G, B and G/B (mean +- s.e.m. over the packings), how many packings have
 G < 0, and the largest number of negative modes and extra zero modes.
 Then weighted least-squares fits (weights 1/(s.e.m./mean)^2, on logs) of
-G ~ p^a, G/B ~ dz^c and dz ~ p^e over pmin <= p <= pmax, with the slope's
+G ~ x^a, G/B ~ dz^c, dz ~ x^e and p ~ x^b over pmin <= x <= pmax, with the slope's
 standard error from the weights and chi^2 per degree of freedom. Only the
 standard library.
 """
@@ -18,6 +20,7 @@ import argparse
 import csv
 import math
 import os
+import re
 from collections import defaultdict
 
 
@@ -48,30 +51,39 @@ PARAMS = ("n", "delta", "aspect", "alpha")
 
 def main():
     ap = argparse.ArgumentParser()
+    ap.add_argument("--x", choices=["p", "dphi"], default="p")
     ap.add_argument("--pmin", type=float, default=0.0)
     ap.add_argument("--pmax", type=float, default=math.inf)
     ap.add_argument("dirs", nargs="+")
     args = ap.parse_args()
     groups = defaultdict(list)
     for d in args.dirs:
+        dphi = None
+        if args.x == "dphi":
+            with open(os.path.join(d, "experiment.ron")) as f:
+                dphi = float(re.search(r"delta_phi: *([0-9.eE+-]+)", f.read()).group(1))
         with open(os.path.join(d, "results.csv")) as f:
             for r in csv.DictReader(f):
                 key = (r["family"], r["particles"]) + tuple(
                     f"{k}={r[k]}" for k in PARAMS if k in r
                 )
-                target = round(math.log10(float(r["pressure"])), 1)
+                if dphi is None:
+                    target = round(math.log10(float(r["pressure"])), 1)
+                else:
+                    target = dphi
                 groups[key].append((target, r))
     for key, items in sorted(groups.items()):
         by_p = defaultdict(list)
         for target, r in items:
             by_p[target].append(r)
         print("## " + " ".join(key))
-        print("p | phi | z_J | dz | G | B | G/B | G<0 | packings | neg. modes | extra zero")
+        print(f"{args.x} | p | phi | z_J | dz | G | B | G/B | G<0 | packings | neg. modes | extra zero")
         points = []
         for target in sorted(by_p):
             rs = by_p[target]
             f = lambda name: [float(r[name]) for r in rs]
-            p = mean_sem(f("pressure"))[0]
+            p = mean_sem(f("pressure"))
+            x = p[0] if args.x == "p" else target
             g, b = mean_sem(f("G")), mean_sem(f("B"))
             gb = mean_sem([float(r["G"]) / float(r["B"]) for r in rs])
             dz = mean_sem(
@@ -81,20 +93,22 @@ def main():
                 ]
             )
             print(
-                f"{p:.2e} | {mean_sem(f('phi_j'))[0]:.4f} | {mean_sem(f('z_j'))[0]:.3f}"
+                f"{x:.2e} | {p[0]:.2e} | {mean_sem(f('phi_j'))[0]:.4f} | {mean_sem(f('z_j'))[0]:.3f}"
                 f" | {dz[0]:.4f} ± {dz[1]:.1e} | {g[0]:.3e} ± {g[1]:.1e}"
                 f" | {b[0]:.4f} ± {b[1]:.1e} | {gb[0]:.3e} ± {gb[1]:.1e}"
                 f" | {sum(x < 0 for x in f('G'))} | {len(rs)}"
                 f" | {max(int(r['moduli_negative_modes']) for r in rs)}"
                 f" | {max(int(r['moduli_zero_extra']) for r in rs)}"
             )
-            points.append((p, g, gb, dz))
+            points.append((x, g, gb, dz, p))
         sel = [t for t in points if args.pmin <= t[0] <= args.pmax]
         fits = [
-            ("G ~ p^a", lambda t: (t[0], t[1][0], t[1][1])),
+            (f"G ~ {args.x}^a", lambda t: (t[0], t[1][0], t[1][1])),
             ("G/B ~ dz^c", lambda t: (t[3][0], t[2][0], t[2][1])),
-            ("dz ~ p^e", lambda t: (t[0], t[3][0], t[3][1])),
+            (f"dz ~ {args.x}^e", lambda t: (t[0], t[3][0], t[3][1])),
         ]
+        if args.x == "dphi":
+            fits.append(("p ~ dphi^b", lambda t: (t[0], t[4][0], t[4][1])))
         for name, pick in fits:
             xyz = [pick(t) for t in sel]
             if len(xyz) < 3 or any(x <= 0 or y <= 0 or s <= 0 for x, y, s in xyz):
@@ -107,7 +121,7 @@ def main():
             )
             print(
                 f"{name}: exponent {a:.3f} ± {se:.3f} (chi2/dof {chi2:.2f}),"
-                f" {len(xyz)} points, {args.pmin:g} <= p <= {args.pmax:g}"
+                f" {len(xyz)} points, {args.pmin:g} <= {args.x} <= {args.pmax:g}"
             )
         print()
 

@@ -179,14 +179,28 @@ impl SceneVisitor for SampleVisitor<'_> {
                 };
                 jam(&mut scene, &mut fire, &params).and_then(|jammed| {
                     let target = jammed.phi + delta_phi;
-                    compress_to_phi(&mut scene, &mut fire, target, compress_eps).map(|above| {
-                        jamkit_engine::ProtocolOutcome {
+                    let above = compress_to_phi(&mut scene, &mut fire, target, compress_eps)?;
+                    // NOTE: a compression step followed by FIRE can rearrange
+                    // the packing into a state that jams above φ_J + δφ
+                    // (measured: N = 64 disks, seed 1, δφ = 3e-3 ended with
+                    // V/N = 7e-17 and no contact). That is not a packing at
+                    // δφ above its jamming point: fail, naming it.
+                    if !(above.energy_per_particle > energy_high) {
+                        return Err(jamkit_core::Error::JammingFailed {
                             phi: above.phi,
-                            energy_per_particle: above.energy_per_particle,
-                            fire_steps: jammed.fire_steps + above.fire_steps,
-                            minimizations: jammed.minimizations + above.minimizations,
-                            newton_iterations: jammed.newton_iterations + above.newton_iterations,
-                        }
+                            steps: above.minimizations,
+                            reason: format!(
+                                "the packing unjammed while compressed by delta_phi = {delta_phi:e} from phi_J = {:.12} (V/N = {:.3e}, not above energy_high = {energy_high:e}): a rearrangement found a state that jams above phi_J + delta_phi; try a smaller protocol.compress_eps or another seed",
+                                jammed.phi, above.energy_per_particle
+                            ),
+                        });
+                    }
+                    Ok(jamkit_engine::ProtocolOutcome {
+                        phi: above.phi,
+                        energy_per_particle: above.energy_per_particle,
+                        fire_steps: jammed.fire_steps + above.fire_steps,
+                        minimizations: jammed.minimizations + above.minimizations,
+                        newton_iterations: jammed.newton_iterations + above.newton_iterations,
                     })
                 })
             }
