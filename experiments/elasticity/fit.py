@@ -58,6 +58,10 @@ def main():
     args = ap.parse_args()
     groups = defaultdict(list)
     for d in args.dirs:
+        packings = os.path.join(d, "packings")
+        failed = [f for f in os.listdir(packings) if f.endswith(".failed.json")] if os.path.isdir(packings) else []
+        if failed:
+            print(f"{d}: {len(failed)} failed samples ({', '.join(sorted(failed))})")
         dphi = None
         if args.x == "dphi":
             with open(os.path.join(d, "experiment.ron")) as f:
@@ -85,7 +89,7 @@ def main():
             p = mean_sem(f("pressure"))
             x = p[0] if args.x == "p" else target
             g, b = mean_sem(f("G")), mean_sem(f("B"))
-            gb = mean_sem([float(r["G"]) / float(r["B"]) for r in rs])
+            gb = mean_sem([float(r["G"]) / float(r["B"]) for r in rs if float(r["B"]) != 0])
             dz = mean_sem(
                 [
                     2 * int(r["iso_margin"]) / (int(r["particles"]) - int(r["n_rattlers"]))
