@@ -164,8 +164,12 @@ pub fn stiffness_blocks<const D: usize, S: Shape<D>>(
 }
 
 /// Add one contact's `v'' ∇h ∇hᵀ (+ v' ∇²h)` to the entries. Local
-/// coordinates of the pair: `(r_i, q_i, r_j, q_j)`, with `∂h/∂r_i = −∂h/∂r_j`.
-fn add_contact<const D: usize>(
+/// coordinates of the pair: `(r_i, q_i, r_j, q_j)`, with `∂h/∂r_i = −∂h/∂r_j`;
+/// `first_row` holds the rows of body `i`'s and body `j`'s first
+/// coordinates and `k` the rotational coordinates per body. Public for
+/// objectives other than [`Scene`] that assemble the same Hessian (the
+/// strained packings of `jamkit_observe::moduli`).
+pub fn add_contact<const D: usize>(
     entries: &mut Vec<(u32, u32, f64)>,
     first_row: [u32; 2],
     k: usize,

@@ -116,6 +116,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<PackingFile, Experimen
             gaps: None,
             n_rot_rattlers: None,
             free_rotations: None,
+            moduli: None,
         },
         box_edges,
         positions,

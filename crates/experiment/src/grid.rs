@@ -142,8 +142,16 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
     for dim in experiment.dim.values() {
         for particles in experiment.particles.values() {
             for params in &combos {
+                // The spectrum and the moduli both need the Hessian.
+                let hessian = if experiment.spectrum().is_some() {
+                    Some("Spectrum")
+                } else if experiment.moduli().is_some() {
+                    Some("Moduli")
+                } else {
+                    None
+                };
                 let check = CheckOnly {
-                    hessian: experiment.spectrum().is_some(),
+                    hessian,
                     minimizer: &experiment.minimizer,
                 };
                 let minimizer = registry::dispatch(&experiment.family, dim, params, check)??;
@@ -263,21 +271,22 @@ fn param_axes(
 
 /// A visitor that only checks that the shape can be built.
 /// Builds the shape (which checks its parameters) and, when the spectrum
-/// is asked for, that the family gives the second derivatives of its gap.
+/// (or the moduli) is asked for, that the family gives the second
+/// derivatives of its gap; `hessian` names the observable that needs them.
 struct CheckOnly<'a> {
-    hessian: bool,
+    hessian: Option<&'static str>,
     minimizer: &'a FireParams,
 }
 
 impl registry::SceneVisitor for CheckOnly<'_> {
     type Output = Result<FireParams, ExperimentError>;
     fn visit<const D: usize, S: jamkit_core::Shape<D>>(self, shape: S) -> Self::Output {
-        if self.hessian {
+        if let Some(observable) = self.hessian {
             let o = shape.reference_orientation();
             let apart = jamkit_core::Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
             shape
                 .gap_hessians(1.0, &o, 1.0, &o, &apart, f64::INFINITY, |_| {})
-                .map_err(|e| ExperimentError::invalid("observables", "Spectrum", e.to_string()))?;
+                .map_err(|e| ExperimentError::invalid("observables", observable, e.to_string()))?;
         }
         Ok(self.minimizer.for_family(&shape))
     }

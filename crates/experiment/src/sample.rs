@@ -15,7 +15,7 @@ use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
     Fire, JamParams, PressureParams, Progress, Scene, compress_to_phi, compress_to_pressure, jam,
 };
-use jamkit_format::{Measures, PackingFile, SpectrumMeasures};
+use jamkit_format::{Measures, ModuliMeasures, PackingFile, SpectrumMeasures};
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::saddle::{self, SaddleParams};
 use jamkit_observe::spectrum::{self, Spectrum};
@@ -160,6 +160,50 @@ impl SceneVisitor for SampleVisitor<'_> {
                     Ok(outcome)
                 })
             }
+            Protocol::AboveJam {
+                eps,
+                energy_low,
+                energy_high,
+                max_density_steps,
+                search,
+                delta_phi,
+                compress_eps,
+                ..
+            } => {
+                let params = JamParams {
+                    eps,
+                    energy_low,
+                    energy_high,
+                    max_density_steps,
+                    search,
+                };
+                jam(&mut scene, &mut fire, &params).and_then(|jammed| {
+                    let target = jammed.phi + delta_phi;
+                    let above = compress_to_phi(&mut scene, &mut fire, target, compress_eps)?;
+                    // NOTE: a compression step followed by FIRE can rearrange
+                    // the packing into a state that jams above φ_J + δφ
+                    // (measured: N = 64 disks, seed 1, δφ = 3e-3 ended with
+                    // V/N = 7e-17 and no contact). That is not a packing at
+                    // δφ above its jamming point: fail, naming it.
+                    if !(above.energy_per_particle > energy_high) {
+                        return Err(jamkit_core::Error::JammingFailed {
+                            phi: above.phi,
+                            steps: above.minimizations,
+                            reason: format!(
+                                "the packing unjammed while compressed by delta_phi = {delta_phi:e} from phi_J = {:.12} (V/N = {:.3e}, not above energy_high = {energy_high:e}): a rearrangement found a state that jams above phi_J + delta_phi; try a smaller protocol.compress_eps or another seed",
+                                jammed.phi, above.energy_per_particle
+                            ),
+                        });
+                    }
+                    Ok(jamkit_engine::ProtocolOutcome {
+                        phi: above.phi,
+                        energy_per_particle: above.energy_per_particle,
+                        fire_steps: jammed.fire_steps + above.fire_steps,
+                        minimizations: jammed.minimizations + above.minimizations,
+                        newton_iterations: jammed.newton_iterations + above.newton_iterations,
+                    })
+                })
+            }
             Protocol::Phi { phi, eps, .. } => compress_to_phi(&mut scene, &mut fire, phi, eps),
             Protocol::Pressure {
                 pressure,
@@ -295,6 +339,7 @@ impl SampleVisitor<'_> {
             saddle_escapes: None,
             spectrum: None,
             gaps: None,
+            moduli: None,
         };
         Some(self.file(scene.packing(), true, measures))
     }
@@ -317,6 +362,7 @@ struct Observed {
     spectrum: Option<SpectrumMeasures>,
     eigenvalue_table: Option<String>,
     gaps: Option<GapCounts>,
+    moduli: Option<ModuliMeasures>,
 }
 
 /// The rattler rule of `e` for this packing: an explicit
@@ -357,12 +403,25 @@ fn observe<const D: usize, S: Shape<D>>(
     let gaps = e
         .gaps()
         .map(|params| GapCounts::of_scene(scene, rattler, &params));
+    let moduli = match e.moduli() {
+        Some(params) => {
+            let start = Instant::now();
+            let moduli = jamkit_observe::moduli::measure(scene, rattler, &params)?;
+            Some(ModuliMeasures {
+                moduli,
+                params,
+                wall_s: start.elapsed().as_secs_f64(),
+            })
+        }
+        None => None,
+    };
     Ok(Observed {
         contacts,
         pressure,
         spectrum,
         eigenvalue_table,
         gaps,
+        moduli,
     })
 }
 
@@ -401,6 +460,7 @@ impl Observed {
             gaps: self.gaps.clone(),
             n_rot_rattlers: contacts.map(|s| s.n_rot_rattlers),
             free_rotations: contacts.map(|s| s.free_rotations),
+            moduli: self.moduli.clone(),
         }
     }
 

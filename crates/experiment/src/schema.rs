@@ -26,6 +26,7 @@ use jamkit_core::{Potential, SizeDistribution};
 use jamkit_engine::{FireParams, JamParams, JamSearch, PressureParams};
 use jamkit_observe::gaps::GapParams;
 use jamkit_observe::hessian::HessianOptions;
+use jamkit_observe::moduli::ModuliParams;
 use jamkit_observe::spectrum::DosParams;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -176,6 +177,35 @@ pub enum Protocol {
         #[serde(default = "default_max_density_steps")]
         max_density_steps: u64,
     },
+    /// Jam (as `Jam`), then compress the jammed packing by `delta_phi`
+    /// in steps of at most `compress_eps`, relaxing after each: a packing
+    /// at a chosen distance `φ − φ_J = delta_phi` above its own jamming
+    /// point (issue 21).
+    AboveJam {
+        /// Packing fraction of the random start.
+        #[serde(default = "default_phi_start")]
+        phi_start: f64,
+        /// Initial step of φ of the jamming search.
+        #[serde(default = "default_eps")]
+        eps: f64,
+        /// Lower edge of the window for `V/N` at φ_J.
+        #[serde(default = "default_energy_low")]
+        energy_low: f64,
+        /// Upper edge of the window for `V/N` at φ_J.
+        #[serde(default = "default_energy_high")]
+        energy_high: f64,
+        /// Give up after this many changes of φ in the jamming search.
+        #[serde(default = "default_max_density_steps")]
+        max_density_steps: u64,
+        /// The jamming search (as `Jam`'s).
+        #[serde(default)]
+        search: JamSearch,
+        /// `δφ = φ − φ_J`.
+        delta_phi: f64,
+        /// Largest step of φ on the way from φ_J to φ_J + δφ.
+        #[serde(default = "default_eps")]
+        compress_eps: f64,
+    },
 }
 
 fn default_phi_start() -> f64 {
@@ -217,7 +247,8 @@ impl Protocol {
         match *self {
             Protocol::Jam { phi_start, .. }
             | Protocol::Phi { phi_start, .. }
-            | Protocol::Pressure { phi_start, .. } => phi_start,
+            | Protocol::Pressure { phi_start, .. }
+            | Protocol::AboveJam { phi_start, .. } => phi_start,
         }
     }
 
@@ -227,6 +258,7 @@ impl Protocol {
             Protocol::Jam { .. } => "jam",
             Protocol::Phi { .. } => "phi",
             Protocol::Pressure { .. } => "pressure",
+            Protocol::AboveJam { .. } => "above_jam",
         }
     }
 }
@@ -282,6 +314,19 @@ pub enum Observable {
         #[serde(default = "default_points_per_decade")]
         points_per_decade: usize,
     },
+    /// The shear and bulk moduli `G`, `B` by linear response
+    /// (`jamkit_observe::moduli`; rattlers removed; `results.csv`).
+    /// Written `Moduli()` for the defaults.
+    Moduli {
+        /// Modes with `ω ≤ omega_zero` are zero modes, left out of `H⁺`
+        /// (the spectrum's threshold, 10⁻⁵).
+        #[serde(default = "default_moduli_omega_zero")]
+        omega_zero: f64,
+    },
+}
+
+fn default_moduli_omega_zero() -> f64 {
+    ModuliParams::default().omega_zero
 }
 
 fn yes() -> bool {
@@ -356,10 +401,21 @@ impl Experiment {
         })
     }
 
+    /// The moduli asked for, if any.
+    pub fn moduli(&self) -> Option<ModuliParams> {
+        self.observables.iter().find_map(|o| match *o {
+            Observable::Moduli { omega_zero } => Some(ModuliParams { omega_zero }),
+            _ => None,
+        })
+    }
+
     /// Whether contacts and rattlers must be found (for themselves, or for
-    /// the spectrum and the gaps, which leave rattlers out).
+    /// the spectrum, the gaps and the moduli, which leave rattlers out).
     pub fn needs_contacts(&self) -> bool {
-        self.wants(&Observable::Contacts) || self.spectrum().is_some() || self.gaps().is_some()
+        self.wants(&Observable::Contacts)
+            || self.spectrum().is_some()
+            || self.gaps().is_some()
+            || self.moduli().is_some()
     }
 
     fn validate_observables(&self) -> Result<(), ExperimentError> {
@@ -380,6 +436,9 @@ impl Experiment {
         }
         if let Some(g) = self.gaps() {
             g.validate("observables.Gaps")?;
+        }
+        if let Some(m) = self.moduli() {
+            m.validate("observables.Moduli")?;
         }
         Ok(())
     }
@@ -570,6 +629,14 @@ impl Experiment {
                 max_density_steps,
                 search,
                 ..
+            }
+            | Protocol::AboveJam {
+                eps,
+                energy_low,
+                energy_high,
+                max_density_steps,
+                search,
+                ..
             } => {
                 JamParams {
                     eps,
@@ -588,6 +655,27 @@ impl Experiment {
                         self.minimizer.energy_tol,
                         format!("must not exceed protocol.energy_low = {energy_low:e}"),
                     ));
+                }
+                if let Protocol::AboveJam {
+                    delta_phi,
+                    compress_eps,
+                    ..
+                } = self.protocol
+                {
+                    if !(delta_phi > 0.0 && delta_phi < 0.5) {
+                        return Err(ExperimentError::invalid(
+                            "protocol.delta_phi",
+                            delta_phi,
+                            "must lie in (0, 0.5) (φ − φ_J above the jamming point)",
+                        ));
+                    }
+                    if !(compress_eps > 0.0 && compress_eps < 1.0) {
+                        return Err(ExperimentError::invalid(
+                            "protocol.compress_eps",
+                            compress_eps,
+                            "must lie in (0, 1)",
+                        ));
+                    }
                 }
             }
             Protocol::Phi { phi, eps, .. } => {

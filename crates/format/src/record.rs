@@ -6,6 +6,7 @@
 
 use crate::error::FormatError;
 use jamkit_observe::gaps::GapCounts;
+use jamkit_observe::moduli::{Moduli, ModuliParams};
 use jamkit_observe::spectrum::{DosHistogram, DosParams, ZeroModes};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -54,6 +55,21 @@ pub struct Measures {
     /// Their free coordinates, `Σ_b (f − r_b)` over the non-rattlers.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub free_rotations: Option<usize>,
+    /// The elastic moduli, when asked for (absent otherwise, so files
+    /// without them are unchanged).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moduli: Option<ModuliMeasures>,
+}
+
+/// The elastic moduli of one packing, as stored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModuliMeasures {
+    /// `G`, `B` and what goes with them (`jamkit_observe::moduli`).
+    pub moduli: Moduli,
+    /// The options used.
+    pub params: ModuliParams,
+    /// Seconds for assembly, diagonalisation and the strain derivatives.
+    pub wall_s: f64,
 }
 
 /// The spectrum of one packing, as stored.

@@ -5,7 +5,7 @@
 //! was not measured or a mean of nothing); quoting and line ends are the
 //! `csv` crate's. Columns: `docs/formats.md`.
 
-use crate::record::{PackingFile, SpectrumMeasures};
+use crate::record::{ModuliMeasures, PackingFile, SpectrumMeasures};
 use jamkit_core::stats::mean_sem;
 use jamkit_observe::spectrum::DosHistogram;
 
@@ -95,6 +95,7 @@ pub fn results_csv(files: &[PackingFile]) -> String {
     );
     let with_spectrum = files.iter().any(|f| f.measures.spectrum.is_some());
     let with_gaps = files.iter().any(|f| f.measures.gaps.is_some());
+    let with_moduli = files.iter().any(|f| f.measures.moduli.is_some());
     // Only when some packing escaped saddles, so that tables of runs
     // without the escape keep their columns.
     let with_escapes = files.iter().any(|f| f.measures.saddle_escapes.is_some());
@@ -106,6 +107,9 @@ pub fn results_csv(files: &[PackingFile]) -> String {
     }
     if with_gaps {
         head.push("gaps".into());
+    }
+    if with_moduli {
+        head.extend(MODULI_COLUMNS.map(String::from));
     }
     let mut rows = Vec::with_capacity(files.len());
     for f in files {
@@ -148,6 +152,9 @@ pub fn results_csv(files: &[PackingFile]) -> String {
                     .unwrap_or_default(),
             );
         }
+        if with_moduli {
+            row.extend(moduli_cells(m.moduli.as_ref()));
+        }
         rows.push(row);
     }
     table(&head, rows)
@@ -164,6 +171,37 @@ const SPECTRUM_COLUMNS: [&str; 9] = [
     "lambda_max",
     "spectrum_s",
 ];
+
+/// The columns of `Moduli` (docs/formats.md).
+const MODULI_COLUMNS: [&str; 9] = [
+    "G",
+    "B",
+    "G_affine",
+    "B_affine",
+    "moduli_pressure",
+    "moduli_zero_extra",
+    "moduli_negative_modes",
+    "moduli_floppy_share",
+    "moduli_s",
+];
+
+fn moduli_cells(m: Option<&ModuliMeasures>) -> Vec<String> {
+    let Some(m) = m else {
+        return vec![String::new(); MODULI_COLUMNS.len()];
+    };
+    let v = &m.moduli;
+    vec![
+        format!("{:e}", v.shear),
+        format!("{:e}", v.bulk),
+        format!("{:e}", v.shear_affine),
+        format!("{:e}", v.bulk_affine),
+        format!("{:e}", v.pressure),
+        v.zero_modes.extra.to_string(),
+        v.negative_modes.to_string(),
+        format!("{:e}", v.floppy_share),
+        format!("{:.3}", m.wall_s),
+    ]
+}
 
 fn spectrum_cells(s: Option<&SpectrumMeasures>) -> Vec<String> {
     let Some(s) = s else {

@@ -10,11 +10,15 @@
 //!   (stiffness part `K` and stress part `T`), assembled sparse;
 //! * [`spectrum`]: its eigenvalues, the density of states `D(ω)`, `ω₁`,
 //!   `ω_*`, zero modes, participation ratios and rotational shares;
+//! * [`moduli`]: the stress tensor, the strain derivatives of the energy
+//!   and the shear and bulk moduli by linear response, with a check by
+//!   deformation;
 //! * [`gaps`]: the distribution of positive gaps between non-rattlers,
 //!   `g(h)` and its cumulative `Z(h)`.
 
 pub mod contacts;
 pub mod gaps;
+pub mod moduli;
 pub use jamkit_engine::hessian;
 pub mod saddle;
 pub mod spectrum;

@@ -1,0 +1,134 @@
+#!/usr/bin/env python3
+"""Tables and power-law fits of the moduli runs of docs/elasticity.md.
+
+    python3 experiments/elasticity/fit.py [--x p|dphi] [--pmin X] [--pmax X] DIR...
+
+Reads `results.csv` of every DIR (one run per pressure, made with
+`--set protocol.pressure=<p>`, or with `--x dphi` one `AboveJam` run per
+delta_phi, read from the DIR's `experiment.ron`), groups the packings by
+family parameters and x (target pressure or delta_phi), and prints per
+group: x, the mean pressure, phi, z_J,
+dz = 2 iso_margin / N_nr (= z - z_iso with the finite-N isostatic count),
+G, B and G/B (mean +- s.e.m. over the packings), how many packings have
+G < 0, and the largest number of negative modes and extra zero modes.
+Then weighted least-squares fits (weights 1/(s.e.m./mean)^2, on logs) of
+G ~ x^a, G/B ~ dz^c, dz ~ x^e and p ~ x^b over pmin <= x <= pmax, with the slope's
+standard error from the weights and chi^2 per degree of freedom. Only the
+standard library.
+"""
+import argparse
+import csv
+import math
+import os
+import re
+from collections import defaultdict
+
+
+def mean_sem(xs):
+    n = len(xs)
+    m = sum(xs) / n
+    if n < 2:
+        return m, 0.0
+    return m, math.sqrt(sum((x - m) ** 2 for x in xs) / ((n - 1) * n))
+
+
+def wls(xs, ys, sigmas):
+    """Slope, its standard error and chi^2/dof of a weighted line fit."""
+    w = [1.0 / s**2 for s in sigmas]
+    sw = sum(w)
+    mx = sum(wi * x for wi, x in zip(w, xs)) / sw
+    my = sum(wi * y for wi, y in zip(w, ys)) / sw
+    sxx = sum(wi * (x - mx) ** 2 for wi, x in zip(w, xs))
+    sxy = sum(wi * (x - mx) * (y - my) for wi, x, y in zip(w, xs, ys))
+    a = sxy / sxx
+    b = my - a * mx
+    chi2 = sum(wi * (y - a * x - b) ** 2 for wi, x, y in zip(w, xs, ys))
+    return a, math.sqrt(1.0 / sxx), chi2 / max(len(xs) - 2, 1)
+
+
+PARAMS = ("n", "delta", "aspect", "alpha")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--x", choices=["p", "dphi"], default="p")
+    ap.add_argument("--pmin", type=float, default=0.0)
+    ap.add_argument("--pmax", type=float, default=math.inf)
+    ap.add_argument("dirs", nargs="+")
+    args = ap.parse_args()
+    groups = defaultdict(list)
+    for d in args.dirs:
+        packings = os.path.join(d, "packings")
+        failed = [f for f in os.listdir(packings) if f.endswith(".failed.json")] if os.path.isdir(packings) else []
+        if failed:
+            print(f"{d}: {len(failed)} failed samples ({', '.join(sorted(failed))})")
+        dphi = None
+        if args.x == "dphi":
+            with open(os.path.join(d, "experiment.ron")) as f:
+                dphi = float(re.search(r"delta_phi: *([0-9.eE+-]+)", f.read()).group(1))
+        with open(os.path.join(d, "results.csv")) as f:
+            for r in csv.DictReader(f):
+                key = (r["family"], r["particles"]) + tuple(
+                    f"{k}={r[k]}" for k in PARAMS if k in r
+                )
+                if dphi is None:
+                    target = round(math.log10(float(r["pressure"])), 1)
+                else:
+                    target = dphi
+                groups[key].append((target, r))
+    for key, items in sorted(groups.items()):
+        by_p = defaultdict(list)
+        for target, r in items:
+            by_p[target].append(r)
+        print("## " + " ".join(key))
+        print(f"{args.x} | p | phi | z_J | dz | G | B | G/B | G<0 | packings | neg. modes | extra zero")
+        points = []
+        for target in sorted(by_p):
+            rs = by_p[target]
+            f = lambda name: [float(r[name]) for r in rs]
+            p = mean_sem(f("pressure"))
+            x = p[0] if args.x == "p" else target
+            g, b = mean_sem(f("G")), mean_sem(f("B"))
+            gb = mean_sem([float(r["G"]) / float(r["B"]) for r in rs if float(r["B"]) != 0])
+            dz = mean_sem(
+                [
+                    2 * int(r["iso_margin"]) / (int(r["particles"]) - int(r["n_rattlers"]))
+                    for r in rs
+                ]
+            )
+            print(
+                f"{x:.2e} | {p[0]:.2e} | {mean_sem(f('phi_j'))[0]:.4f} | {mean_sem(f('z_j'))[0]:.3f}"
+                f" | {dz[0]:.4f} ± {dz[1]:.1e} | {g[0]:.3e} ± {g[1]:.1e}"
+                f" | {b[0]:.4f} ± {b[1]:.1e} | {gb[0]:.3e} ± {gb[1]:.1e}"
+                f" | {sum(x < 0 for x in f('G'))} | {len(rs)}"
+                f" | {max(int(r['moduli_negative_modes']) for r in rs)}"
+                f" | {max(int(r['moduli_zero_extra']) for r in rs)}"
+            )
+            points.append((x, g, gb, dz, p))
+        sel = [t for t in points if args.pmin <= t[0] <= args.pmax]
+        fits = [
+            (f"G ~ {args.x}^a", lambda t: (t[0], t[1][0], t[1][1])),
+            ("G/B ~ dz^c", lambda t: (t[3][0], t[2][0], t[2][1])),
+            (f"dz ~ {args.x}^e", lambda t: (t[0], t[3][0], t[3][1])),
+        ]
+        if args.x == "dphi":
+            fits.append(("p ~ dphi^b", lambda t: (t[0], t[4][0], t[4][1])))
+        for name, pick in fits:
+            xyz = [pick(t) for t in sel]
+            if len(xyz) < 3 or any(x <= 0 or y <= 0 or s <= 0 for x, y, s in xyz):
+                print(f"{name}: no fit (fewer than 3 points, or a mean <= 0 in range)")
+                continue
+            a, se, chi2 = wls(
+                [math.log(x) for x, _, _ in xyz],
+                [math.log(y) for _, y, _ in xyz],
+                [s / y for _, y, s in xyz],
+            )
+            print(
+                f"{name}: exponent {a:.3f} ± {se:.3f} (chi2/dof {chi2:.2f}),"
+                f" {len(xyz)} points, {args.pmin:g} <= {args.x} <= {args.pmax:g}"
+            )
+        print()
+
+
+if __name__ == "__main__":
+    main()
