@@ -868,7 +868,6 @@ mod tests {
     /// refused; the bounds hold `ρ` on a sample of directions.
     #[test]
     fn the_drawing_surface_is_the_shape() {
-        use jamkit_core::Surface;
         use rand::SeedableRng;
         let h = mixed(0.2);
         let s = Shape::<3>::surface(&h).unwrap();
