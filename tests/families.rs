@@ -4,7 +4,7 @@
 //! families; the docs keep lists of their own for readers. These tests fail
 //! when a family is added to the registry and a list is not updated (the
 //! lists in docs/formats.md and docs/drawing.md once went stale unnoticed),
-//! or when a registered 2D family cannot be drawn from its example.
+//! or when a registered 2D or 3D family cannot be drawn from its example.
 
 use jamkit_draw::Outline;
 use jamkit_registry::{EXAMPLES, FAMILIES, supports_dim};
@@ -57,6 +57,32 @@ fn every_registered_planar_family_draws_from_its_example() {
         assert!(
             body.iter().all(|p| p[0].is_finite() && p[1].is_finite()),
             "{}",
+            info.name
+        );
+    }
+}
+
+/// Every registered 3D family draws from its example: as balls, through
+/// its `Surface`, or from its spheres (`jamkit_draw::scene3d::Solid`), and
+/// a body of its example ray-casts to a non-empty picture.
+#[test]
+fn every_registered_3d_family_draws_from_its_example() {
+    use jamkit_draw::render3d::{ShapeBody, body_primitives, body_raster, view_rotation};
+    for (info, example) in FAMILIES.iter().zip(EXAMPLES) {
+        if !supports_dim(info, 3) {
+            continue;
+        }
+        let params = jamkit_registry::params_from_ron(example).unwrap();
+        let primitives = body_primitives(info.name, &params, view_rotation())
+            .unwrap_or_else(|e| panic!("family `{}` does not draw in 3D: {e}", info.name));
+        let body = ShapeBody {
+            label: String::new(),
+            primitives,
+        };
+        let raster = body_raster(&body, 3.0, 20.0);
+        assert!(
+            raster.count_body(0) > 100,
+            "family `{}`: empty picture",
             info.name
         );
     }
