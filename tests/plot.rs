@@ -38,6 +38,30 @@ fn a_dimer_scan_plots_every_observable_against_each_scanned_quantity() {
 }
 
 #[test]
+fn runs_of_one_file_at_several_pressures_plot_the_moduli_against_the_target() {
+    // The same file run at two target pressures into two directories: the
+    // packing ids are the same, the settings differ, so both runs are
+    // points (not one taken for a copy of the other), and G, B are drawn
+    // against the target pressure.
+    let text = r#"(name: "el", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 1,
+        protocol: Pressure(pressure: 1e-2), observables: [Contacts, Pressure, Moduli()])"#;
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    let runs = [tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap()];
+    common::run_ok(&e, runs[0].path(), 2);
+    let e = jamkit_experiment::overrides::apply(&e, &["protocol.pressure=1e-1".into()]).unwrap();
+    common::run_ok(&e, runs[1].path(), 2);
+    let out = tempfile::tempdir().unwrap();
+    let dirs: Vec<_> = runs.iter().map(|d| d.path().to_path_buf()).collect();
+    let p = jamkit_report::runplot::plot(&dirs, out.path()).unwrap();
+    assert_eq!(p.scanned, ["target_pressure"]);
+    for y in ["shear_modulus", "bulk_modulus", "pressure"] {
+        let stem = out.path().join(format!("{y}_vs_target_pressure"));
+        assert!(p.figures.contains(&stem), "{y}: {:?}", p.figures);
+    }
+    assert!(p.index.contains("2 points, 4 packings"), "{}", p.index);
+}
+
+#[test]
 fn plot_refuses_a_directory_without_packings() {
     let empty = tempfile::tempdir().unwrap();
     std::fs::create_dir(empty.path().join("packings")).unwrap();

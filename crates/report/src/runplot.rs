@@ -7,12 +7,17 @@
 //! in the runs — goes on the x axis of one figure per observable:
 //!
 //! * φ_J, `z_J` (and `z_corr` where rotational rattlers make it differ),
-//!   the rattler fraction and the pressure, as the mean over the point's
+//!   the rattler fraction, the pressure and the moduli `G`, `B` (where
+//!   `Moduli` was measured), as the mean over the point's
 //!   packings with the standard error as error bar; one series per value
 //!   of the other scanned quantities (and per family), with its label;
 //! * the pooled `D(ω)` of each point where `Spectrum` was measured, and
 //!   the pooled cumulative gap distribution `Z(h)` where `Gaps` was, one
 //!   curve per point (zero modes left out of `D(ω)`).
+//!
+//! The protocol's target (`Pressure`'s pressure, `Phi`'s φ, `AboveJam`'s
+//! δφ) is a coordinate like a parameter, so runs of one file at several
+//! targets are points along it.
 //!
 //! A run of one point (nothing scanned) is drawn packing by packing,
 //! against the seed. An x axis is logarithmic when all its values are
@@ -89,6 +94,9 @@ fn axis_name(name: &str) -> String {
         "alpha" => "α".into(),
         "kappa" => "κ".into(),
         "seed" => "seed (one packing each)".into(),
+        "target_pressure" => "p (target)".into(),
+        "target_phi" => "φ (target)".into(),
+        "delta_phi" => "δφ = φ − φ_J".into(),
         other => other.into(),
     }
 }
@@ -103,7 +111,10 @@ fn load(dirs: &[PathBuf]) -> Result<Vec<Point>, ReportError> {
             let Some(file) = PackingFile::load(&path) else {
                 continue;
             };
-            if !seen.insert(file.id.clone()) {
+            // The same packing in a run and its archive is taken once;
+            // runs that differ in a setting the id does not name (the
+            // target pressure of each of several runs) are all kept.
+            if !seen.insert((file.id.clone(), file.settings.to_string())) {
                 continue;
             }
             let mut coords = BTreeMap::from([
@@ -120,6 +131,21 @@ fn load(dirs: &[PathBuf]) -> Result<Vec<Point>, ReportError> {
                         serde_json::Value::Null => {}
                         other => {
                             tags.insert(k.clone(), other.to_string().trim_matches('"').to_string());
+                        }
+                    }
+                }
+            }
+            // The protocol's target is a coordinate too (several runs of
+            // one file at different pressures or distances from jamming).
+            if let Some(protocol) = file.settings.get("protocol").and_then(|p| p.as_object()) {
+                for (kind, fields) in protocol {
+                    for (field, name) in PROTOCOL_TARGETS
+                        .iter()
+                        .filter(|t| t.0 == kind.as_str())
+                        .map(|t| (t.1, t.2))
+                    {
+                        if let Some(x) = fields.get(field).and_then(|v| v.as_f64()) {
+                            coords.insert(name.to_string(), x);
                         }
                     }
                 }
@@ -182,7 +208,15 @@ type Group = (Vec<f64>, String, Vec<(f64, f64, f64)>);
 /// One observable of a packing (`None` where it was not measured).
 type Measure = fn(&PackingFile) -> Option<f64>;
 
-const OBSERVABLES: [(&str, &str, Measure); 5] = [
+/// Protocol targets that become coordinates: protocol, its field, the
+/// coordinate's name.
+const PROTOCOL_TARGETS: [(&str, &str, &str); 3] = [
+    ("Pressure", "pressure", "target_pressure"),
+    ("Phi", "phi", "target_phi"),
+    ("AboveJam", "delta_phi", "delta_phi"),
+];
+
+const OBSERVABLES: [(&str, &str, Measure); 7] = [
     ("phi_j", "φ_J", |f| Some(f.phi)),
     ("z_j", "z_J", |f| f.measures.z_j),
     ("z_corr", "z_corr", |f| f.z_corr()),
@@ -190,6 +224,12 @@ const OBSERVABLES: [(&str, &str, Measure); 5] = [
         Some(f.measures.n_rattlers? as f64 / f.particles as f64)
     }),
     ("pressure", "pressure p", |f| f.measures.pressure),
+    ("shear_modulus", "shear modulus G", |f| {
+        Some(f.measures.moduli.as_ref()?.moduli.shear)
+    }),
+    ("bulk_modulus", "bulk modulus B", |f| {
+        Some(f.measures.moduli.as_ref()?.moduli.bulk)
+    }),
 ];
 
 /// Draw the figures of the runs in `dirs` into `out`.
@@ -321,6 +361,18 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
                     .find(|o| o.is_ne())
                     .unwrap_or(a.1.cmp(&b.1))
             });
+            // Pressure and moduli on a log axis when every mean is positive
+            // and they span a factor of 20 (a negative mean G stays on a
+            // linear axis, where it shows).
+            let log_y = matches!(key, "pressure" | "shear_modulus" | "bulk_modulus") && {
+                let ys: Vec<f64> = groups
+                    .iter()
+                    .flat_map(|g| g.2.iter().map(|p| p.1))
+                    .collect();
+                let lo = ys.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = ys.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                lo > 0.0 && hi >= 20.0 * lo
+            };
             let series = groups
                 .into_iter()
                 .map(|(_, label, mut pts)| {
@@ -339,7 +391,7 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
                     x_label: axis_name(x_name),
                     y_label: y_label.into(),
                     log_x,
-                    log_y: key == "pressure",
+                    log_y,
                     series,
                     guides: Vec::new(),
                     legend: SeriesLabelPosition::UpperLeft,
