@@ -122,6 +122,30 @@ impl Quaternion {
         }
     }
 
+    /// One step of the rotational coordinates `dq` of a body:
+    /// `o → exp(ω) o` with `ω = (dq₀, dq₁, dq₂)` in the world frame, or, for
+    /// a body symmetric about its own z axis (`axial`, two coordinates),
+    /// `o → o exp((dq₀, dq₁, 0))` in the body frame; then renormalised.
+    pub fn stepped(&self, dq: &[f64], axial: bool) -> Self {
+        if axial {
+            self.mul(&Self::exp(&Vector::<3>::new(dq[0], dq[1], 0.0)))
+        } else {
+            Self::exp(&Vector::<3>::new(dq[0], dq[1], dq[2])).mul(self)
+        }
+        .renormalized()
+    }
+
+    /// The orientation stored as `[w, x, y, z]` ([`Quaternion::coords`]):
+    /// four numbers of norm 1 to 10⁻⁶, renormalised; `None` otherwise.
+    pub fn from_coords(coords: &[f64]) -> Option<Self> {
+        match coords {
+            [w, x, y, z] if ((w * w + x * x + y * y + z * z).sqrt() - 1.0).abs() < 1e-6 => {
+                Self::normalized(*w, *x, *y, *z)
+            }
+            _ => None,
+        }
+    }
+
     /// The rotation matrix `R(o)`, as its three columns `R x̂, R ŷ, R ẑ`.
     #[inline(always)]
     pub fn columns(&self) -> [Vector<3>; 3] {

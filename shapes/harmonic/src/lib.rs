@@ -735,12 +735,7 @@ impl Shape<3> for Harmonic {
     /// `Q → exp(ω) Q` (world frame), or `Q → Q exp((dq₀, dq₁, 0))` (body
     /// frame) for an axisymmetric `F`; renormalised.
     fn rotate(&self, o: &mut Quaternion, dq: &[f64]) {
-        *o = if self.axisymmetric {
-            o.mul(&Quaternion::exp(&Vector::<3>::new(dq[0], dq[1], 0.0)))
-        } else {
-            Quaternion::exp(&Vector::<3>::new(dq[0], dq[1], dq[2])).mul(o)
-        }
-        .renormalized();
+        *o = o.stepped(dq, self.axisymmetric);
     }
 
     /// `[w, x, y, z]`.
@@ -750,12 +745,7 @@ impl Shape<3> for Harmonic {
 
     /// Four numbers of norm 1 (to 10⁻⁶; renormalised).
     fn orientation_from_coords(&self, coords: &[f64]) -> Option<Quaternion> {
-        match coords {
-            [w, x, y, z] if ((w * w + x * x + y * y + z * z).sqrt() - 1.0).abs() < 1e-6 => {
-                Quaternion::normalized(*w, *x, *y, *z)
-            }
-            _ => None,
-        }
+        Quaternion::from_coords(coords)
     }
 
     /// `1 + Δ F`, for drawing ([`HarmonicSurface`]).

@@ -34,8 +34,7 @@
 use crate::orientation::{Angle, Quaternion};
 use crate::{MAX_SPHERES, Nmer};
 use jamkit_core::{Contact, GapHessian, MAX_ROT, Matrix, RotVec, Shape, Vector};
-use rand::{Rng, RngExt};
-use std::f64::consts::PI;
+use rand::Rng;
 
 /// FIRE's largest time step for bodies made of spheres in 3D. Two bodies
 /// touch at up to four points, nearly parallel, so jammed dimers vibrate
@@ -402,27 +401,14 @@ impl Shape<3> for Nmer<3> {
     /// numbers `u₁, u₂, u₃`, `q = (√(1−u₁) sin 2πu₂, √(1−u₁) cos 2πu₂,
     /// √u₁ sin 2πu₃, √u₁ cos 2πu₃)`.
     fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Quaternion {
-        let (u1, u2, u3) = (
-            rng.random::<f64>(),
-            rng.random::<f64>(),
-            rng.random::<f64>(),
-        );
-        let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
-        let (s2, c2) = (2.0 * PI * u2).sin_cos();
-        let (s3, c3) = (2.0 * PI * u3).sin_cos();
-        Quaternion::normalized(a * s2, a * c2, b * s3, b * c3).unwrap_or(Quaternion::IDENTITY)
+        Quaternion::random(rng)
     }
 
     /// `o → exp(ω) ∘ o` with `ω = (dq₀, dq₁, dq₂)` in the world frame, or
     /// `o → o ∘ exp((dq₀, dq₁, 0))` (body frame) for a linear body; then
     /// renormalised.
     fn rotate(&self, o: &mut Quaternion, dq: &[f64]) {
-        *o = if self.linear {
-            o.mul(&Quaternion::exp(&Vector::<3>::new(dq[0], dq[1], 0.0)))
-        } else {
-            Quaternion::exp(&Vector::<3>::new(dq[0], dq[1], dq[2])).mul(o)
-        }
-        .renormalized();
+        *o = o.stepped(dq, self.linear);
     }
 
     /// `[w, x, y, z]`.
@@ -432,12 +418,7 @@ impl Shape<3> for Nmer<3> {
 
     /// Four numbers of norm 1 (to 10⁻⁶; renormalised).
     fn orientation_from_coords(&self, coords: &[f64]) -> Option<Quaternion> {
-        match coords {
-            [w, x, y, z] if ((w * w + x * x + y * y + z * z).sqrt() - 1.0).abs() < 1e-6 => {
-                Quaternion::normalized(*w, *x, *y, *z)
-            }
-            _ => None,
-        }
+        Quaternion::from_coords(coords)
     }
 
     /// `f + 1` with `f = 3 + rot_dof`: 6 for a linear body, 7 otherwise.
