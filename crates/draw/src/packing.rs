@@ -87,34 +87,7 @@ impl Packing2d {
         }
         let outline = Outline::from_family(&file.family, &file.params)?;
         let bad = |what: String| DrawError::Inconsistent(format!("packing {}: {what}", file.id));
-        let box_edges = match file.box_edges[..] {
-            [a, b] if a > 0.0 && b > 0.0 && a.is_finite() && b.is_finite() => [a, b],
-            _ => {
-                return Err(bad(format!(
-                    "box = {:?}: must hold 2 positive edge lengths",
-                    file.box_edges
-                )));
-            }
-        };
-        let n = file.positions.len();
-        if n == 0 {
-            return Err(bad(
-                "positions = []: the file holds no configuration (it was run with output.packings = false)"
-                    .into(),
-            ));
-        }
-        if file.radii.len() != n {
-            return Err(bad(format!(
-                "radii has {} entries for {n} positions",
-                file.radii.len()
-            )));
-        }
-        if !(file.rattler.is_empty() || file.rattler.len() == n) {
-            return Err(bad(format!(
-                "rattler has {} entries for {n} positions",
-                file.rattler.len()
-            )));
-        }
+        let (box_edges, n) = configuration::<2>(file)?;
         let needs_angles = outline.turns();
         // A Δ = 0 near-disk (α = 1 ellipse) is jammed as a disk and stores
         // no angles: its outline does not turn.
@@ -241,6 +214,45 @@ impl Packing2d {
     pub fn size_colors(&self) -> Vec<Rgb> {
         size_colors(&self.bodies.iter().map(|b| b.size).collect::<Vec<_>>())
     }
+}
+
+/// The box edges of a packing file that holds a configuration (`D`
+/// positive, finite edges) and its number of bodies, with as many radii
+/// and rattler flags (or none) as positions: what drawing needs of every
+/// file, in 2D and 3D.
+pub(crate) fn configuration<const D: usize>(
+    file: &PackingFile,
+) -> Result<([f64; D], usize), DrawError> {
+    let bad = |what: String| DrawError::Inconsistent(format!("packing {}: {what}", file.id));
+    let box_edges: [f64; D] = match <[f64; D]>::try_from(&file.box_edges[..]) {
+        Ok(edges) if edges.iter().all(|l| *l > 0.0 && l.is_finite()) => edges,
+        _ => {
+            return Err(bad(format!(
+                "box = {:?}: must hold {D} positive edge lengths",
+                file.box_edges
+            )));
+        }
+    };
+    let n = file.positions.len();
+    if n == 0 {
+        return Err(bad(
+            "positions = []: the file holds no configuration (it was run with output.packings = false)"
+                .into(),
+        ));
+    }
+    if file.radii.len() != n {
+        return Err(bad(format!(
+            "radii has {} entries for {n} positions",
+            file.radii.len()
+        )));
+    }
+    if !(file.rattler.is_empty() || file.rattler.len() == n) {
+        return Err(bad(format!(
+            "rattler has {} entries for {n} positions",
+            file.rattler.len()
+        )));
+    }
+    Ok((box_edges, n))
 }
 
 #[cfg(test)]

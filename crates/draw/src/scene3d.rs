@@ -208,34 +208,7 @@ impl Packing3d {
         }
         let solid = Solid::from_family(&file.family, &file.params)?;
         let bad = |what: String| DrawError::Inconsistent(format!("packing {}: {what}", file.id));
-        let box_edges = match file.box_edges[..] {
-            [a, b, c] if [a, b, c].iter().all(|l| *l > 0.0 && l.is_finite()) => [a, b, c],
-            _ => {
-                return Err(bad(format!(
-                    "box = {:?}: must hold 3 positive edge lengths",
-                    file.box_edges
-                )));
-            }
-        };
-        let n = file.positions.len();
-        if n == 0 {
-            return Err(bad(
-                "positions = []: the file holds no configuration (it was run with output.packings = false)"
-                    .into(),
-            ));
-        }
-        if file.radii.len() != n {
-            return Err(bad(format!(
-                "radii has {} entries for {n} positions",
-                file.radii.len()
-            )));
-        }
-        if !(file.rattler.is_empty() || file.rattler.len() == n) {
-            return Err(bad(format!(
-                "rattler has {} entries for {n} positions",
-                file.rattler.len()
-            )));
-        }
+        let (box_edges, n) = crate::packing::configuration::<3>(file)?;
         if let Solid::Star(_) = solid
             && file.orientations.len() != n
         {
