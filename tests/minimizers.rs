@@ -435,15 +435,7 @@ impl Shape<2> for DisksWithoutHessian {
     fn bounding_radius(&self, size: f64) -> f64 {
         Shape::<2>::bounding_radius(&Sphere, size)
     }
-    fn reference_orientation(&self) {}
-    fn random_orientation<R: rand::Rng + ?Sized>(&self, _rng: &mut R) {}
     fn rotate(&self, _o: &mut (), _dq: &[f64]) {}
-    fn orientation_coords(&self, _o: &()) -> Vec<f64> {
-        Vec::new()
-    }
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<()> {
-        coords.is_empty().then_some(())
-    }
     fn contacts<F: FnMut(jamkit_core::Contact<2>)>(
         &self,
         size_i: f64,

@@ -13,6 +13,8 @@
 //!   [`Outline`] ability;
 //! * [`rotation`]: [`Rotation2`] and [`Angle`], the planar orientations shared by the 2D
 //!   families (the 2D near-disk gaps live in `jamkit-planar`);
+//! * [`orientation`]: [`BodyOrientation`], what every orientation type does
+//!   by itself (reference, random draw, file numbers), so families don't;
 //! * [`quaternion`]: [`Quaternion`], the 3D orientation of the rigid 3D
 //!   families (`nmer`, `harmonic`);
 //! * [`potential`]: scalar contact potentials `v(h)` (harmonic, Hertzian);
@@ -27,6 +29,7 @@
 pub mod error;
 pub mod family;
 pub mod math;
+pub mod orientation;
 pub mod packing;
 pub mod periodic;
 pub mod potential;
@@ -42,6 +45,7 @@ pub use family::{
     SharedSurface, Surface,
 };
 pub use math::{MAX_ROT, Matrix, RotVec, Vector};
+pub use orientation::BodyOrientation;
 pub use packing::Packing;
 pub use periodic::PeriodicBox;
 pub use potential::Potential;

@@ -22,6 +22,7 @@
 
 use crate::error::{Error, Result};
 use crate::math::{MAX_ROT, Matrix, RotVec, Vector};
+use crate::orientation::BodyOrientation;
 use rand::Rng;
 use std::fmt::Debug;
 
@@ -214,7 +215,7 @@ pub fn contacts_one_by_one<const D: usize, S: Shape<D>, const W: usize>(
 pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     /// Orientation of one body (`()` for spheres, an angle in 2D, a unit
     /// quaternion in 3D).
-    type Orientation: Copy + Debug + PartialEq + Send + Sync + 'static;
+    type Orientation: BodyOrientation;
 
     /// The family's registry name (`"sphere"`, `"fourier"`, …).
     fn family(&self) -> &'static str;
@@ -273,21 +274,33 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         [1.0; 3]
     }
 
-    /// The orientation all bodies start from before randomisation.
-    fn reference_orientation(&self) -> Self::Orientation;
+    /// The orientation all bodies start from before randomisation (by
+    /// default the orientation type's own, [`BodyOrientation::reference`]).
+    fn reference_orientation(&self) -> Self::Orientation {
+        Self::Orientation::reference()
+    }
 
-    /// A uniformly random orientation.
-    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Self::Orientation;
+    /// A uniformly random orientation ([`BodyOrientation::random`] by
+    /// default).
+    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Self::Orientation {
+        Self::Orientation::random(rng)
+    }
 
     /// Apply a change `dq` (length `rot_dof`) of the rotational coordinates.
     fn rotate(&self, orientation: &mut Self::Orientation, dq: &[f64]);
 
-    /// The orientation written as numbers for output (empty for spheres).
-    fn orientation_coords(&self, orientation: &Self::Orientation) -> Vec<f64>;
+    /// The orientation written as numbers for output (empty for spheres;
+    /// [`BodyOrientation::to_coords`] by default).
+    fn orientation_coords(&self, orientation: &Self::Orientation) -> Vec<f64> {
+        orientation.to_coords()
+    }
 
     /// The inverse of [`Shape::orientation_coords`]; `None` if the numbers do
-    /// not describe an orientation.
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Self::Orientation>;
+    /// not describe an orientation ([`BodyOrientation::from_coords`] by
+    /// default).
+    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Self::Orientation> {
+        Self::Orientation::from_coords(coords)
+    }
 
     /// Visit the contacts between body `i` (size `size_i`, orientation `o_i`)
     /// and body `j`, whose centre is at `r_ij = r_j − r_i` from `i`'s.

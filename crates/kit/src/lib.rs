@@ -420,7 +420,6 @@ pub fn claimed_dims(family: &str) -> Vec<usize> {
 mod tests {
     use super::*;
     use jamkit_core::{Contact, GapHessian, Result};
-    use rand::Rng;
 
     /// Disks whose gap gradient is 10% too long: a wrong derivative the
     /// kit must catch.
@@ -441,15 +440,7 @@ mod tests {
         fn bounding_radius(&self, size: f64) -> f64 {
             size
         }
-        fn reference_orientation(&self) {}
-        fn random_orientation<R: Rng + ?Sized>(&self, _rng: &mut R) {}
         fn rotate(&self, _o: &mut (), _dq: &[f64]) {}
-        fn orientation_coords(&self, _o: &()) -> Vec<f64> {
-            Vec::new()
-        }
-        fn orientation_from_coords(&self, _c: &[f64]) -> Option<()> {
-            Some(())
-        }
         fn contacts<F: FnMut(Contact<2>)>(
             &self,
             size_i: f64,

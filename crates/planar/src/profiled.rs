@@ -42,7 +42,6 @@ use crate::gap2d::direction;
 use jamkit_core::{
     Angle, Contact, Error, GapHessian, Outline, RotVec, Shape, SharedOutline, Vector,
 };
-use rand::Rng;
 use std::f64::consts::PI;
 use std::fmt::Debug;
 
@@ -238,24 +237,8 @@ impl<P: NearDiskProfile> Shape<2> for Profiled<P> {
         Some(std::sync::Arc::new(self.clone()))
     }
 
-    fn reference_orientation(&self) -> Angle<1> {
-        Angle::new(0.0)
-    }
-
-    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Angle<1> {
-        Angle::random(rng)
-    }
-
     fn rotate(&self, o: &mut Angle<1>, dq: &[f64]) {
         *o = o.turned(dq[0]);
-    }
-
-    fn orientation_coords(&self, o: &Angle<1>) -> Vec<f64> {
-        o.coords()
-    }
-
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Angle<1>> {
-        Angle::from_coords(coords)
     }
 
     /// Three, as for the paper's near-disks (`d + 1`).

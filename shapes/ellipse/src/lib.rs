@@ -68,7 +68,6 @@ use jamkit_core::{
     SharedOutline, Vector,
 };
 use jamkit_planar::gap2d::{ExactGap, SupportJet};
-use rand::Rng;
 use serde::Deserialize;
 use std::f64::consts::PI;
 
@@ -486,25 +485,9 @@ impl Shape<2> for Ellipse {
         [i, 1.0, 1.0]
     }
 
-    fn reference_orientation(&self) -> Axis {
-        Axis::new(0.0)
-    }
-
-    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Axis {
-        Axis::random(rng)
-    }
-
     #[inline]
     fn rotate(&self, o: &mut Axis, dq: &[f64]) {
         *o = o.turned(dq[0]);
-    }
-
-    fn orientation_coords(&self, o: &Axis) -> Vec<f64> {
-        o.coords()
-    }
-
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Axis> {
-        Axis::from_coords(coords)
     }
 
     /// `d + 1 = 3`, as for near-disks.

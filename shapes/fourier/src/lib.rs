@@ -41,7 +41,6 @@ use jamkit_core::{
 };
 use jamkit_planar::first_order::{Profile, gap_hessian};
 use jamkit_planar::gap2d::{self, GapModel, Jet3, SupportJet};
-use rand::Rng;
 use serde::Deserialize;
 use std::f64::consts::PI;
 
@@ -800,25 +799,9 @@ impl Shape<2> for NearDisk {
         Some(std::sync::Arc::new(self.clone()))
     }
 
-    fn reference_orientation(&self) -> Angle {
-        Angle::new(0.0)
-    }
-
-    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Angle {
-        Angle::random(rng)
-    }
-
     #[inline]
     fn rotate(&self, o: &mut Angle, dq: &[f64]) {
         *o = o.turned(dq[0]);
-    }
-
-    fn orientation_coords(&self, o: &Angle) -> Vec<f64> {
-        o.coords()
-    }
-
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Angle> {
-        Angle::from_coords(coords)
     }
 
     fn rattler_threshold(&self) -> usize {

@@ -34,7 +34,6 @@
 use crate::orientation::{Angle, Quaternion};
 use crate::{MAX_SPHERES, Nmer};
 use jamkit_core::{Contact, GapHessian, MAX_ROT, Matrix, RotVec, Shape, Vector};
-use rand::Rng;
 
 /// FIRE's largest time step for bodies made of spheres in 3D. Two bodies
 /// touch at up to four points, nearly parallel, so jammed dimers vibrate
@@ -196,24 +195,8 @@ impl Shape<2> for Nmer<2> {
         [self.moment_of_inertia(size); 3]
     }
 
-    fn reference_orientation(&self) -> Angle {
-        Angle::new(0.0)
-    }
-
-    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Angle {
-        Angle::random(rng)
-    }
-
     fn rotate(&self, o: &mut Angle, dq: &[f64]) {
         *o = o.turned_exact(dq[0]);
-    }
-
-    fn orientation_coords(&self, o: &Angle) -> Vec<f64> {
-        o.coords()
-    }
-
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Angle> {
-        Angle::from_coords(coords)
     }
 
     /// `f + 1 = 4`: `f = 3` (two translations, one angle).
@@ -393,32 +376,11 @@ impl Shape<3> for Nmer<3> {
         Some(FIRE_DT_MAX)
     }
 
-    fn reference_orientation(&self) -> Quaternion {
-        Quaternion::IDENTITY
-    }
-
-    /// Uniform on the rotation group (Shoemake 1992): from three uniform
-    /// numbers `u₁, u₂, u₃`, `q = (√(1−u₁) sin 2πu₂, √(1−u₁) cos 2πu₂,
-    /// √u₁ sin 2πu₃, √u₁ cos 2πu₃)`.
-    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Quaternion {
-        Quaternion::random(rng)
-    }
-
     /// `o → exp(ω) ∘ o` with `ω = (dq₀, dq₁, dq₂)` in the world frame, or
     /// `o → o ∘ exp((dq₀, dq₁, 0))` (body frame) for a linear body; then
     /// renormalised.
     fn rotate(&self, o: &mut Quaternion, dq: &[f64]) {
         *o = o.stepped(dq, self.linear);
-    }
-
-    /// `[w, x, y, z]`.
-    fn orientation_coords(&self, o: &Quaternion) -> Vec<f64> {
-        o.coords().to_vec()
-    }
-
-    /// Four numbers of norm 1 (to 10⁻⁶; renormalised).
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Quaternion> {
-        Quaternion::from_coords(coords)
     }
 
     /// `f + 1` with `f = 3 + rot_dof`: 6 for a linear body, 7 otherwise.

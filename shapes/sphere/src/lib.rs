@@ -17,7 +17,6 @@ use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, Matrix, RoundOutline, Shape, ShapeVisitor,
     SharedOutline, Vector,
 };
-use rand::Rng;
 
 /// The family's self-description for the registry.
 pub const INFO: FamilyInfo = FamilyInfo {
@@ -96,19 +95,7 @@ impl<const D: usize> Shape<D> for Sphere {
 
     const BALL: bool = true;
 
-    fn reference_orientation(&self) {}
-
-    fn random_orientation<R: Rng + ?Sized>(&self, _rng: &mut R) {}
-
     fn rotate(&self, _orientation: &mut (), _dq: &[f64]) {}
-
-    fn orientation_coords(&self, _orientation: &()) -> Vec<f64> {
-        Vec::new()
-    }
-
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<()> {
-        coords.is_empty().then_some(())
-    }
 
     #[inline(always)]
     fn contacts<F: FnMut(Contact<D>)>(
