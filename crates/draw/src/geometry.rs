@@ -76,29 +76,14 @@ impl Outline {
     /// experiment file gives them (`(n: 3, delta: 0.2)` for `fourier`;
     /// defaults filled in).
     pub fn of(family: &str, params: &ParamMap) -> Result<Self, DrawError> {
-        let bad = |message: String| DrawError::Params {
-            family: family.to_string(),
-            message,
-        };
-        let info = registry::family_info(family).map_err(|e| bad(e.to_string()))?;
-        if !registry::supports_dim(&info, 2) {
-            return Err(DrawError::UnknownFamily(family.to_string(), 2));
-        }
-        let params = registry::with_defaults(&info, params);
-        registry::dispatch(family, 2, &params, OutlineOf)
-            .map_err(|e| bad(e.to_string()))?
-            .ok_or_else(|| DrawError::UnknownFamily(family.to_string(), 2))
+        crate::drawing_of(family, 2, params, OutlineOf)
     }
 
     /// The outline of a registered family from its parameters as stored in
     /// a packing file (`{}` for spheres, `{"n": 3, "delta": 0.2, …}` for
     /// `fourier`, `{"modes": [...], "delta": …}` for `fourier_sum`).
     pub fn from_family(family: &str, params: &serde_json::Value) -> Result<Self, DrawError> {
-        let params = registry::params_from_json(params).map_err(|e| DrawError::Params {
-            family: family.to_string(),
-            message: e.to_string(),
-        })?;
-        Self::of(family, &params)
+        crate::drawing_from_json(family, 2, params, OutlineOf)
     }
 
     /// The outline of a registered family from its parameters written in

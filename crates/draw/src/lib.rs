@@ -97,6 +97,51 @@ pub enum DrawError {
     },
 }
 
+/// How a registered family is drawn in `dim`: the family's shape, built
+/// from `params` as an experiment file gives them (defaults filled in),
+/// handed to `drawing` (a visitor that asks the shape for its drawing
+/// capability, `None` when it has none). Every error names the family.
+pub(crate) fn drawing_of<V, T>(
+    family: &str,
+    dim: usize,
+    params: &jamkit_registry::ParamMap,
+    drawing: V,
+) -> Result<T, DrawError>
+where
+    V: jamkit_registry::SceneVisitor<Output = Option<T>>,
+{
+    use jamkit_registry as registry;
+    let bad = |message: String| DrawError::Params {
+        family: family.to_string(),
+        message,
+    };
+    let info = registry::family_info(family).map_err(|e| bad(e.to_string()))?;
+    if !registry::supports_dim(&info, dim) {
+        return Err(DrawError::UnknownFamily(family.to_string(), dim));
+    }
+    let params = registry::with_defaults(&info, params);
+    registry::dispatch(family, dim, &params, drawing)
+        .map_err(|e| bad(e.to_string()))?
+        .ok_or_else(|| DrawError::UnknownFamily(family.to_string(), dim))
+}
+
+/// [`drawing_of`] from the parameters a packing file stores (JSON).
+pub(crate) fn drawing_from_json<V, T>(
+    family: &str,
+    dim: usize,
+    params: &serde_json::Value,
+    drawing: V,
+) -> Result<T, DrawError>
+where
+    V: jamkit_registry::SceneVisitor<Output = Option<T>>,
+{
+    let params = jamkit_registry::params_from_json(params).map_err(|e| DrawError::Params {
+        family: family.to_string(),
+        message: e.to_string(),
+    })?;
+    drawing_of(family, dim, &params, drawing)
+}
+
 pub use geometry::{Outline, Point};
 pub use packing::{Body, Packing2d, Piece};
 pub use render::{Format, draw_packing, draw_shapes, packing_svg, shapes_svg};

@@ -87,7 +87,8 @@ impl Packing2d {
         }
         let outline = Outline::from_family(&file.family, &file.params)?;
         let bad = |what: String| DrawError::Inconsistent(format!("packing {}: {what}", file.id));
-        let (box_edges, n) = configuration::<2>(file)?;
+        let (box_edges, centers) = configuration::<2>(file)?;
+        let n = centers.len();
         let needs_angles = outline.turns();
         // A Δ = 0 near-disk (α = 1 ellipse) is jammed as a disk and stores
         // no angles: its outline does not turn.
@@ -99,24 +100,8 @@ impl Packing2d {
             )));
         }
         let mut bodies = Vec::with_capacity(n);
-        for i in 0..n {
-            let center = match file.positions[i][..] {
-                [x, y] if x.is_finite() && y.is_finite() => {
-                    [x.rem_euclid(box_edges[0]), y.rem_euclid(box_edges[1])]
-                }
-                _ => {
-                    return Err(bad(format!(
-                        "positions[{i}] = {:?}: must be 2 finite numbers",
-                        file.positions[i]
-                    )));
-                }
-            };
+        for (i, &center) in centers.iter().enumerate() {
             let size = file.radii[i];
-            if !(size > 0.0 && size.is_finite()) {
-                return Err(bad(format!(
-                    "radii[{i}] = {size}: must be positive and finite"
-                )));
-            }
             let theta = match file.orientations.get(i) {
                 Some(o) if needs_angles => match o.first() {
                     Some(&t) if t.is_finite() => t,
@@ -217,12 +202,14 @@ impl Packing2d {
 }
 
 /// The box edges of a packing file that holds a configuration (`D`
-/// positive, finite edges) and its number of bodies, with as many radii
-/// and rattler flags (or none) as positions: what drawing needs of every
-/// file, in 2D and 3D.
+/// positive, finite edges) and its bodies' centres wrapped into the box,
+/// checked: as many radii and rattler flags (or none) as positions, every
+/// position `D` finite numbers and every radius positive and finite. What
+/// drawing needs of every file, in 2D and 3D; each error names the key and
+/// the index.
 pub(crate) fn configuration<const D: usize>(
     file: &PackingFile,
-) -> Result<([f64; D], usize), DrawError> {
+) -> Result<([f64; D], Vec<[f64; D]>), DrawError> {
     let bad = |what: String| DrawError::Inconsistent(format!("packing {}: {what}", file.id));
     let box_edges: [f64; D] = match <[f64; D]>::try_from(&file.box_edges[..]) {
         Ok(edges) if edges.iter().all(|l| *l > 0.0 && l.is_finite()) => edges,
@@ -252,7 +239,25 @@ pub(crate) fn configuration<const D: usize>(
             file.rattler.len()
         )));
     }
-    Ok((box_edges, n))
+    let mut centers = Vec::with_capacity(n);
+    for (i, (position, &size)) in file.positions.iter().zip(&file.radii).enumerate() {
+        match <[f64; D]>::try_from(&position[..]) {
+            Ok(r) if r.iter().all(|x| x.is_finite()) => {
+                centers.push(std::array::from_fn(|a| r[a].rem_euclid(box_edges[a])));
+            }
+            _ => {
+                return Err(bad(format!(
+                    "positions[{i}] = {position:?}: must be {D} finite numbers"
+                )));
+            }
+        }
+        if !(size > 0.0 && size.is_finite()) {
+            return Err(bad(format!(
+                "radii[{i}] = {size}: must be positive and finite"
+            )));
+        }
+    }
+    Ok((box_edges, centers))
 }
 
 #[cfg(test)]

@@ -68,27 +68,12 @@ impl Solid {
     /// How a registered 3D family is drawn, from its parameters as an
     /// experiment file gives them (defaults filled in).
     pub fn of(family: &str, params: &ParamMap) -> Result<Self, DrawError> {
-        let bad = |message: String| DrawError::Params {
-            family: family.to_string(),
-            message,
-        };
-        let info = registry::family_info(family).map_err(|e| bad(e.to_string()))?;
-        if !registry::supports_dim(&info, 3) {
-            return Err(DrawError::UnknownFamily(family.to_string(), 3));
-        }
-        let params = registry::with_defaults(&info, params);
-        registry::dispatch(family, 3, &params, SolidOf)
-            .map_err(|e| bad(e.to_string()))?
-            .ok_or_else(|| DrawError::UnknownFamily(family.to_string(), 3))
+        crate::drawing_of(family, 3, params, SolidOf)
     }
 
     /// As [`Solid::of`], from the parameters a packing file stores.
     pub fn from_family(family: &str, params: &serde_json::Value) -> Result<Self, DrawError> {
-        let params = registry::params_from_json(params).map_err(|e| DrawError::Params {
-            family: family.to_string(),
-            message: e.to_string(),
-        })?;
-        Self::of(family, &params)
+        crate::drawing_from_json(family, 3, params, SolidOf)
     }
 
     /// The sphere decomposition of a body of size 1 at the family's
@@ -208,7 +193,8 @@ impl Packing3d {
         }
         let solid = Solid::from_family(&file.family, &file.params)?;
         let bad = |what: String| DrawError::Inconsistent(format!("packing {}: {what}", file.id));
-        let (box_edges, n) = crate::packing::configuration::<3>(file)?;
+        let (box_edges, centers) = crate::packing::configuration::<3>(file)?;
+        let n = centers.len();
         if let Solid::Star(_) = solid
             && file.orientations.len() != n
         {
@@ -219,26 +205,8 @@ impl Packing3d {
             )));
         }
         let mut bodies = Vec::with_capacity(n);
-        for i in 0..n {
-            let center = match file.positions[i][..] {
-                [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => [
-                    x.rem_euclid(box_edges[0]),
-                    y.rem_euclid(box_edges[1]),
-                    z.rem_euclid(box_edges[2]),
-                ],
-                _ => {
-                    return Err(bad(format!(
-                        "positions[{i}] = {:?}: must be 3 finite numbers",
-                        file.positions[i]
-                    )));
-                }
-            };
+        for (i, &center) in centers.iter().enumerate() {
             let size = file.radii[i];
-            if !(size > 0.0 && size.is_finite()) {
-                return Err(bad(format!(
-                    "radii[{i}] = {size}: must be positive and finite"
-                )));
-            }
             let rotation = match &solid {
                 Solid::Star(s) => s.rotation(&file.orientations[i]).ok_or_else(|| {
                     bad(format!(
