@@ -456,7 +456,11 @@ fn negative_shear_modulus_is_confirmed_by_deformation() {
 /// a `Jam` run with the same seeds), then a compression to φ_J + δφ: the
 /// final φ minus the `Jam` run's φ_J is δφ to 1e-12 (round-off of φ
 /// through the box volume), and the
-/// packing has a positive pressure and finite moduli with `B > 0`.
+/// packing has a positive pressure and finite moduli with `B > 0`. The
+/// jamming point it records (`jam_point`) is the `Jam` run's packing,
+/// exactly: the same φ_J, `z_J`, rattlers and isostatic margin; reading
+/// its contacts moves no body (the same final positions, bit for bit, as a
+/// run that records no contacts); and `results.csv` carries it.
 #[test]
 fn above_jam_protocol_compresses_from_each_packings_own_jamming_point() {
     let jam = r#"(name: "j", family: "sphere", particles: 32, samples: 2, seed: 4,
@@ -477,6 +481,30 @@ fn above_jam_protocol_compresses_from_each_packings_own_jamming_point() {
         let m = &a.measures.moduli.as_ref().unwrap().moduli;
         assert!(m.shear.is_finite() && m.bulk > 0.0, "{m:?}");
         assert!((m.pressure - p).abs() < 1e-9 * p);
+        let at = a.measures.jam_point.as_ref().expect("AboveJam records φ_J");
+        assert_eq!(at.phi, j.phi);
+        assert_eq!(at.z, j.measures.z_j);
+        assert_eq!(at.n_rattlers, j.measures.n_rattlers);
+        assert_eq!(at.iso_margin, j.measures.iso_margin);
+        assert!(j.measures.jam_point.is_none(), "Jam records no second point");
+    }
+    // Compressed by 10⁻³, the disks gain contacts: z − z_J > 0 on the mean.
+    let dz: f64 = compressed
+        .packings
+        .iter()
+        .map(|a| a.measures.z_j.unwrap() - a.measures.jam_point.as_ref().unwrap().z.unwrap())
+        .sum();
+    assert!(dz > 0.0, "Σ (z − z_J) = {dz}");
+    let results = std::fs::read_to_string(d2.path().join("results.csv")).unwrap();
+    let head = results.lines().next().unwrap();
+    assert!(head.ends_with("jam_phi,jam_z,jam_rattlers,jam_iso_margin"), "{head}");
+    let quiet = r#"(name: "a", family: "sphere", particles: 32, samples: 2, seed: 4,
+        protocol: AboveJam(delta_phi: 1e-3), observables: [Pressure])"#;
+    let d3 = tempfile::tempdir().unwrap();
+    let without = common::run_ok(&parse(quiet), d3.path(), 1);
+    for (a, b) in compressed.packings.iter().zip(&without.packings) {
+        assert_eq!(a.positions, b.positions);
+        assert_eq!(b.measures.jam_point.as_ref().unwrap().z, None);
     }
     let bad = r#"(name: "a", family: "sphere", particles: 32,
         protocol: AboveJam(delta_phi: -1e-3))"#;

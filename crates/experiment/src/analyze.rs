@@ -117,6 +117,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<PackingFile, Experimen
             n_rot_rattlers: None,
             free_rotations: None,
             moduli: None,
+            jam_point: None,
         },
         box_edges,
         positions,

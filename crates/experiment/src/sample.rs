@@ -15,7 +15,7 @@ use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
     Fire, JamParams, PressureParams, Progress, Scene, compress_to_phi, compress_to_pressure, jam,
 };
-use jamkit_format::{Measures, ModuliMeasures, PackingFile, SpectrumMeasures};
+use jamkit_format::{JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures};
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::saddle::{self, SaddleParams};
 use jamkit_observe::spectrum::{self, Spectrum};
@@ -121,6 +121,7 @@ impl SceneVisitor for SampleVisitor<'_> {
             fire.watch(p.clone());
         }
         let mut saddle_escapes = None;
+        let mut jam_point = None;
         let outcome: Result<_, jamkit_core::Error> = match e.protocol {
             Protocol::Jam {
                 eps,
@@ -178,6 +179,18 @@ impl SceneVisitor for SampleVisitor<'_> {
                     search,
                 };
                 jam(&mut scene, &mut fire, &params).and_then(|jammed| {
+                    // The jamming point's contacts, before the compression
+                    // (reading them moves no body: same packing after).
+                    let at_jam = e.needs_contacts().then(|| {
+                        let rule = rattler_rule(e, scene.packing());
+                        summarize_with(&mut scene, rule)
+                    });
+                    jam_point = Some(JamPoint {
+                        phi: jammed.phi,
+                        z: at_jam.as_ref().map(|s| s.z_j),
+                        n_rattlers: at_jam.as_ref().map(|s| s.n_rattlers),
+                        iso_margin: at_jam.as_ref().map(|s| s.iso_margin),
+                    });
                     let target = jammed.phi + delta_phi;
                     let above = compress_to_phi(&mut scene, &mut fire, target, compress_eps)?;
                     // NOTE: a compression step followed by FIRE can rearrange
@@ -246,6 +259,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                 minimizations: outcome.minimizations,
                 wall_s: start.elapsed().as_secs_f64(),
                 saddle_escapes,
+                jam_point,
             },
             &scene.packing().shape,
         );
@@ -340,6 +354,7 @@ impl SampleVisitor<'_> {
             spectrum: None,
             gaps: None,
             moduli: None,
+            jam_point: None,
         };
         Some(self.file(scene.packing(), true, measures))
     }
@@ -353,6 +368,8 @@ struct Protocolled {
     minimizations: u64,
     wall_s: f64,
     saddle_escapes: Option<u32>,
+    /// `AboveJam`'s jamming point.
+    jam_point: Option<JamPoint>,
 }
 
 /// The observables of one packing.
@@ -461,6 +478,7 @@ impl Observed {
             n_rot_rattlers: contacts.map(|s| s.n_rot_rattlers),
             free_rotations: contacts.map(|s| s.free_rotations),
             moduli: self.moduli.clone(),
+            jam_point: run.jam_point,
         }
     }
 
@@ -498,6 +516,7 @@ pub(crate) fn remeasure(
                 minimizations: old.minimizations,
                 wall_s: old.wall_s + start.elapsed().as_secs_f64(),
                 saddle_escapes: old.saddle_escapes,
+                jam_point: old.jam_point.clone(),
             };
             file.measures = observed.measures(e, run, &scene.packing().shape);
             file.rattler = observed.rattler();

@@ -59,6 +59,26 @@ pub struct Measures {
     /// without them are unchanged).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub moduli: Option<ModuliMeasures>,
+    /// The packing's own jamming point, for protocols that go past it
+    /// (`AboveJam`: measured before the compression by δφ; absent
+    /// otherwise, so other files are unchanged).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jam_point: Option<JamPoint>,
+}
+
+/// The jamming point a packing above jamming was compressed from: φ_J and
+/// the contact numbers there, with the same rattler rule as the packing's
+/// own (`None` where `Contacts` was not measured).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JamPoint {
+    /// φ_J.
+    pub phi: f64,
+    /// `z_J = 2 N_c / N_nr` at φ_J.
+    pub z: Option<f64>,
+    /// Rattlers at φ_J.
+    pub n_rattlers: Option<usize>,
+    /// `N_c − (f N_nr − d)` at φ_J.
+    pub iso_margin: Option<i64>,
 }
 
 /// The elastic moduli of one packing, as stored.

@@ -111,6 +111,10 @@ pub fn results_csv(files: &[PackingFile]) -> String {
     if with_moduli {
         head.extend(MODULI_COLUMNS.map(String::from));
     }
+    let with_jam_point = files.iter().any(|f| f.measures.jam_point.is_some());
+    if with_jam_point {
+        head.extend(JAM_POINT_COLUMNS.map(String::from));
+    }
     let mut rows = Vec::with_capacity(files.len());
     for f in files {
         let m = &f.measures;
@@ -155,10 +159,24 @@ pub fn results_csv(files: &[PackingFile]) -> String {
         if with_moduli {
             row.extend(moduli_cells(m.moduli.as_ref()));
         }
+        if with_jam_point {
+            row.extend(match &m.jam_point {
+                Some(j) => [
+                    format!("{}", j.phi),
+                    opt(&j.z),
+                    opt(&j.n_rattlers),
+                    opt(&j.iso_margin),
+                ],
+                None => Default::default(),
+            });
+        }
         rows.push(row);
     }
     table(&head, rows)
 }
+
+/// The columns of `AboveJam`'s jamming point (docs/formats.md).
+const JAM_POINT_COLUMNS: [&str; 4] = ["jam_phi", "jam_z", "jam_rattlers", "jam_iso_margin"];
 
 const SPECTRUM_COLUMNS: [&str; 9] = [
     "omega_1",

@@ -446,7 +446,13 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
         Ok(())
     }
 
-    fn visit<F: FnMut(usize, usize, &Vector<D>, &jamkit_core::Contact<D>)>(&self, mut visit: F) {
+    /// Visit every contact of the strained cell as `(i, j, r0, r, contact)`:
+    /// `r0` the pair's separation in the cell as built, `r` the strained
+    /// one.
+    fn visit<F>(&self, mut visit: F)
+    where
+        F: FnMut(usize, usize, &Vector<D>, &Vector<D>, &jamkit_core::Contact<D>),
+    {
         for &(i, j, r0) in &self.pairs {
             let (i, j) = (i as usize, j as usize);
             let r = self.deformation * r0 + self.displacement[j] - self.displacement[i];
@@ -457,7 +463,7 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
                 &self.orientations[j],
                 &r,
                 0.0,
-                |c| visit(i, j, &r, &c),
+                |c| visit(i, j, &r0, &r, &c),
             );
         }
     }
@@ -465,7 +471,7 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
     /// The stress tensor `σ_ab = (1/V) Σ_c v' g_a r_b` in the deformed cell.
     pub fn stress(&self) -> Matrix<D> {
         let mut sum = Matrix::<D>::zeros();
-        self.visit(|_, _, r, c| {
+        self.visit(|_, _, _, r, c| {
             sum += c.grad_r * r.transpose() * self.potential.derivative(c.gap);
         });
         sum / self.volume()
@@ -477,20 +483,9 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
     /// and `q` (for finite-difference checks of [`strain_derivatives`]).
     pub fn strain_derivative(&self, e: &Matrix<D>) -> f64 {
         let mut sum = 0.0;
-        for &(i, j, r0) in &self.pairs {
-            let (i, j) = (i as usize, j as usize);
-            let r = self.deformation * r0 + self.displacement[j] - self.displacement[i];
-            let t = e * r0;
-            self.shape.contacts(
-                self.sizes[i],
-                &self.orientations[i],
-                self.sizes[j],
-                &self.orientations[j],
-                &r,
-                0.0,
-                |c| sum += self.potential.derivative(c.gap) * c.grad_r.dot(&t),
-            );
-        }
+        self.visit(|_, _, r0, _, c| {
+            sum += self.potential.derivative(c.gap) * c.grad_r.dot(&(e * r0));
+        });
         sum
     }
 
@@ -505,7 +500,7 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
         let stride = D + k;
         grad.fill(0.0);
         let mut energy = 0.0;
-        self.visit(|i, j, _, c| {
+        self.visit(|i, j, _, _, c| {
             let (v, dv) = self.potential.energy_and_derivative(c.gap);
             energy += v;
             for a in 0..D {

@@ -7,8 +7,9 @@
 //! in the runs — goes on the x axis of one figure per observable:
 //!
 //! * φ_J, `z_J` (and `z_corr` where rotational rattlers make it differ),
-//!   the rattler fraction, the pressure and the moduli `G`, `B` (where
-//!   `Moduli` was measured), as the mean over the point's
+//!   the rattler fraction, the pressure, the moduli `G`, `B` (where
+//!   `Moduli` was measured) and `z − z_J` (where `AboveJam` recorded its
+//!   jamming point), as the mean over the point's
 //!   packings with the standard error as error bar; one series per value
 //!   of the other scanned quantities (and per family), with its label;
 //! * the pooled `D(ω)` of each point where `Spectrum` was measured, and
@@ -216,7 +217,7 @@ const PROTOCOL_TARGETS: [(&str, &str, &str); 3] = [
     ("AboveJam", "delta_phi", "delta_phi"),
 ];
 
-const OBSERVABLES: [(&str, &str, Measure); 7] = [
+const OBSERVABLES: [(&str, &str, Measure); 8] = [
     ("phi_j", "φ_J", |f| Some(f.phi)),
     ("z_j", "z_J", |f| f.measures.z_j),
     ("z_corr", "z_corr", |f| f.z_corr()),
@@ -230,6 +231,11 @@ const OBSERVABLES: [(&str, &str, Measure); 7] = [
     ("bulk_modulus", "bulk modulus B", |f| {
         Some(f.measures.moduli.as_ref()?.moduli.bulk)
     }),
+    (
+        "z_above_jam",
+        "z − z_J (from its own jamming point)",
+        |f| Some(f.measures.z_j? - f.measures.jam_point.as_ref()?.z?),
+    ),
 ];
 
 /// Draw the figures of the runs in `dirs` into `out`.
@@ -364,7 +370,10 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
             // Pressure and moduli on a log axis when every mean is positive
             // and they span a factor of 20 (a negative mean G stays on a
             // linear axis, where it shows).
-            let log_y = matches!(key, "pressure" | "shear_modulus" | "bulk_modulus") && {
+            let log_y = matches!(
+                key,
+                "pressure" | "shear_modulus" | "bulk_modulus" | "z_above_jam"
+            ) && {
                 let ys: Vec<f64> = groups
                     .iter()
                     .flat_map(|g| g.2.iter().map(|p| p.1))
