@@ -486,7 +486,10 @@ fn above_jam_protocol_compresses_from_each_packings_own_jamming_point() {
         assert_eq!(at.z, j.measures.z_j);
         assert_eq!(at.n_rattlers, j.measures.n_rattlers);
         assert_eq!(at.iso_margin, j.measures.iso_margin);
-        assert!(j.measures.jam_point.is_none(), "Jam records no second point");
+        assert!(
+            j.measures.jam_point.is_none(),
+            "Jam records no second point"
+        );
     }
     // Compressed by 10⁻³, the disks gain contacts: z − z_J > 0 on the mean.
     let dz: f64 = compressed
@@ -497,7 +500,10 @@ fn above_jam_protocol_compresses_from_each_packings_own_jamming_point() {
     assert!(dz > 0.0, "Σ (z − z_J) = {dz}");
     let results = std::fs::read_to_string(d2.path().join("results.csv")).unwrap();
     let head = results.lines().next().unwrap();
-    assert!(head.ends_with("jam_phi,jam_z,jam_rattlers,jam_iso_margin"), "{head}");
+    assert!(
+        head.ends_with("jam_phi,jam_z,jam_rattlers,jam_iso_margin"),
+        "{head}"
+    );
     let quiet = r#"(name: "a", family: "sphere", particles: 32, samples: 2, seed: 4,
         protocol: AboveJam(delta_phi: 1e-3), observables: [Pressure])"#;
     let d3 = tempfile::tempdir().unwrap();

@@ -50,43 +50,32 @@ impl BodyOrientation for () {
     }
 }
 
-/// `θ = 0`; `θ` uniform; `[θ]`.
-impl BodyOrientation for Rotation2 {
-    fn reference() -> Self {
-        Self::new(0.0)
-    }
+/// The planar angles ([`Rotation2`], [`Angle`]), alike: `θ = 0`; `θ`
+/// uniform; `[θ]`.
+macro_rules! planar_orientation {
+    ($($impl_head:tt)*) => {
+        $($impl_head)* {
+            fn reference() -> Self {
+                Self::new(0.0)
+            }
 
-    fn random<R: Rng + ?Sized>(rng: &mut R) -> Self {
-        Self::random(rng)
-    }
+            fn random<R: Rng + ?Sized>(rng: &mut R) -> Self {
+                Self::random(rng)
+            }
 
-    fn to_coords(&self) -> Vec<f64> {
-        self.coords()
-    }
+            fn to_coords(&self) -> Vec<f64> {
+                self.coords()
+            }
 
-    fn from_coords(coords: &[f64]) -> Option<Self> {
-        Self::from_coords(coords)
-    }
+            fn from_coords(coords: &[f64]) -> Option<Self> {
+                Self::from_coords(coords)
+            }
+        }
+    };
 }
 
-/// `θ = 0`; `θ` uniform; `[θ]`.
-impl<const K: u32> BodyOrientation for Angle<K> {
-    fn reference() -> Self {
-        Self::new(0.0)
-    }
-
-    fn random<R: Rng + ?Sized>(rng: &mut R) -> Self {
-        Self::random(rng)
-    }
-
-    fn to_coords(&self) -> Vec<f64> {
-        self.coords()
-    }
-
-    fn from_coords(coords: &[f64]) -> Option<Self> {
-        Self::from_coords(coords)
-    }
-}
+planar_orientation!(impl BodyOrientation for Rotation2);
+planar_orientation!(impl<const K: u32> BodyOrientation for Angle<K>);
 
 /// The identity; uniform on the rotation group (Shoemake); `[w, x, y, z]`,
 /// read back when of norm 1 to 10⁻⁶ (renormalised).

@@ -111,17 +111,14 @@ where
     V: jamkit_registry::SceneVisitor<Output = Option<T>>,
 {
     use jamkit_registry as registry;
-    let bad = |message: String| DrawError::Params {
-        family: family.to_string(),
-        message,
-    };
-    let info = registry::family_info(family).map_err(|e| bad(e.to_string()))?;
+    let bad = |e: jamkit_core::Error| params_error(family, e);
+    let info = registry::family_info(family).map_err(bad)?;
     if !registry::supports_dim(&info, dim) {
         return Err(DrawError::UnknownFamily(family.to_string(), dim));
     }
     let params = registry::with_defaults(&info, params);
     registry::dispatch(family, dim, &params, drawing)
-        .map_err(|e| bad(e.to_string()))?
+        .map_err(bad)?
         .ok_or_else(|| DrawError::UnknownFamily(family.to_string(), dim))
 }
 
@@ -135,11 +132,16 @@ pub(crate) fn drawing_from_json<V, T>(
 where
     V: jamkit_registry::SceneVisitor<Output = Option<T>>,
 {
-    let params = jamkit_registry::params_from_json(params).map_err(|e| DrawError::Params {
+    let params = jamkit_registry::params_from_json(params).map_err(|e| params_error(family, e))?;
+    drawing_of(family, dim, &params, drawing)
+}
+
+/// A family's parameters refused, named.
+fn params_error(family: &str, e: jamkit_core::Error) -> DrawError {
+    DrawError::Params {
         family: family.to_string(),
         message: e.to_string(),
-    })?;
-    drawing_of(family, dim, &params, drawing)
+    }
 }
 
 pub use geometry::{Outline, Point};
