@@ -328,6 +328,7 @@ fn real_main() -> Result<()> {
                 .map(|f| load(f, &sets))
                 .collect::<Result<Vec<_>>>()?;
             let mut failed = 0;
+            let mut reports = Vec::with_capacity(files.len());
             for (file, experiment) in files.iter().zip(&experiments) {
                 if files.len() > 1 {
                     out!("\n== {} ==", file.display());
@@ -372,6 +373,20 @@ fn real_main() -> Result<()> {
                     eprintln!("error: {f}");
                 }
                 failed += report.failures.len();
+                reports.push(report);
+            }
+            // Several files into one `--out`: each run's tables hold its own
+            // packings, so the last would hide the others'. Gather them all.
+            if let (Some(dir), true, None) = (&out, files.len() > 1, shard)
+                && reports.iter().all(|r| r.elsewhere.is_empty())
+            {
+                let runs: Vec<_> = experiments.iter().zip(&reports).collect();
+                let n = jamkit_experiment::runner::tables_of_runs(&runs, dir)?;
+                out!(
+                    "\n{n} packings of the {} files in {}: results.csv, summary.csv",
+                    files.len(),
+                    dir.display()
+                );
             }
             if failed > 0 {
                 bail!(

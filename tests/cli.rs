@@ -168,3 +168,70 @@ fn run_writes_results_and_a_table() {
         assert!(dir.path().join(f).exists(), "{f} missing");
     }
 }
+
+/// Two experiment files run into one `--out` (as the paper profile's
+/// Figs. 7–13 do): the directory's tables list every packing of both
+/// files, a packing they share once, and every point of both; a run of
+/// the second file alone still writes only its own.
+#[test]
+fn several_files_into_one_directory_tabulate_all_their_packings() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, particles: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(
+            &path,
+            format!(
+                r#"(name: "{name}", family: "sphere", particles: {particles}, samples: 2, seed: 1,
+                   observables: [Contacts, Pressure])"#
+            ),
+        )
+        .unwrap();
+        path
+    };
+    // Both files make N = 16 (the same packings); only the first makes
+    // N = 12 and only the second N = 20.
+    let a = write("a.ron", "[12, 16]");
+    let b = write("b.ron", "[16, 20]");
+    let out = dir.path().join("both");
+    let (code, stdout, err) = jamkit(&[
+        "run",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("6 packings of the 2 files"), "{stdout}");
+    let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let ids: Vec<&str> = results
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert_eq!(
+        ids,
+        [
+            "sphere_d2_N12_s1",
+            "sphere_d2_N12_s2",
+            "sphere_d2_N16_s1",
+            "sphere_d2_N16_s2",
+            "sphere_d2_N20_s1",
+            "sphere_d2_N20_s2"
+        ]
+    );
+    let summary = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    assert_eq!(summary.lines().count(), 1 + 3, "{summary}");
+    // One file alone: its own packings only (the shared directory keeps
+    // the others' files, which a single run does not list).
+    let (code, _, err) = jamkit(&[
+        "run",
+        b.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(results.lines().count(), 1 + 4, "{results}");
+}

@@ -9,10 +9,12 @@ delta_phi, read from the DIR's `experiment.ron`), groups the packings by
 family parameters and x (target pressure or delta_phi), and prints per
 group: x, the mean pressure, phi, z_J,
 dz = 2 iso_margin / N_nr (= z - z_iso with the finite-N isostatic count),
-G, B and G/B (mean +- s.e.m. over the packings), how many packings have
+G, B and G/B (mean +- s.e.m. over the packings), z - z_J against the
+packing's own jamming point (`AboveJam` runs, columns jam_z), how many
+packings have
 G < 0, and the largest number of negative modes and extra zero modes.
 Then weighted least-squares fits (weights 1/(s.e.m./mean)^2, on logs) of
-G ~ x^a, G/B ~ dz^c, dz ~ x^e and p ~ x^b over pmin <= x <= pmax, with the slope's
+G ~ x^a, G/B ~ dz^c, dz ~ x^e, p ~ x^b and z - z_J ~ x^f over pmin <= x <= pmax, with the slope's
 standard error from the weights and chi^2 per degree of freedom. Only the
 standard library.
 """
@@ -81,7 +83,7 @@ def main():
         for target, r in items:
             by_p[target].append(r)
         print("## " + " ".join(key))
-        print(f"{args.x} | p | phi | z_J | dz | G | B | G/B | G<0 | packings | neg. modes | extra zero")
+        print(f"{args.x} | p | phi | z_J | dz | z - z_J | G | B | G/B | G<0 | packings | neg. modes | extra zero")
         points = []
         for target in sorted(by_p):
             rs = by_p[target]
@@ -96,15 +98,17 @@ def main():
                     for r in rs
                 ]
             )
+            above = [float(r["z_j"]) - float(r["jam_z"]) for r in rs if r.get("jam_z")]
+            zz = mean_sem(above) if above else (math.nan, math.nan)
             print(
                 f"{x:.2e} | {p[0]:.2e} | {mean_sem(f('phi_j'))[0]:.4f} | {mean_sem(f('z_j'))[0]:.3f}"
-                f" | {dz[0]:.4f} ± {dz[1]:.1e} | {g[0]:.3e} ± {g[1]:.1e}"
+                f" | {dz[0]:.4f} ± {dz[1]:.1e} | {zz[0]:.4f} ± {zz[1]:.1e} | {g[0]:.3e} ± {g[1]:.1e}"
                 f" | {b[0]:.4f} ± {b[1]:.1e} | {gb[0]:.3e} ± {gb[1]:.1e}"
                 f" | {sum(x < 0 for x in f('G'))} | {len(rs)}"
                 f" | {max(int(r['moduli_negative_modes']) for r in rs)}"
                 f" | {max(int(r['moduli_zero_extra']) for r in rs)}"
             )
-            points.append((x, g, gb, dz, p))
+            points.append((x, g, gb, dz, p, zz))
         sel = [t for t in points if args.pmin <= t[0] <= args.pmax]
         fits = [
             (f"G ~ {args.x}^a", lambda t: (t[0], t[1][0], t[1][1])),
@@ -113,9 +117,10 @@ def main():
         ]
         if args.x == "dphi":
             fits.append(("p ~ dphi^b", lambda t: (t[0], t[4][0], t[4][1])))
+            fits.append(("z - z_J ~ dphi^f", lambda t: (t[0], t[5][0], t[5][1])))
         for name, pick in fits:
             xyz = [pick(t) for t in sel]
-            if len(xyz) < 3 or any(x <= 0 or y <= 0 or s <= 0 for x, y, s in xyz):
+            if len(xyz) < 3 or any(not (x > 0 and y > 0 and s > 0) for x, y, s in xyz):
                 print(f"{name}: no fit (fewer than 3 points, or a mean <= 0 in range)")
                 continue
             a, se, chi2 = wls(

@@ -299,6 +299,65 @@ fn keep_failed_state(err: ExperimentError, packing_dir: &Path) -> ExperimentErro
     }
 }
 
+/// The tables of several experiment files run one after the other into
+/// the same directory (`jamkit run A.ron B.ron --out DIR`), which each
+/// run's own tables would leave holding the last file's packings only:
+/// every packing of every run, in the order the files first made or read
+/// it (a packing that two files share appears once, with the measures of
+/// the last run that touched it), and the points of all the files, a point
+/// that two files share once. Returns the number of packings.
+pub fn tables_of_runs(
+    runs: &[(&Experiment, &RunReport)],
+    out: &Path,
+) -> Result<usize, ExperimentError> {
+    let mut order: Vec<&str> = Vec::new();
+    let mut latest: HashMap<&str, &PackingFile> = HashMap::new();
+    for (_, report) in runs {
+        for f in &report.packings {
+            if latest.insert(f.id.as_str(), f).is_none() {
+                order.push(f.id.as_str());
+            }
+        }
+    }
+    let packings: Vec<PackingFile> = order.iter().map(|id| latest[id].clone()).collect();
+    let mut labels: Vec<(String, Vec<String>)> = Vec::new();
+    for (experiment, _) in runs {
+        let points = grid::points(experiment)?;
+        let jobs = grid::jobs(experiment, &points);
+        for p in &points {
+            let label = p.label(&experiment.family);
+            let at = match labels.iter().position(|(l, _)| *l == label) {
+                Some(at) => at,
+                None => {
+                    labels.push((label, Vec::new()));
+                    labels.len() - 1
+                }
+            };
+            for j in jobs.iter().filter(|j| j.point == p.index) {
+                if !labels[at].1.contains(&j.id) {
+                    labels[at].1.push(j.id.clone());
+                }
+            }
+        }
+    }
+    let by_id: HashMap<&str, &PackingFile> = packings.iter().map(|f| (f.id.as_str(), f)).collect();
+    let groups: Vec<(String, Vec<&PackingFile>)> = labels
+        .into_iter()
+        .map(|(label, ids)| {
+            let members = ids
+                .iter()
+                .filter_map(|id| by_id.get(id.as_str()).copied())
+                .collect();
+            (label, members)
+        })
+        .filter(|(_, m): &(String, Vec<&PackingFile>)| !m.is_empty())
+        .collect();
+    let spectrum = runs.iter().any(|(e, _)| e.spectrum().is_some());
+    let gaps = runs.iter().any(|(e, _)| e.gaps().is_some());
+    write_table_files(&packings, &groups, (spectrum, gaps), out)?;
+    Ok(packings.len())
+}
+
 /// The tables of a whole run in `out`: `results.csv`, `summary.csv`, and
 /// `dos.csv` / `gaps.csv` where the experiment measures them (one plain run
 /// and `jamkit merge` write them alike).
@@ -306,6 +365,17 @@ fn write_tables(
     experiment: &Experiment,
     packings: &[PackingFile],
     groups: &[(String, Vec<&PackingFile>)],
+    out: &Path,
+) -> Result<(), ExperimentError> {
+    let measured = (experiment.spectrum().is_some(), experiment.gaps().is_some());
+    write_table_files(packings, groups, measured, out)
+}
+
+/// [`write_tables`] with what was measured given as `(spectrum, gaps)`.
+fn write_table_files(
+    packings: &[PackingFile],
+    groups: &[(String, Vec<&PackingFile>)],
+    (spectrum, gaps): (bool, bool),
     out: &Path,
 ) -> Result<(), ExperimentError> {
     format::write_atomic(
@@ -316,10 +386,10 @@ fn write_tables(
         &out.join("summary.csv"),
         format::summary_csv(groups).as_bytes(),
     )?;
-    if experiment.spectrum().is_some() {
+    if spectrum {
         format::write_atomic(&out.join("dos.csv"), format::dos_csv(groups).as_bytes())?;
     }
-    if experiment.gaps().is_some() {
+    if gaps {
         format::write_atomic(&out.join("gaps.csv"), format::gaps_csv(groups).as_bytes())?;
     }
     Ok(())
