@@ -547,3 +547,57 @@ fn above_jam_refuses_a_packing_that_unjammed() {
     let report = common::run_ok(&parse(&text("1e-3")), dir.path(), 1);
     assert!(report.packings[0].measures.energy_per_particle > 1e-10);
 }
+
+/// A list of targets scans, one grid point per value, innermost: `AboveJam`
+/// with `delta_phi: [1e-3, 1e-2]` makes two points whose ids end in
+/// `_dphi1e-3` and `_dphi1e-2`, each packing δφ above its own φ_J (to
+/// 1e-12); a `Pressure` list lands each point within 1 % of its own
+/// target (the bisection stops within `tol` = 10⁻³ of it; 1 % leaves room
+/// for a final relaxation); a single value keeps the ids it always had; an empty list
+/// or a bad value is refused by name.
+#[test]
+fn protocol_targets_given_as_lists_scan() {
+    let parse = |t: &str| jamkit_experiment::Experiment::from_ron(t, "inline").unwrap();
+    let above = r#"(name: "a", family: "sphere", particles: 32, samples: 1, seed: 4,
+        protocol: AboveJam(delta_phi: [1e-3, 1e-2]), observables: [Contacts, Pressure])"#;
+    let dir = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&parse(above), dir.path(), 1);
+    let ids: Vec<&str> = report.packings.iter().map(|f| f.id.as_str()).collect();
+    assert_eq!(
+        ids,
+        ["sphere_d2_N32_dphi1e-3_s4", "sphere_d2_N32_dphi1e-2_s4"]
+    );
+    for (f, dphi) in report.packings.iter().zip([1e-3, 1e-2]) {
+        let jam = f.measures.jam_point.as_ref().unwrap().phi;
+        assert!((f.phi - jam - dphi).abs() < 1e-12, "{} {jam} {dphi}", f.phi);
+        assert_eq!(f.settings["protocol"]["AboveJam"]["delta_phi"], dphi);
+    }
+    let pressure = r#"(name: "p", family: "sphere", particles: 32, samples: 1, seed: 4,
+        protocol: Pressure(pressure: [1e-3, 1e-2]), observables: [Pressure])"#;
+    let dir = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&parse(pressure), dir.path(), 1);
+    assert_eq!(report.packings.len(), 2);
+    for (f, p) in report.packings.iter().zip([1e-3, 1e-2]) {
+        let got = f.measures.pressure.unwrap();
+        assert!((got - p).abs() <= 0.011 * p, "{got} against {p}");
+    }
+    let single = parse(
+        r#"(name: "s", family: "sphere", particles: 32, protocol: AboveJam(delta_phi: 1e-3))"#,
+    );
+    let points = jamkit_experiment::grid::points(&single).unwrap();
+    assert_eq!(points.len(), 1);
+    assert_eq!(points[0].label("sphere"), "sphere_d2_N32");
+    for (bad, named) in [
+        ("AboveJam(delta_phi: [])", "at least one value"),
+        ("AboveJam(delta_phi: [1e-3, -1.0])", "protocol.delta_phi"),
+        ("Pressure(pressure: [1e-3, 0.0])", "protocol.pressure"),
+    ] {
+        let e = parse(&format!(
+            r#"(name: "b", family: "sphere", particles: 32, protocol: {bad})"#
+        ))
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains(named), "{bad}: {e}");
+    }
+}

@@ -4,12 +4,13 @@
 //! list, as a list of lists) scans; so do `dim` and `particles`. The grid is
 //! the Cartesian product, `dim` outermost, then `particles`, then the
 //! parameters in the order the family declares them (the first declared
-//! varies slowest).
+//! varies slowest), then the protocol's target (`Phi`'s φ, `Pressure`'s
+//! pressure, `AboveJam`'s δφ) when the file gives a list of them.
 //! Each point runs `samples` packings with seeds `seed, seed + 1, …`: the
 //! same seeds at every point, so points differ only by their parameters.
 
 use crate::error::ExperimentError;
-use crate::schema::Experiment;
+use crate::schema::{Experiment, Protocol};
 use jamkit_core::FamilyInfo;
 use jamkit_engine::FireParams;
 use jamkit_registry::{self as registry, ParamMap};
@@ -29,6 +30,12 @@ pub struct Point {
     /// (`dt_max`: the experiment's, else the family's, else 0.5), resolved
     /// once here, where the point's shape is built to check it.
     pub minimizer: FireParams,
+    /// The protocol with this point's one target (φ, pressure or δφ: a
+    /// list in the file scans, as the innermost axis of the grid).
+    pub protocol: Protocol,
+    /// The target's name in the label when the file scans it (`phi`, `p`,
+    /// `dphi`), else `None` (labels as before targets could scan).
+    pub target_label: Option<&'static str>,
 }
 
 impl Point {
@@ -44,6 +51,19 @@ impl Point {
             s.push('_');
             s.push_str(k);
             s.push_str(&short(&sanitize(&value_text(v))));
+        }
+        if let Some(name) = self.target_label {
+            let value = match &self.protocol {
+                Protocol::Phi { phi: t, .. }
+                | Protocol::Pressure { pressure: t, .. }
+                | Protocol::AboveJam { delta_phi: t, .. } => t.first(),
+                Protocol::Jam { .. } => None,
+            };
+            if let Some(v) = value {
+                s.push('_');
+                s.push_str(name);
+                s.push_str(&sanitize(&format!("{v:e}")));
+            }
         }
         s
     }
@@ -155,13 +175,18 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
                     minimizer: &experiment.minimizer,
                 };
                 let minimizer = registry::dispatch(&experiment.family, dim, params, check)??;
-                out.push(Point {
-                    index: out.len(),
-                    dim,
-                    particles,
-                    params: params.clone(),
-                    minimizer,
-                });
+                let (protocols, target_label) = experiment.protocol.targets();
+                for protocol in protocols {
+                    out.push(Point {
+                        index: out.len(),
+                        dim,
+                        particles,
+                        params: params.clone(),
+                        minimizer: minimizer.clone(),
+                        protocol,
+                        target_label,
+                    });
+                }
             }
         }
     }

@@ -328,7 +328,7 @@ mod tests {
             e.protocol,
             crate::schema::Protocol::Phi {
                 phi_start: 0.1,
-                phi: 0.9,
+                phi: crate::schema::OneOrMany::One(0.9),
                 eps: 0.01
             }
         );

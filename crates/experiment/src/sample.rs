@@ -36,7 +36,7 @@ pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json
         "particles": point.particles,
         "seed": job.seed,
         "sizes": e.sizes,
-        "protocol": protocol_settings(&e.protocol),
+        "protocol": protocol_settings(&point.protocol),
         "minimizer": minimizer,
         "potential": e.potential,
         "rattlers": e.rattlers,
@@ -113,7 +113,8 @@ impl SceneVisitor for SampleVisitor<'_> {
             .iter()
             .map(|&s| shape.bounding_radius(s))
             .fold(f64::INFINITY, f64::min);
-        let packing = Packing::<D, S>::random(shape, sizes, e.protocol.phi_start(), &mut rng)
+        let protocol = &self.point.protocol;
+        let packing = Packing::<D, S>::random(shape, sizes, protocol.phi_start(), &mut rng)
             .map_err(sample_err)?;
         let mut scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
         let mut fire = Fire::new(minimizer);
@@ -122,7 +123,9 @@ impl SceneVisitor for SampleVisitor<'_> {
         }
         let mut saddle_escapes = None;
         let mut jam_point = None;
-        let outcome: Result<_, jamkit_core::Error> = match e.protocol {
+        // A grid point's protocol has one target (`Protocol::targets`).
+        let target = |t: &crate::schema::OneOrMany<f64>| t.first().unwrap_or(f64::NAN);
+        let outcome: Result<_, jamkit_core::Error> = match *protocol {
             Protocol::Jam {
                 eps,
                 energy_low,
@@ -167,10 +170,11 @@ impl SceneVisitor for SampleVisitor<'_> {
                 energy_high,
                 max_density_steps,
                 search,
-                delta_phi,
+                ref delta_phi,
                 compress_eps,
                 ..
             } => {
+                let delta_phi = target(delta_phi);
                 let params = JamParams {
                     eps,
                     energy_low,
@@ -217,9 +221,11 @@ impl SceneVisitor for SampleVisitor<'_> {
                     })
                 })
             }
-            Protocol::Phi { phi, eps, .. } => compress_to_phi(&mut scene, &mut fire, phi, eps),
+            Protocol::Phi { ref phi, eps, .. } => {
+                compress_to_phi(&mut scene, &mut fire, target(phi), eps)
+            }
             Protocol::Pressure {
-                pressure,
+                ref pressure,
                 tol,
                 eps,
                 max_density_steps,
@@ -228,7 +234,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                 &mut scene,
                 &mut fire,
                 &PressureParams {
-                    pressure,
+                    pressure: target(pressure),
                     tol,
                     eps,
                     max_density_steps,

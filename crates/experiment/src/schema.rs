@@ -49,6 +49,15 @@ impl<T: Clone> OneOrMany<T> {
             OneOrMany::Many(v) => v.clone(),
         }
     }
+
+    /// The one value of a single target (a grid point's; the first of a
+    /// list, `None` for an empty one).
+    pub fn first(&self) -> Option<T> {
+        match self {
+            OneOrMany::One(v) => Some(v.clone()),
+            OneOrMany::Many(v) => v.first().cloned(),
+        }
+    }
 }
 
 /// A whole experiment.
@@ -154,8 +163,8 @@ pub enum Protocol {
         /// Packing fraction of the random start.
         #[serde(default = "default_phi_start")]
         phi_start: f64,
-        /// Target packing fraction.
-        phi: f64,
+        /// Target packing fraction (a list scans: one grid point each).
+        phi: OneOrMany<f64>,
         /// Step of φ.
         #[serde(default = "default_eps")]
         eps: f64,
@@ -165,8 +174,8 @@ pub enum Protocol {
         /// Packing fraction of the random start.
         #[serde(default = "default_phi_start")]
         phi_start: f64,
-        /// Target pressure.
-        pressure: f64,
+        /// Target pressure (a list scans: one grid point each).
+        pressure: OneOrMany<f64>,
         /// Relative tolerance on the pressure.
         #[serde(default = "default_pressure_tol")]
         tol: f64,
@@ -200,8 +209,8 @@ pub enum Protocol {
         /// The jamming search (as `Jam`'s).
         #[serde(default)]
         search: JamSearch,
-        /// `δφ = φ − φ_J`.
-        delta_phi: f64,
+        /// `δφ = φ − φ_J` (a list scans: one grid point each).
+        delta_phi: OneOrMany<f64>,
         /// Largest step of φ on the way from φ_J to φ_J + δφ.
         #[serde(default = "default_eps")]
         compress_eps: f64,
@@ -250,6 +259,38 @@ impl Protocol {
             | Protocol::Pressure { phi_start, .. }
             | Protocol::AboveJam { phi_start, .. } => phi_start,
         }
+    }
+
+    /// The protocol at each of its targets (`Phi`'s φ, `Pressure`'s
+    /// pressure, `AboveJam`'s δφ; a list scans), each with one value, in
+    /// the order given; `Jam` as it is. With the targets' name in a label
+    /// (`phi`, `p`, `dphi`) when there are several.
+    pub fn targets(&self) -> (Vec<Protocol>, Option<&'static str>) {
+        let each = |values: &OneOrMany<f64>, set: &dyn Fn(f64) -> Protocol, name| {
+            let list: Vec<Protocol> = values.values().into_iter().map(set).collect();
+            let named = (list.len() > 1).then_some(name);
+            (list, named)
+        };
+        match self {
+            Protocol::Jam { .. } => (vec![self.clone()], None),
+            Protocol::Phi { phi, .. } => each(phi, &|v| self.with_target(v), "phi"),
+            Protocol::Pressure { pressure, .. } => each(pressure, &|v| self.with_target(v), "p"),
+            Protocol::AboveJam { delta_phi, .. } => {
+                each(delta_phi, &|v| self.with_target(v), "dphi")
+            }
+        }
+    }
+
+    /// This protocol with its target (φ, pressure or δφ) set to `value`.
+    fn with_target(&self, value: f64) -> Protocol {
+        let mut out = self.clone();
+        match &mut out {
+            Protocol::Jam { .. } => {}
+            Protocol::Phi { phi: t, .. }
+            | Protocol::Pressure { pressure: t, .. }
+            | Protocol::AboveJam { delta_phi: t, .. } => *t = OneOrMany::One(value),
+        }
+        out
     }
 
     /// A short name for tables.
@@ -621,7 +662,24 @@ impl Experiment {
                 "must lie in (0, 1)",
             ));
         }
-        match self.protocol {
+        let (targets, _) = self.protocol.targets();
+        if targets.is_empty() {
+            return Err(ExperimentError::invalid(
+                "protocol",
+                format!("{:?}", self.protocol),
+                "a list of targets (phi, pressure or delta_phi) must hold at least one value",
+            ));
+        }
+        for protocol in &targets {
+            self.validate_target(protocol)?;
+        }
+        Ok(())
+    }
+
+    /// The checks of one protocol with a single target.
+    fn validate_target(&self, protocol: &Protocol) -> Result<(), ExperimentError> {
+        let single = |t: &OneOrMany<f64>| t.first().unwrap_or(f64::NAN);
+        match *protocol {
             Protocol::Jam {
                 eps,
                 energy_low,
@@ -657,11 +715,12 @@ impl Experiment {
                     ));
                 }
                 if let Protocol::AboveJam {
-                    delta_phi,
+                    ref delta_phi,
                     compress_eps,
                     ..
-                } = self.protocol
+                } = *protocol
                 {
+                    let delta_phi = single(delta_phi);
                     if !(delta_phi > 0.0 && delta_phi < 0.5) {
                         return Err(ExperimentError::invalid(
                             "protocol.delta_phi",
@@ -678,7 +737,8 @@ impl Experiment {
                     }
                 }
             }
-            Protocol::Phi { phi, eps, .. } => {
+            Protocol::Phi { ref phi, eps, .. } => {
+                let phi = single(phi);
                 if !(phi > 0.0 && phi.is_finite()) {
                     return Err(ExperimentError::invalid(
                         "protocol.phi",
@@ -695,12 +755,13 @@ impl Experiment {
                 }
             }
             Protocol::Pressure {
-                pressure,
+                ref pressure,
                 tol,
                 eps,
                 max_density_steps,
                 ..
             } => {
+                let pressure = single(pressure);
                 if !(pressure > 0.0 && pressure.is_finite()) {
                     return Err(ExperimentError::invalid(
                         "protocol.pressure",
