@@ -14,7 +14,9 @@
 //! * [`rotation`]: [`Rotation2`] and [`Angle`], the planar orientations shared by the 2D
 //!   families (the 2D near-disk gaps live in `jamkit-planar`);
 //! * [`quaternion`]: [`Quaternion`], the 3D orientation of the rigid 3D
-//!   families (`nmer`, `harmonic`);
+//!   families (`nmer`, `harmonic`, `ellipsoid`);
+//! * [`gap3d`]: the exact gap of two convex 3D bodies from their support
+//!   functions, with its first and second derivatives (`ellipsoid`);
 //! * [`potential`]: scalar contact potentials `v(h)` (harmonic, Hertzian);
 //! * [`sizes`]: size distributions (binary, monodisperse, uniform);
 //! * [`packing`]: a configuration of bodies in a box, in flat generalised
@@ -26,6 +28,7 @@
 
 pub mod error;
 pub mod family;
+pub mod gap3d;
 pub mod math;
 pub mod packing;
 pub mod periodic;
