@@ -332,10 +332,28 @@ impl Ellipsoid {
         max_gap: f64,
     ) -> Option<ExactGap3> {
         // h ≥ r − (longest semi-axes): skip pairs certainly apart.
-        if r_ij.norm() - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
+        let r = r_ij.norm();
+        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return None;
         }
-        let (si, sj) = (self.support(size_i, o_i), self.support(size_j, o_j));
+        let (ci, cj) = (o_i.columns(), o_j.columns());
+        // h ≥ g(r̂) = r − s_i(r̂) − s_j(−r̂), with s(u) = |diag(a, b, c) Qᵀ u|:
+        // skip before building the quadratic forms (`gap3d::exact` makes
+        // the same test again, on the forms, for pairs that get there).
+        if r > 0.0 {
+            let u = r_ij / r;
+            let reach = |size: f64, c: &[Vector<3>; 3]| {
+                (0..3)
+                    .map(|k| (size * self.ratios[k] * c[k].dot(&u)).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            };
+            if r - reach(size_i, &ci) - reach(size_j, &cj) > max_gap {
+                return None;
+            }
+        }
+        let si = QuadraticSupport::new(&ci, self.semi_axes(size_i));
+        let sj = QuadraticSupport::new(&cj, self.semi_axes(size_j));
         gap3d::exact(r_ij, |u| si.jet(u), |u| sj.jet(u), max_gap)
     }
 
