@@ -709,3 +709,40 @@ fn bad_parameters_are_refused_with_the_field_named() {
     // The limits themselves are accepted.
     assert!(Ellipsoid::spheroid(10.0).is_ok() && Ellipsoid::spheroid(0.1).is_ok());
 }
+
+/// The asphericity against the spheroids' closed-form surfaces (1e-12
+/// relative at 96 nodes, geometric convergence; 48 leave 3e-12 at α = 0.2), prolate
+/// `S = 2πb²[1 + (a/(b e)) arcsin e]`, `e² = 1 − b²/a²`, and oblate
+/// `S = 2πb²[1 + ((1 − e²)/e) artanh e]`, `e² = 1 − a²/b²`; near the
+/// sphere `A − 1 = (8/15)ε² + O(ε³)` (1 % at ε = 10⁻³, where the next order
+/// is ~ε relative); a triaxial body's `A` does not depend on the order of
+/// its axes (1e-13).
+#[test]
+fn asphericity_matches_the_closed_forms() {
+    for alpha in [1.2, 2.0, 5.0, 0.8, 0.5, 0.2] {
+        let s = spheroid(alpha);
+        let [b, _, a] = s.ratios();
+        let area = if a > b {
+            let e = (1.0 - b * b / (a * a)).sqrt();
+            2.0 * PI * b * b * (1.0 + a / (b * e) * e.asin())
+        } else {
+            let e = (1.0 - a * a / (b * b)).sqrt();
+            2.0 * PI * b * b * (1.0 + (1.0 - e * e) / e * e.atanh())
+        };
+        let expected = area.powi(3) / (36.0 * PI * (4.0 * PI / 3.0).powi(2));
+        assert_relative_eq!(s.asphericity(96), expected, max_relative = 1e-12);
+        assert!(expected > 1.0);
+    }
+    let eps = 1e-3;
+    for alpha in [1.0 + eps, 1.0 / (1.0 + eps)] {
+        assert_relative_eq!(
+            spheroid(alpha).asphericity(48) - 1.0,
+            8.0 / 15.0 * eps * eps,
+            max_relative = 1e-2
+        );
+    }
+    let a = triaxial([1.0, 1.4, 2.2]).asphericity(48);
+    let b = triaxial([2.2, 1.0, 1.4]).asphericity(48);
+    assert_relative_eq!(a, b, max_relative = 1e-13);
+    assert_relative_eq!(spheroid(1.0).asphericity(8), 1.0, max_relative = 1e-14);
+}
