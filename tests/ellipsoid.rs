@@ -32,28 +32,21 @@ fn triaxial(axes: [f64; 3]) -> Ellipsoid {
 
 /// The kit's forces and torques, Hessian (central differences of the
 /// analytic gradient on dense overlapping configurations, φ = 0.9) and
-/// `h_ij = h_ji` (tolerances and their reasons in `crates/kit`) for
-/// prolate and oblate spheroids from near the sphere to α = 3 and 1/3, and
-/// triaxial bodies; the whole kit (with a jamming run and the rotation
-/// about z) for one triaxial body.
+/// `h_ij = h_ji` (tolerances and their reasons in `crates/kit`) for the
+/// bodies the conformance test (`tests/conformance.rs`: α = 1.5, 1.2, 0.5
+/// and a triaxial body, with the whole kit) leaves out: nearly round
+/// (α = 1.05), long (α = 3), flat (α = 1/3) and strongly triaxial.
 #[test]
 fn spheroids_and_triaxial_bodies_pass_the_kit() {
     for shape in [
         spheroid(1.05),
-        spheroid(1.5),
         spheroid(3.0),
-        spheroid(0.7),
         spheroid(1.0 / 3.0),
-        triaxial([1.0, 1.2, 1.5]),
         triaxial([0.5, 1.0, 2.0]),
     ] {
         jamkit_kit::check_gradient::<3, _>(&shape);
         assert!(jamkit_kit::check_hessian::<3, _>(&shape));
         jamkit_kit::check_symmetry::<3, _>(&shape);
-    }
-    let done = jamkit_kit::check_family::<3, _>(triaxial([1.0, 1.3, 1.8]));
-    for check in ["gradient", "hessian", "symmetry", "rotation", "jamming"] {
-        assert!(done.ran.contains(&check), "{check}: {done:?}");
     }
 }
 
