@@ -466,4 +466,146 @@ mod tests {
         let e = exact(&d, |u| tip.jet(u), |u| tip.jet(u), f64::INFINITY).unwrap();
         assert_relative_eq!(e.gap, 0.15, epsilon = 1e-14);
     }
+
+    /// An ellipsoid whose reference point is off its centre by `offset`
+    /// (body frame): `s(u) = u·Q c + √(uᵀMu)`, a convex body *without*
+    /// central symmetry (`s(−u) ≠ s(u)`), so that mixing up body `j`'s
+    /// direction `−u` with `u` anywhere shows (for an ellipsoid about its
+    /// centre `S(−u) = S(u)` and such a slip would pass).
+    fn off_centre(
+        q: &Quaternion,
+        semi: [f64; 3],
+        offset: Vector<3>,
+    ) -> impl Fn(&Vector<3>) -> SupportJet3 {
+        let e = ellipsoid(q, semi);
+        let c = q.apply(&offset);
+        move |u: &Vector<3>| {
+            let j = e.jet(u);
+            SupportJet3 {
+                h: j.h + u.dot(&c),
+                point: j.point + c,
+                hess: j.hess,
+            }
+        }
+    }
+
+    /// The gap of two off-centre bodies at `r + z[0..3]`, body `i` turned
+    /// by `exp(z[3..6])` and body `j` by `exp(z[6..9])` (world frame).
+    fn off_centre_gap(z: &[f64]) -> ExactGap3 {
+        let qi = Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap();
+        let qj = Quaternion::normalized(-0.7, 0.1, 0.4, 0.2).unwrap();
+        let v = |k: usize| Vector::<3>::new(z[k], z[k + 1], z[k + 2]);
+        let qi = Quaternion::exp(&v(3)).mul(&qi);
+        let qj = Quaternion::exp(&v(6)).mul(&qj);
+        let si = off_centre(&qi, [0.4, 0.55, 0.8], Vector::<3>::new(0.1, -0.05, 0.15));
+        let sj = off_centre(&qj, [0.7, 0.5, 0.45], Vector::<3>::new(-0.12, 0.08, 0.05));
+        let r = Vector::<3>::new(0.9, 0.7, -0.6) + v(0);
+        exact(&r, si, sj, f64::INFINITY).unwrap()
+    }
+
+    /// The gradient in `z = (r_j, ω_i, ω_j)` (world axes, three each).
+    fn off_centre_grad(g: &ExactGap3) -> [f64; 9] {
+        let c = g.contact(&WORLD_AXES, &WORLD_AXES, 3);
+        let mut v = [0.0; 9];
+        for a in 0..3 {
+            v[a] = c.grad_r[a];
+            v[3 + a] = c.grad_rot_i[a];
+            v[6 + a] = c.grad_rot_j[a];
+        }
+        v
+    }
+
+    /// The generic machinery on bodies without central symmetry, apart
+    /// (`h > 0`) and overlapping (`h < 0`: the same bodies 0.45 closer):
+    /// the optimum's geometry `r − p_i(n) + p_j(−n) = h n` (1e-12); the
+    /// gradient (translation and both bodies' three world-frame rotations)
+    /// against central differences of the gap (ε = 1e-6: truncation
+    /// ~1e-12, round-off ~1e-10; bound 1e-8); every second derivative
+    /// against central differences of the analytic gradient (ε = 1e-5:
+    /// truncation ~1e-10, round-off ~1e-11; bound 1e-6). The gradient at
+    /// `exp(ε e_b) Q` differentiated in `ε` is the Hessian of
+    /// `h(exp(Σ z e) Q)` plus the commutator `½ (e_a × e_b)·∇_ω h` for two
+    /// rotations of one body: the symmetric part is compared with the
+    /// Hessian, the antisymmetric part with that term.
+    #[test]
+    fn bodies_without_central_symmetry() {
+        for shift in [0.0, -0.45] {
+            let dir = Vector::<3>::new(0.9, 0.7, -0.6).normalize() * shift;
+            let at = |dz: &[f64; 9]| {
+                let mut z = *dz;
+                for a in 0..3 {
+                    z[a] += dir[a];
+                }
+                off_centre_gap(&z)
+            };
+            let e = at(&[0.0; 9]);
+            assert!(e.converged);
+            assert_eq!(shift == 0.0, e.gap > 0.0, "h = {}", e.gap);
+            let r = Vector::<3>::new(0.9, 0.7, -0.6) + dir;
+            let closing = r - e.jet_i.point + e.jet_j.point - e.normal * e.gap;
+            assert!(closing.norm() < 1e-12, "{closing:?}");
+            let g0 = off_centre_grad(&e);
+            let h = e.hessian(&WORLD_AXES, &WORLD_AXES, 3);
+            assert_eq!(h.contact, e.contact(&WORLD_AXES, &WORLD_AXES, 3));
+            let mut hm = [[0.0; 9]; 9];
+            for a in 0..3 {
+                for b in 0..3 {
+                    hm[a][b] = h.rr[(a, b)];
+                    hm[3 + a][3 + b] = h.qi_qi[a][b];
+                    hm[6 + a][6 + b] = h.qj_qj[a][b];
+                    hm[3 + a][6 + b] = h.qi_qj[a][b];
+                    hm[6 + b][3 + a] = h.qi_qj[a][b];
+                    hm[a][3 + b] = h.r_qi[b][a];
+                    hm[3 + b][a] = h.r_qi[b][a];
+                    hm[a][6 + b] = h.r_qj[b][a];
+                    hm[6 + b][a] = h.r_qj[b][a];
+                }
+            }
+            for a in 0..9 {
+                let (mut p, mut m) = ([0.0; 9], [0.0; 9]);
+                p[a] = 1e-6;
+                m[a] = -1e-6;
+                let fd = (at(&p).gap - at(&m).gap) / 2e-6;
+                assert!(
+                    (fd - g0[a]).abs() < 1e-8,
+                    "∂h/∂z[{a}]: {} vs fd {fd}",
+                    g0[a]
+                );
+            }
+            let mut fd = [[0.0; 9]; 9];
+            for b in 0..9 {
+                let (mut p, mut m) = ([0.0; 9], [0.0; 9]);
+                p[b] = 1e-5;
+                m[b] = -1e-5;
+                let (gp, gm) = (off_centre_grad(&at(&p)), off_centre_grad(&at(&m)));
+                for a in 0..9 {
+                    fd[a][b] = (gp[a] - gm[a]) / 2e-5;
+                }
+            }
+            let body = |k: usize| k / 3;
+            for a in 0..9 {
+                for b in 0..9 {
+                    let sym = 0.5 * (fd[a][b] + fd[b][a]);
+                    assert!(
+                        (sym - hm[a][b]).abs() < 1e-6,
+                        "shift {shift}: ∂²h/∂z[{a}]∂z[{b}] {} vs fd {sym}",
+                        hm[a][b]
+                    );
+                    let commutator = if body(a) == body(b) && body(a) > 0 {
+                        let (ea, eb) = (WORLD_AXES[a % 3], WORLD_AXES[b % 3]);
+                        let k = 3 * body(a);
+                        let torque = Vector::<3>::new(g0[k], g0[k + 1], g0[k + 2]);
+                        0.5 * ea.cross(&eb).dot(&torque)
+                    } else {
+                        0.0
+                    };
+                    let anti = 0.5 * (fd[a][b] - fd[b][a]);
+                    assert!(
+                        (anti - commutator).abs() < 1e-6,
+                        "shift {shift}: antisymmetric part [{a}][{b}] {anti} vs {commutator}"
+                    );
+                }
+            }
+        }
+    }
 }
