@@ -166,10 +166,10 @@ fn ellipsoid_spheroids_triaxial_and_the_sphere_limit() {
     assert_eq!(claimed_dims("ellipsoid"), [3]);
     // Spheroids: two rotational coordinates (the kit's rotation about z
     // needs three and is skipped; tests/ellipsoid.rs turns about skew
-    // axes), prolate and oblate.
-    for params in ["(alpha: 1.2)", "(alpha: 0.5)"] {
-        check_registered("ellipsoid", 3, params);
-    }
+    // axes). The prolate example (α = 1.5) runs above; an oblate one here
+    // (tests/ellipsoid.rs has the kit's derivative checks from α = 1/3 to
+    // 3 without the jamming runs, which cost ~30 s each here).
+    check_registered("ellipsoid", 3, "(alpha: 0.8)");
     let triaxial = check_registered("ellipsoid", 3, "(axes: [1.0, 1.3, 1.8])");
     assert!(triaxial.ran.contains(&"rotation"), "{triaxial:?}");
     // α = 1 and three equal ratios run as the sphere family.
