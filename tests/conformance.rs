@@ -160,3 +160,38 @@ fn harmonic_single_modes_sums_and_the_sphere_limit() {
         ],
     );
 }
+
+#[test]
+fn ellipsoid_spheroids_triaxial_and_the_sphere_limit() {
+    assert_eq!(claimed_dims("ellipsoid"), [3]);
+    // Spheroids: two rotational coordinates (the kit's rotation about z
+    // needs three and is skipped; tests/ellipsoid.rs turns about skew
+    // axes). The prolate example (α = 1.5) runs above; an oblate one here
+    // (tests/ellipsoid.rs has the kit's derivative checks from α = 1/3 to
+    // 3 without the jamming runs, which cost ~30 s each here).
+    check_registered("ellipsoid", 3, "(alpha: 0.8)");
+    let triaxial = check_registered("ellipsoid", 3, "(axes: [1.0, 1.3, 1.8])");
+    assert!(triaxial.ran.contains(&"rotation"), "{triaxial:?}");
+    // α = 1 and three equal ratios run as the sphere family.
+    for params in ["(alpha: 1.0)", "(axes: [2.0, 2.0, 2.0])"] {
+        let done = check_registered("ellipsoid", 3, params);
+        assert!(done.ran.contains(&"hessian"), "{done:?}");
+    }
+    check_bad_params(
+        "ellipsoid",
+        3,
+        &[
+            ("(alpha: 0.0)", "params.alpha"),
+            ("(alpha: -2.0)", "params.alpha"),
+            ("(alpha: 11.0)", "params.alpha"),
+            ("()", "params"),
+            ("(alpha: 1.5, axes: [1.0, 1.0, 1.5])", "params.alpha"),
+            ("(axes: [1.0, -1.0, 2.0])", "params.axes[1]"),
+            ("(axes: [1.0, 1.0, 20.0])", "params.axes"),
+            ("(axes: [1.0, 2.0])", "params.axes"),
+            ("(alpha: 1.5, inertia: Some(0.0))", "params.inertia"),
+            ("(alpha: 1.0, inertia: Some(-1.0))", "params.inertia"),
+            ("(alpha: 1.5, colour: 3)", "colour"),
+        ],
+    );
+}

@@ -205,6 +205,7 @@ fn draw_3d_packings_of_every_3d_family() {
         ("sphere", "{}"),
         ("nmer", r#"{"alpha": 1.5}"#),
         ("harmonic", r#"{"l": 2, "delta": 0.2}"#),
+        ("ellipsoid", r#"{"alpha": 1.5}"#),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let family_set = format!("family={family}");
@@ -283,6 +284,24 @@ fn draw_shape_draws_3d_bodies() {
     let (code, _, err) = jamkit(&["draw-shape", "harmonic", "-o", png.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(&std::fs::read(&png).unwrap()[..4], b"\x89PNG");
+    // Ellipsoids through their `Surface`: oblate, the ball (α = 1, drawn as
+    // a ball) and triaxial (whose `axes` replace the example's `alpha`).
+    let (code, stdout, err) = jamkit(&[
+        "draw-shape",
+        "ellipsoid",
+        "--curve",
+        "(alpha: 0.5)",
+        "--curve",
+        "(alpha: 1.0)",
+        "--curve",
+        "(axes: [1.0, 1.4, 2.0])",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("1 row(s) of 3D bodies"), "{stdout}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert_eq!(text.matches("<image").count(), 3);
     let (code, _, err) = jamkit(&[
         "draw-shape",
         "nmer",

@@ -184,6 +184,53 @@ fn ellipses_carry_their_semi_axes() {
     }
 }
 
+/// Ellipsoids carry their semi-axes along the body axes,
+/// `R⁰ (ξ_x, ξ_y, ξ_z)` (unit product: `a b c = (R⁰)³`, to 1e-12), in the
+/// body frame the unit quaternion `(x, y, z, w)` turns, which is the
+/// packing file's `[w, x, y, z]`, bit for bit.
+#[test]
+fn ellipsoids_carry_their_semi_axes_and_quaternion() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("ellipsoid");
+    let xyz = run(
+        "experiments/examples/ellipsoid.ron",
+        &dir,
+        &[
+            "samples=1",
+            "params.alpha=None",
+            "params.axes=[1.0, 1.2, 1.4]",
+        ],
+    );
+    let (comment, rows) = &frames(&xyz)[0];
+    assert!(
+        comment.contains("orientation:R:4:aspherical_shape:R:3"),
+        "{comment}"
+    );
+    let id = comment
+        .split("id=")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap();
+    let p = packing(&dir, id);
+    let orientations = p["orientations"].as_array().unwrap();
+    assert_eq!(rows.len(), orientations.len());
+    for (r, o) in rows.iter().zip(orientations) {
+        let (r0, a, b, c) = (f(&r[4]), f(&r[9]), f(&r[10]), f(&r[11]));
+        assert!((a * b * c / r0.powi(3) - 1.0).abs() < 1e-12, "{r:?}");
+        assert!(
+            (c / a - 1.4).abs() < 1e-12 && (b / a - 1.2).abs() < 1e-12,
+            "{r:?}"
+        );
+        let q: Vec<f64> = (5..9).map(|k| f(&r[k])).collect();
+        let w = o.as_array().unwrap();
+        for (k, x) in [1, 2, 3, 0].iter().zip(&q) {
+            assert_eq!(x.to_bits(), w[*k].as_f64().unwrap().to_bits());
+        }
+    }
+}
+
 /// `output: (extxyz: true)` writes `packings/<id>.xyz` beside each packing,
 /// the same frame as `jamkit export` of that packing; a resumed run writes
 /// the ones missing and touches nothing else; without the packings'

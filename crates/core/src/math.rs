@@ -67,6 +67,36 @@ pub fn turn_unit(z: Unit, dtheta: f64) -> Unit {
     (cos * fix, sin * fix)
 }
 
+/// Gauss–Legendre nodes and weights on `[−1, 1]` (Newton on the Legendre
+/// recurrence from the Chebyshev guesses, to round-off).
+pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut nodes = Vec::with_capacity(n);
+    let mut weights = Vec::with_capacity(n);
+    for i in 0..n {
+        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut dp = 1.0;
+        for _ in 0..100 {
+            let (mut p0, mut p1) = (1.0, z);
+            for k in 2..=n {
+                let p2 = ((2 * k - 1) as f64 * z * p1 - (k - 1) as f64 * p0) / k as f64;
+                p0 = p1;
+                p1 = p2;
+            }
+            let pn = if n == 0 { 1.0 } else { p1 };
+            let pm = if n == 1 { 1.0 } else { p0 };
+            dp = n as f64 * (z * pn - pm) / (z * z - 1.0);
+            let dz = pn / dp;
+            z -= dz;
+            if dz.abs() < 1e-16 {
+                break;
+            }
+        }
+        nodes.push(z);
+        weights.push(2.0 / ((1.0 - z * z) * dp * dp));
+    }
+    (nodes, weights)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -12,7 +12,7 @@
 //! | `radius` | the size `R⁰` (the sphere's radius for a rigid body's sphere) |
 //! | `orientation` | the rotation as a unit quaternion in OVITO's order `(x, y, z, w)`: a planar angle θ is `(0, 0, sin θ/2, cos θ/2)` |
 //! | `angle` | planar families: θ itself (radians), for colouring |
-//! | `aspherical_shape` | ellipses: the semi-axes `(a, b, b)`, `a = R⁰√α`, `b = R⁰/√α` |
+//! | `aspherical_shape` | ellipses: the semi-axes `(a, b, b)`, `a = R⁰√α`, `b = R⁰/√α`; ellipsoids: the semi-axes `R⁰ (ξ_x, ξ_y, ξ_z)` along the body axes |
 //! | `body` | rigid bodies: the body a sphere belongs to |
 //! | `contacts` | the body's contacts (`h < 0`), each contact counted at both bodies |
 //! | `rattler` | 1 for a rattler, 0 otherwise (only when contacts were measured) |
@@ -68,9 +68,22 @@ pub fn frame(file: &PackingFile) -> Result<String, ExperimentError> {
     let planar = dim == 2 && file.orientations.first().is_some_and(|o| o.len() == 1);
     let quaternion = dim == 3 && file.orientations.first().is_some_and(|o| o.len() == 4);
     let rigid = !file.spheres.is_empty();
-    let ellipse = (file.family == "ellipse")
-        .then(|| file.params.get("aspect").and_then(|a| a.as_f64()))
-        .flatten();
+    // Semi-axes per unit size along the body axes: ellipses (a, b, b),
+    // ellipsoids their ratios ξ (unit product).
+    let semi_axes: Option<[f64; 3]> = match file.family.as_str() {
+        "ellipse" => file
+            .params
+            .get("aspect")
+            .and_then(|a| a.as_f64())
+            .map(|alpha| [alpha.sqrt(), 1.0 / alpha.sqrt(), 1.0 / alpha.sqrt()]),
+        "ellipsoid" => jamkit_registry::params_from_json(&file.params)
+            .and_then(|map| jamkit_registry::parse_params("ellipsoid", &map))
+            .and_then(|p| jamkit_ellipsoid::Ellipsoid::new(&p))
+            .ok()
+            .filter(|e| !e.is_ball())
+            .map(|e| e.ratios()),
+        _ => None,
+    };
     let rattlers = file.rattler.len() == file.particles;
 
     let mut props = String::from("species:S:1:pos:R:3:radius:R:1");
@@ -80,7 +93,7 @@ pub fn frame(file: &PackingFile) -> Result<String, ExperimentError> {
     if planar {
         props.push_str(":angle:R:1");
     }
-    if ellipse.is_some() {
+    if semi_axes.is_some() {
         props.push_str(":aspherical_shape:R:3");
     }
     if rigid {
@@ -122,10 +135,9 @@ pub fn frame(file: &PackingFile) -> Result<String, ExperimentError> {
     };
     let tail = |b: usize| -> String {
         let mut t = String::new();
-        if let Some(alpha) = ellipse {
+        if let Some(xi) = semi_axes {
             let r = file.radii[b];
-            let (a, c) = (r * alpha.sqrt(), r / alpha.sqrt());
-            let _ = write!(t, " {a} {c} {c}");
+            let _ = write!(t, " {} {} {}", r * xi[0], r * xi[1], r * xi[2]);
         }
         if rigid {
             let _ = write!(t, " {b}");

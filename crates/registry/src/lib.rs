@@ -57,6 +57,7 @@ families![
     jamkit_nmer::NmerFamily,
     jamkit_ellipse::EllipseFamily,
     jamkit_harmonic::HarmonicFamily,
+    jamkit_ellipsoid::EllipsoidFamily,
 ];
 
 /// Dimensions the engine is compiled for (families with `Dims::Any`).

@@ -1,0 +1,611 @@
+//! The **exact gap of two convex bodies in 3D** from their support
+//! functions: the 3D counterpart of `jamkit_planar::gap2d::exact`, shared
+//! by the 3D families with an exact gap (`ellipsoid`; any smooth convex
+//! body whose support function is known, e.g. an exact gap for `harmonic`).
+//!
+//! ## The gap
+//!
+//! A convex body with centre `c` is described by its support function
+//! `s(u) = max_{x ∈ body} u·(x − c)`, extended to all of `ℝ³` as a function
+//! positively homogeneous of degree 1 (`s(λx) = λ s(x)`). Its gradient
+//! `p(u) = ∇s(u)` is the *support point*, the boundary point (relative to
+//! the centre) whose outward normal is `u`, and `S(u) = ∇∇s(u)` is the
+//! matrix of the radii of curvature there (`S u = 0`; on the tangent plane
+//! its eigenvalues are the principal radii of curvature). The
+//! separating-axis theorem makes the signed distance of two convex bodies
+//! at separation `r = r_j − r_i`
+//!
+//! ```text
+//! h = max_{|u| = 1} g(u),     g(u) = u·r − s_i(u) − s_j(−u):
+//! ```
+//!
+//! positive, the distance of the two surfaces; negative, minus the depth
+//! of penetration along the common normal `n = u*` (the shortest
+//! translation of body `j` along `n` that separates the bodies is `−h`).
+//! At the optimum `r − p_i(n) + p_j(−n) = h n`: the support points of the
+//! two bodies face each other along `n`.
+//!
+//! ## Finding the normal
+//!
+//! Write `G(x) = x·r − s_i(x) − s_j(−x)`, homogeneous of degree 1, so that
+//! `u·∇G(u) = g(u)` (Euler). On the unit sphere its Riemannian gradient and
+//! Hessian are
+//!
+//! ```text
+//! t = ∇G − g u = r − p_i(u) + p_j(−u) − g u,
+//! K = −(S_i(u) + S_j(−u) + g P),      P = 1 − u uᵀ,
+//! ```
+//!
+//! and `W = −K = S_i + S_j + g P` is positive definite on the tangent plane
+//! at a non-degenerate maximum (in 2D it is the number
+//! `k = h + ρ_i + ρ_j` of `gap2d`). [`exact`] runs a safeguarded Newton
+//! iteration from the line of centres: the Newton step solves `W δ = t` in
+//! the tangent plane (as `(W + u uᵀ) δ = t`, one 3 × 3 Cholesky
+//! factorisation: `W u = 0` and `t ⊥ u`), taken where `W` is positive
+//! definite, else a gradient step of 0.1 along `t`; steps are capped at
+//! 0.3, applied on the sphere as `u → (u + δ)/|u + δ|`, and halved
+//! until `g` does not decrease, except Newton steps below 10⁻⁶ rad, which
+//! are taken as they are (there the gain in `g`, `~|t||δ|/2`, is lost in
+//! round-off and the descent test would only halve a correct step).
+//! Converged after a Newton step below 10⁻⁷ (as `gap2d`): what is left,
+//! `~C·10⁻¹⁴` with `C = O(1)` the ratio of third to second derivatives of
+//! `g`, moves `h` by `~10⁻²⁸` (`g` is stationary) and the normal by
+//! `~10⁻¹⁴`. Since `h ≥ g(r̂)`, a pair whose `g` at the line of
+//! centres already exceeds `max_gap` is skipped after one evaluation.
+//!
+//! NOTE: for *overlapping* bodies the iteration finds the local maximum of
+//! `g` nearest the line of centres. For the overlaps of a jamming run
+//! (`|h|` far below the radii of curvature) `g` has one maximum; two long
+//! bodies crossed at their centres can have several.
+//!
+//! ## Derivatives
+//!
+//! `h` depends on `r_j` only through `r`, so by the envelope theorem
+//! `∂h/∂r_j = n`. A body's rotational coordinates `ω_p` turn it about the
+//! axes `e_p` (`Q → exp(Σ ω_p e_p) Q`, with `e_p` the world axes, or the
+//! body's own axes `Q x̂, Q ŷ` for a body symmetric about its `z` axis: the
+//! same rotation at zero increment). Turning body `i` by `ω` reads its
+//! support function at `exp(−ω) u`, so with `p_i = p_i(n)`, `p_j = p_j(−n)`
+//!
+//! ```text
+//! ∂h/∂ω_ip = e_p · (n × p_i),      ∂h/∂ω_jp = −e_p · (n × p_j),
+//! ```
+//!
+//! the torques of the contact force about each centre. The second
+//! derivatives follow by differentiating the optimum implicitly: with
+//! `θ` any of the coordinates, `G_θ` the derivative of `g` at fixed `u`,
+//! `b_θ = ∂_θ ∇G` at fixed `u`, and `W⁺` the inverse of `W` on the
+//! tangent plane (`W⁺ = (W + n nᵀ)⁻¹ − n nᵀ`),
+//!
+//! ```text
+//! ∂²h/∂θ∂θ' = G_θθ' + b_θᵀ W⁺ b_θ',
+//! b_r = 1 (so ∂²h/∂r_j² = W⁺),
+//! b_ωip = −e_p × p_i + S_i (e_p × n),     b_ωjp = e_p × p_j + S_j (e_p × n),
+//! G_ωω(body, v = ±n) = −[(e_p × v)ᵀ S (e_q × v) + ½((p·e_q)(e_p·v) + (p·e_p)(e_q·v)) − (p·v)(e_p·e_q)],
+//! ```
+//!
+//! with `v = n` for body `i`, `v = −n` for body `j`, and `G_rω = 0`,
+//! `G_ω_iω_j = 0` (the two bodies mix only through the moving normal).
+//! Where `W` is not positive definite (bodies overlapping by more than
+//! their radii of curvature: never in a jamming run) the `W⁺` terms are
+//! dropped, as `gap2d` does with `1/k`.
+//!
+//! [`QuadraticSupport`] is the support function of an ellipsoid,
+//! `s(x) = √(xᵀ M x)`, the body the `ellipsoid` family is made of and the
+//! one the tests here use.
+
+use crate::math::{MAX_ROT, Matrix, RotVec, Vector};
+use crate::shape::{Contact, GapHessian};
+
+/// A support function at one direction `u` (world frame) with its first
+/// two derivatives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SupportJet3 {
+    /// `s(u)`.
+    pub h: f64,
+    /// `∇s(u)`: the support point relative to the centre.
+    pub point: Vector<3>,
+    /// `∇∇s(u)` (symmetric, `S u = 0`): the radii of curvature at the
+    /// support point.
+    pub hess: Matrix<3>,
+}
+
+/// The support function `s(x) = √(xᵀ M x)` of the ellipsoid
+/// `{y : yᵀ M⁻¹ y ≤ 1}` (`M = Q diag(a², b², c²) Qᵀ` for semi-axes
+/// `a, b, c` along the columns of `Q`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuadraticSupport {
+    /// `M`, symmetric positive definite.
+    pub form: Matrix<3>,
+}
+
+impl QuadraticSupport {
+    /// The ellipsoid with semi-axes `semi[k]` along the unit vectors
+    /// `axes[k]` (orthonormal): `M = Σ_k semi[k]² axes[k] axes[k]ᵀ`.
+    #[inline(always)]
+    pub fn new(axes: &[Vector<3>; 3], semi: [f64; 3]) -> Self {
+        let mut form = Matrix::<3>::zeros();
+        for k in 0..3 {
+            form += axes[k] * axes[k].transpose() * (semi[k] * semi[k]);
+        }
+        Self { form }
+    }
+
+    /// `s(u)`, `∇s = M u / s` and `∇∇s = M/s − (M u)(M u)ᵀ/s³` (at a unit
+    /// `u`; `∇∇s u = 0`).
+    #[inline(always)]
+    pub fn jet(&self, u: &Vector<3>) -> SupportJet3 {
+        let mu = self.form * u;
+        let h = u.dot(&mu).sqrt();
+        let inv = 1.0 / h;
+        let point = mu * inv;
+        SupportJet3 {
+            h,
+            point,
+            hess: (self.form - point * point.transpose()) * inv,
+        }
+    }
+}
+
+/// The exact gap of two convex bodies at the optimum normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExactGap3 {
+    /// The common normal `n` (unit, from `i` towards `j`).
+    pub normal: Vector<3>,
+    /// The signed distance `h = g(n)`.
+    pub gap: f64,
+    /// Body `i`'s support jet at `n`.
+    pub jet_i: SupportJet3,
+    /// Body `j`'s support jet at `−n`.
+    pub jet_j: SupportJet3,
+    /// Iterations taken (each evaluates both support functions at least
+    /// once).
+    pub iterations: u32,
+    /// False when the iteration stopped at its cap (the last iterate is
+    /// returned).
+    pub converged: bool,
+}
+
+/// One evaluation of `g`, its tangent gradient and `W` at a unit `u`.
+#[derive(Clone, Copy, Debug)]
+struct Eval {
+    g: f64,
+    t: Vector<3>,
+    w: Matrix<3>,
+    ji: SupportJet3,
+    jj: SupportJet3,
+}
+
+/// `u` moved by the tangent vector `δ` and projected back onto the sphere,
+/// `(u + δ)/|u + δ|`: a second-order retraction (it follows the great
+/// circle through `u` along `δ`, by the angle `atan|δ| = |δ| − |δ|³/3 + …`),
+/// enough for Newton's quadratic convergence, with no trigonometric call.
+#[inline(always)]
+fn along_sphere(u: &Vector<3>, d: &Vector<3>) -> Vector<3> {
+    (u + d).normalize()
+}
+
+/// The exact signed distance `h = max_{|u|=1} [u·r_ij − s_i(u) − s_j(−u)]`
+/// (module documentation), with `sup_i(u)` and `sup_j(v)` the two bodies'
+/// world-frame support jets (the solver asks body `j` at `v = −u`), started
+/// from the line of centres (`x̂` at coincident centres). `None` when `g`
+/// at the line of centres already exceeds `max_gap` (then `h > max_gap`).
+#[inline]
+pub fn exact<A, B>(r_ij: &Vector<3>, sup_i: A, sup_j: B, max_gap: f64) -> Option<ExactGap3>
+where
+    A: Fn(&Vector<3>) -> SupportJet3,
+    B: Fn(&Vector<3>) -> SupportJet3,
+{
+    let eval = |u: &Vector<3>| {
+        let ji = sup_i(u);
+        let jj = sup_j(&-u);
+        let g = u.dot(r_ij) - ji.h - jj.h;
+        let t = r_ij - ji.point + jj.point - u * g;
+        let p = Matrix::<3>::identity() - u * u.transpose();
+        Eval {
+            g,
+            t,
+            w: ji.hess + jj.hess + p * g,
+            ji,
+            jj,
+        }
+    };
+    let r = r_ij.norm();
+    let mut u = if r > 0.0 { r_ij / r } else { Vector::<3>::x() };
+    let mut cur = eval(&u);
+    if cur.g > max_gap {
+        return None;
+    }
+    let mut converged = false;
+    let mut iterations = 0;
+    while iterations < 60 {
+        iterations += 1;
+        // The tangent component only (t ⊥ u up to round-off).
+        let t = cur.t - u * u.dot(&cur.t);
+        let newton = (cur.w + u * u.transpose())
+            .cholesky()
+            .map(|c| c.solve(&t))
+            .map(|d| d - u * u.dot(&d));
+        let (mut step, is_newton) = match newton {
+            Some(d) => (d, true),
+            None => {
+                let n = t.norm();
+                if n == 0.0 {
+                    converged = true;
+                    break;
+                }
+                (t * (0.1 / n), false)
+            }
+        };
+        let len = step.norm();
+        if len > 0.3 {
+            step *= 0.3 / len;
+        }
+        if is_newton && len < 1e-6 {
+            u = along_sphere(&u, &step);
+            cur = eval(&u);
+            if len < 1e-7 {
+                converged = true;
+                break;
+            }
+            continue;
+        }
+        let mut next_u = along_sphere(&u, &step);
+        let mut next = eval(&next_u);
+        let mut halvings = 0;
+        while next.g < cur.g && halvings < 40 {
+            step *= 0.5;
+            next_u = along_sphere(&u, &step);
+            next = eval(&next_u);
+            halvings += 1;
+        }
+        if next.g < cur.g {
+            // No ascent along this direction at round-off level: u is the
+            // maximum to machine precision.
+            converged = true;
+            break;
+        }
+        u = next_u;
+        cur = next;
+    }
+    Some(ExactGap3 {
+        normal: u,
+        gap: cur.g,
+        jet_i: cur.ji,
+        jet_j: cur.jj,
+        iterations,
+        converged,
+    })
+}
+
+/// `∂²s(exp(−Σω e) v)/∂ω_p∂ω_q` at `ω = 0` for the support jet `jet` at
+/// `v` (module documentation).
+#[inline]
+fn rotation_second(jet: &SupportJet3, v: &Vector<3>, e_p: &Vector<3>, e_q: &Vector<3>) -> f64 {
+    let (tp, tq) = (e_p.cross(v), e_q.cross(v));
+    let p = &jet.point;
+    tp.dot(&(jet.hess * tq)) + 0.5 * (p.dot(e_q) * e_p.dot(v) + p.dot(e_p) * e_q.dot(v))
+        - p.dot(v) * e_p.dot(e_q)
+}
+
+impl ExactGap3 {
+    /// The contact: `∂h/∂r_j = n`, `∂h/∂ω_ip = e_p·(n × p_i)`,
+    /// `∂h/∂ω_jp = −e_p·(n × p_j)`, for the first `m` of each body's
+    /// rotation axes `axes_i`, `axes_j`.
+    #[inline(always)]
+    pub fn contact(
+        &self,
+        axes_i: &[Vector<3>; 3],
+        axes_j: &[Vector<3>; 3],
+        m: usize,
+    ) -> Contact<3> {
+        let n = &self.normal;
+        let (ti, tj) = (n.cross(&self.jet_i.point), n.cross(&self.jet_j.point));
+        let mut grad_rot_i: RotVec = [0.0; MAX_ROT];
+        let mut grad_rot_j: RotVec = [0.0; MAX_ROT];
+        for p in 0..m {
+            grad_rot_i[p] = axes_i[p].dot(&ti);
+            grad_rot_j[p] = -axes_j[p].dot(&tj);
+        }
+        Contact {
+            gap: self.gap,
+            grad_r: *n,
+            grad_rot_i,
+            grad_rot_j,
+        }
+    }
+
+    /// `W = S_i(n) + S_j(−n) + h P` and its inverse on the tangent plane,
+    /// `W⁺` (zero where `W` is not positive definite there).
+    pub fn tangent_inverse(&self) -> Matrix<3> {
+        let n = &self.normal;
+        let nn = n * n.transpose();
+        let w = self.jet_i.hess + self.jet_j.hess + (Matrix::<3>::identity() - nn) * self.gap;
+        match (w + nn).cholesky() {
+            Some(c) => {
+                let inv = c.inverse() - nn;
+                // Symmetrise: the two triangles agree to round-off.
+                (inv + inv.transpose()) * 0.5
+            }
+            None => Matrix::<3>::zeros(),
+        }
+    }
+
+    /// The gap with its first and second derivatives (module
+    /// documentation), with the same contact as [`ExactGap3::contact`], bit
+    /// for bit.
+    pub fn hessian(
+        &self,
+        axes_i: &[Vector<3>; 3],
+        axes_j: &[Vector<3>; 3],
+        m: usize,
+    ) -> GapHessian<3> {
+        let n = self.normal;
+        let contact = self.contact(axes_i, axes_j, m);
+        let winv = self.tangent_inverse();
+        let mut out = GapHessian::translational(self.gap, n, winv);
+        out.contact = contact;
+        let (pi, pj) = (self.jet_i.point, self.jet_j.point);
+        let b_i: [Vector<3>; 3] = std::array::from_fn(|p| {
+            let e = axes_i[p];
+            -e.cross(&pi) + self.jet_i.hess * e.cross(&n)
+        });
+        let b_j: [Vector<3>; 3] = std::array::from_fn(|p| {
+            let e = axes_j[p];
+            e.cross(&pj) + self.jet_j.hess * e.cross(&n)
+        });
+        for p in 0..m {
+            out.r_qi[p] = winv * b_i[p];
+            out.r_qj[p] = winv * b_j[p];
+        }
+        for p in 0..m {
+            for q in 0..m {
+                out.qi_qi[p][q] = -rotation_second(&self.jet_i, &n, &axes_i[p], &axes_i[q])
+                    + b_i[p].dot(&(winv * b_i[q]));
+                out.qj_qj[p][q] = -rotation_second(&self.jet_j, &-n, &axes_j[p], &axes_j[q])
+                    + b_j[p].dot(&(winv * b_j[q]));
+                out.qi_qj[p][q] = b_i[p].dot(&(winv * b_j[q]));
+            }
+        }
+        // Symmetrise the rotational blocks (the formulas are symmetric; the
+        // products round differently).
+        for p in 0..m {
+            for q in p + 1..m {
+                let a = 0.5 * (out.qi_qi[p][q] + out.qi_qi[q][p]);
+                out.qi_qi[p][q] = a;
+                out.qi_qi[q][p] = a;
+                let b = 0.5 * (out.qj_qj[p][q] + out.qj_qj[q][p]);
+                out.qj_qj[p][q] = b;
+                out.qj_qj[q][p] = b;
+            }
+        }
+        out
+    }
+}
+
+/// The world axes, the rotation axes of a body whose three rotational
+/// coordinates turn it in the world frame.
+pub const WORLD_AXES: [Vector<3>; 3] = [
+    Vector::<3>::new(1.0, 0.0, 0.0),
+    Vector::<3>::new(0.0, 1.0, 0.0),
+    Vector::<3>::new(0.0, 0.0, 1.0),
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Quaternion;
+    use approx::assert_relative_eq;
+
+    fn ellipsoid(q: &Quaternion, semi: [f64; 3]) -> QuadraticSupport {
+        QuadraticSupport::new(&q.columns(), semi)
+    }
+
+    /// `∇s` and `∇∇s` of the quadratic support against central differences
+    /// of `s` and `∇s` (ε = 1e-6: truncation ε²|s'''| ~ 1e-12, round-off
+    /// 1e-16/ε ~ 1e-10; bound 1e-8), `S u = 0` and `p·u = s` to round-off.
+    #[test]
+    fn quadratic_support_derivatives() {
+        let q = Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap();
+        let s = ellipsoid(&q, [0.4, 0.7, 1.3]);
+        let e = 1e-6;
+        for k in 0..20 {
+            let x = k as f64;
+            let u = Vector::<3>::new((x * 1.3).sin(), (x * 0.7).cos(), (x * 2.1).sin() + 0.1)
+                .normalize();
+            let j = s.jet(&u);
+            assert_relative_eq!(j.point.dot(&u), j.h, epsilon = 1e-14);
+            assert!((j.hess * u).norm() < 1e-14);
+            for a in 0..3 {
+                let mut d = Vector::<3>::zeros();
+                d[a] = e;
+                // Off the sphere: s is homogeneous, ∇s its gradient in ℝ³.
+                let plus = |v: Vector<3>| v.dot(&(s.form * v)).sqrt();
+                let fd = (plus(u + d) - plus(u - d)) / (2.0 * e);
+                assert!((fd - j.point[a]).abs() < 1e-8);
+                let grad = |v: Vector<3>| s.form * v / plus(v);
+                let col = (grad(u + d) - grad(u - d)) / (2.0 * e);
+                for b in 0..3 {
+                    assert!((col[b] - j.hess[(b, a)]).abs() < 1e-8);
+                }
+            }
+        }
+    }
+
+    /// Two balls (`M = R² 1`): `h = r − R_i − R_j`, normal along the line of
+    /// centres, in one iteration, separated or overlapping.
+    #[test]
+    fn balls_give_the_sphere_gap() {
+        let q = Quaternion::IDENTITY;
+        let (a, b) = (ellipsoid(&q, [0.5; 3]), ellipsoid(&q, [0.7; 3]));
+        for d in [
+            Vector::<3>::new(0.9, -0.7, 0.3),
+            Vector::<3>::new(0.3, 0.2, -0.4),
+        ] {
+            let e = exact(&d, |u| a.jet(u), |u| b.jet(u), f64::INFINITY).unwrap();
+            assert!(e.converged);
+            assert_relative_eq!(e.gap, d.norm() - 1.2, epsilon = 1e-15);
+            assert_relative_eq!(e.normal, d.normalize(), epsilon = 1e-15);
+        }
+    }
+
+    /// Aligned spheroids along the line of centres: tip to tip
+    /// `r − a_i − a_j`, side by side `r − b_i − b_j`, separated and
+    /// overlapping by less than the tips' radius of curvature (1e-14).
+    #[test]
+    fn aligned_spheroids() {
+        let q = Quaternion::IDENTITY;
+        let tip = ellipsoid(&q, [0.4, 0.4, 0.9]);
+        let d = Vector::<3>::new(0.0, 0.0, 1.9);
+        let e = exact(&d, |u| tip.jet(u), |u| tip.jet(u), f64::INFINITY).unwrap();
+        assert_relative_eq!(e.gap, 0.1, epsilon = 1e-14);
+        let d = Vector::<3>::new(0.0, 0.0, 1.75);
+        let e = exact(&d, |u| tip.jet(u), |u| tip.jet(u), f64::INFINITY).unwrap();
+        assert_relative_eq!(e.gap, -0.05, epsilon = 1e-14);
+        let d = Vector::<3>::new(0.0, 0.95, 0.0);
+        let e = exact(&d, |u| tip.jet(u), |u| tip.jet(u), f64::INFINITY).unwrap();
+        assert_relative_eq!(e.gap, 0.15, epsilon = 1e-14);
+    }
+
+    /// An ellipsoid whose reference point is off its centre by `offset`
+    /// (body frame): `s(u) = u·Q c + √(uᵀMu)`, a convex body *without*
+    /// central symmetry (`s(−u) ≠ s(u)`), so that mixing up body `j`'s
+    /// direction `−u` with `u` anywhere shows (for an ellipsoid about its
+    /// centre `S(−u) = S(u)` and such a slip would pass).
+    fn off_centre(
+        q: &Quaternion,
+        semi: [f64; 3],
+        offset: Vector<3>,
+    ) -> impl Fn(&Vector<3>) -> SupportJet3 {
+        let e = ellipsoid(q, semi);
+        let c = q.apply(&offset);
+        move |u: &Vector<3>| {
+            let j = e.jet(u);
+            SupportJet3 {
+                h: j.h + u.dot(&c),
+                point: j.point + c,
+                hess: j.hess,
+            }
+        }
+    }
+
+    /// The gap of two off-centre bodies at `r + z[0..3]`, body `i` turned
+    /// by `exp(z[3..6])` and body `j` by `exp(z[6..9])` (world frame).
+    fn off_centre_gap(z: &[f64]) -> ExactGap3 {
+        let qi = Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap();
+        let qj = Quaternion::normalized(-0.7, 0.1, 0.4, 0.2).unwrap();
+        let v = |k: usize| Vector::<3>::new(z[k], z[k + 1], z[k + 2]);
+        let qi = Quaternion::exp(&v(3)).mul(&qi);
+        let qj = Quaternion::exp(&v(6)).mul(&qj);
+        let si = off_centre(&qi, [0.4, 0.55, 0.8], Vector::<3>::new(0.1, -0.05, 0.15));
+        let sj = off_centre(&qj, [0.7, 0.5, 0.45], Vector::<3>::new(-0.12, 0.08, 0.05));
+        let r = Vector::<3>::new(0.9, 0.7, -0.6) + v(0);
+        exact(&r, si, sj, f64::INFINITY).unwrap()
+    }
+
+    /// The gradient in `z = (r_j, ω_i, ω_j)` (world axes, three each).
+    fn off_centre_grad(g: &ExactGap3) -> [f64; 9] {
+        let c = g.contact(&WORLD_AXES, &WORLD_AXES, 3);
+        let mut v = [0.0; 9];
+        for a in 0..3 {
+            v[a] = c.grad_r[a];
+            v[3 + a] = c.grad_rot_i[a];
+            v[6 + a] = c.grad_rot_j[a];
+        }
+        v
+    }
+
+    /// The generic machinery on bodies without central symmetry, apart
+    /// (`h > 0`) and overlapping (`h < 0`: the same bodies 0.45 closer):
+    /// the optimum's geometry `r − p_i(n) + p_j(−n) = h n` (1e-12); the
+    /// gradient (translation and both bodies' three world-frame rotations)
+    /// against central differences of the gap (ε = 1e-6: truncation
+    /// ~1e-12, round-off ~1e-10; bound 1e-8); every second derivative
+    /// against central differences of the analytic gradient (ε = 1e-5:
+    /// truncation ~1e-10, round-off ~1e-11; bound 1e-6). The gradient at
+    /// `exp(ε e_b) Q` differentiated in `ε` is the Hessian of
+    /// `h(exp(Σ z e) Q)` plus the commutator `½ (e_a × e_b)·∇_ω h` for two
+    /// rotations of one body: the symmetric part is compared with the
+    /// Hessian, the antisymmetric part with that term.
+    #[test]
+    fn bodies_without_central_symmetry() {
+        for shift in [0.0, -0.45] {
+            let dir = Vector::<3>::new(0.9, 0.7, -0.6).normalize() * shift;
+            let at = |dz: &[f64; 9]| {
+                let mut z = *dz;
+                for a in 0..3 {
+                    z[a] += dir[a];
+                }
+                off_centre_gap(&z)
+            };
+            let e = at(&[0.0; 9]);
+            assert!(e.converged);
+            assert_eq!(shift == 0.0, e.gap > 0.0, "h = {}", e.gap);
+            let r = Vector::<3>::new(0.9, 0.7, -0.6) + dir;
+            let closing = r - e.jet_i.point + e.jet_j.point - e.normal * e.gap;
+            assert!(closing.norm() < 1e-12, "{closing:?}");
+            let g0 = off_centre_grad(&e);
+            let h = e.hessian(&WORLD_AXES, &WORLD_AXES, 3);
+            assert_eq!(h.contact, e.contact(&WORLD_AXES, &WORLD_AXES, 3));
+            let mut hm = [[0.0; 9]; 9];
+            for a in 0..3 {
+                for b in 0..3 {
+                    hm[a][b] = h.rr[(a, b)];
+                    hm[3 + a][3 + b] = h.qi_qi[a][b];
+                    hm[6 + a][6 + b] = h.qj_qj[a][b];
+                    hm[3 + a][6 + b] = h.qi_qj[a][b];
+                    hm[6 + b][3 + a] = h.qi_qj[a][b];
+                    hm[a][3 + b] = h.r_qi[b][a];
+                    hm[3 + b][a] = h.r_qi[b][a];
+                    hm[a][6 + b] = h.r_qj[b][a];
+                    hm[6 + b][a] = h.r_qj[b][a];
+                }
+            }
+            for a in 0..9 {
+                let (mut p, mut m) = ([0.0; 9], [0.0; 9]);
+                p[a] = 1e-6;
+                m[a] = -1e-6;
+                let fd = (at(&p).gap - at(&m).gap) / 2e-6;
+                assert!(
+                    (fd - g0[a]).abs() < 1e-8,
+                    "∂h/∂z[{a}]: {} vs fd {fd}",
+                    g0[a]
+                );
+            }
+            let mut fd = [[0.0; 9]; 9];
+            for b in 0..9 {
+                let (mut p, mut m) = ([0.0; 9], [0.0; 9]);
+                p[b] = 1e-5;
+                m[b] = -1e-5;
+                let (gp, gm) = (off_centre_grad(&at(&p)), off_centre_grad(&at(&m)));
+                for a in 0..9 {
+                    fd[a][b] = (gp[a] - gm[a]) / 2e-5;
+                }
+            }
+            let body = |k: usize| k / 3;
+            for a in 0..9 {
+                for b in 0..9 {
+                    let sym = 0.5 * (fd[a][b] + fd[b][a]);
+                    assert!(
+                        (sym - hm[a][b]).abs() < 1e-6,
+                        "shift {shift}: ∂²h/∂z[{a}]∂z[{b}] {} vs fd {sym}",
+                        hm[a][b]
+                    );
+                    let commutator = if body(a) == body(b) && body(a) > 0 {
+                        let (ea, eb) = (WORLD_AXES[a % 3], WORLD_AXES[b % 3]);
+                        let k = 3 * body(a);
+                        let torque = Vector::<3>::new(g0[k], g0[k + 1], g0[k + 2]);
+                        0.5 * ea.cross(&eb).dot(&torque)
+                    } else {
+                        0.0
+                    };
+                    let anti = 0.5 * (fd[a][b] - fd[b][a]);
+                    assert!(
+                        (anti - commutator).abs() < 1e-6,
+                        "shift {shift}: antisymmetric part [{a}][{b}] {anti} vs {commutator}"
+                    );
+                }
+            }
+        }
+    }
+}
