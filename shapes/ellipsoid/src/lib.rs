@@ -81,7 +81,6 @@ use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, ParamSpec, Quaternion, RotVec, Shape,
     ShapeVisitor, Vector,
 };
-use rand::Rng;
 use serde::Deserialize;
 use std::f64::consts::PI;
 
@@ -454,29 +453,10 @@ impl Shape<3> for Ellipsoid {
         [i; MAX_ROT]
     }
 
-    fn reference_orientation(&self) -> Quaternion {
-        Quaternion::IDENTITY
-    }
-
-    /// Uniform on the rotation group ([`Quaternion::random`]).
-    fn random_orientation<R: Rng + ?Sized>(&self, rng: &mut R) -> Quaternion {
-        Quaternion::random(rng)
-    }
-
     /// `Q → exp(ω) Q` (world frame), or `Q → Q exp((dq₀, dq₁, 0))` (body
     /// frame) for a spheroid; renormalised.
     fn rotate(&self, o: &mut Quaternion, dq: &[f64]) {
         *o = o.stepped(dq, self.axial);
-    }
-
-    /// `[w, x, y, z]`.
-    fn orientation_coords(&self, o: &Quaternion) -> Vec<f64> {
-        o.coords().to_vec()
-    }
-
-    /// Four numbers of norm 1 (to 10⁻⁶; renormalised).
-    fn orientation_from_coords(&self, coords: &[f64]) -> Option<Quaternion> {
-        Quaternion::from_coords(coords)
     }
 
     /// The ellipsoid, for drawing ([`EllipsoidSurface`]).
