@@ -9,12 +9,12 @@
 //! differences near ±Q e_z and generic, h_ij = h_ji, the printed formula,
 //! volume, asphericity) are the crate's unit tests.
 
-use jamkit_core::{Packing, Potential, Quaternion, Shape, SizeDistribution, Vector};
-use jamkit_engine::{Objective, Scene};
+mod common;
+
+use jamkit_core::{Quaternion, Shape, Vector};
 use jamkit_experiment::runner::{RunOptions, run};
 use jamkit_experiment::{Experiment, overrides};
 use jamkit_harmonic::{Harmonic, HarmonicParams, Mode};
-use rand::SeedableRng;
 use std::path::Path;
 
 fn single(l: u32, m: i32, delta: f64) -> Harmonic {
@@ -85,57 +85,8 @@ fn modes_and_sums_pass_the_kit() {
 #[test]
 fn energy_is_invariant_under_a_general_rotation() {
     for shape in [single(2, 0, 0.25), single(3, 2, 0.2), mixed(0.2)] {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        let sizes = SizeDistribution::default().sample(30, &mut rng);
-        let mut p = Packing::<3, Harmonic>::random(shape.clone(), sizes, 0.01, &mut rng).unwrap();
-        let centre = *p.bbox.edges() * 0.5;
-        for (k, r) in p.positions.iter_mut().enumerate() {
-            let a = k as f64 * 2.399;
-            let rho = 0.5 * (k as f64).cbrt();
-            let z = 0.9 * ((k * 7) as f64).sin();
-            *r = centre + Vector::<3>::new(rho * a.cos(), rho * a.sin(), z);
-        }
-        let energy = |p: Packing<3, Harmonic>| {
-            let mut s = Scene::new(p, Potential::Harmonic, 0.2);
-            let mut g = vec![0.0; s.dof()];
-            s.energy_gradient(&mut g)
-        };
-        let e0 = energy(p.clone());
-        assert!(e0 > 1e-3, "the cluster should overlap: V = {e0}");
-        for u in [
-            Quaternion::normalized(0.4, 0.7, -0.3, 0.5).unwrap(),
-            Quaternion::normalized(-0.1, 0.2, 0.9, -0.4).unwrap(),
-        ] {
-            let mut q = p.clone();
-            for (r, o) in q.positions.iter_mut().zip(q.orientations.iter_mut()) {
-                *r = centre + u.apply(&(*r - centre));
-                *o = u.mul(o).renormalized();
-            }
-            let e1 = energy(q);
-            assert!(
-                (e1 - e0).abs() < 1e-12 * e0,
-                "{shape:?}: V {e0} → {e1} after turning"
-            );
-        }
+        common::check_general_rotation(shape);
     }
-}
-
-fn run_inline(text: &str) -> Vec<jamkit_format::PackingFile> {
-    let e = Experiment::from_ron(text, "inline").unwrap();
-    e.validate().unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let report = run(
-        &e,
-        &RunOptions {
-            out: dir.path().to_path_buf(),
-            jobs: Some(1),
-            log: jamkit_experiment::Log::Quiet,
-            shard: None,
-        },
-    )
-    .unwrap();
-    assert!(report.failures.is_empty(), "{:?}", report.failures);
-    report.packings
 }
 
 /// Δ = 0 is the sphere family: the same packings for the same seeds, bit
@@ -145,8 +96,8 @@ fn delta_zero_reproduces_the_sphere_packing() {
     let text = |family: &str| {
         format!(r#"(name: "z", dim: 3, family: {family}, particles: 32, samples: 2, seed: 4)"#)
     };
-    let spheres = run_inline(&text(r#""sphere""#));
-    let near = run_inline(&text(
+    let spheres = common::run_inline(&text(r#""sphere""#));
+    let near = common::run_inline(&text(
         r#""harmonic", params: {"l": 3, "m": 1, "delta": 0.0}"#,
     ));
     assert_eq!(spheres.len(), 2);
@@ -173,7 +124,7 @@ fn rattlers_and_the_isostatic_count_use_the_real_coordinates() {
         let text = format!(
             r#"(name: "r", dim: 3, family: "harmonic", params: {params}, particles: 64, samples: 1, seed: 2, observables: [Contacts])"#
         );
-        let packings = run_inline(&text);
+        let packings = common::run_inline(&text);
         let p = &packings[0];
         let map = jamkit_registry::params_from_json(&p.params).unwrap();
         let shape: HarmonicParams = jamkit_registry::parse_params("harmonic", &map).unwrap();

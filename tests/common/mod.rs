@@ -129,3 +129,58 @@ pub fn compressed<const D: usize, S: jamkit_core::Shape<D>>(
     packing.set_phi(phi);
     jamkit_engine::Scene::new(packing, jamkit_core::Potential::Harmonic, 0.2)
 }
+
+/// A compact overlapping cluster of 30 bodies of a 3D quaternion family,
+/// turned by rotations about two skew axes (centres about the middle,
+/// every orientation `Q → U Q`), keeps its energy to 1e-12 relative (only
+/// the order of round-off changes). The conformance kit turns about the z
+/// axis only, and skips bodies with two rotational coordinates.
+pub fn check_general_rotation<S>(shape: S)
+where
+    S: jamkit_core::Shape<3, Orientation = jamkit_core::Quaternion>,
+{
+    use jamkit_core::{Packing, Potential, Quaternion, SizeDistribution, Vector};
+    use jamkit_engine::{Objective, Scene};
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let sizes = SizeDistribution::default().sample(30, &mut rng);
+    let mut p = Packing::<3, S>::random(shape.clone(), sizes, 0.01, &mut rng).unwrap();
+    let centre = *p.bbox.edges() * 0.5;
+    for (k, r) in p.positions.iter_mut().enumerate() {
+        let a = k as f64 * 2.399;
+        let rho = 0.5 * (k as f64).cbrt();
+        let z = 0.9 * ((k * 7) as f64).sin();
+        *r = centre + Vector::<3>::new(rho * a.cos(), rho * a.sin(), z);
+    }
+    let energy = |p: Packing<3, S>| {
+        let mut s = Scene::new(p, Potential::Harmonic, 0.2);
+        let mut g = vec![0.0; s.dof()];
+        s.energy_gradient(&mut g)
+    };
+    let e0 = energy(p.clone());
+    assert!(e0 > 1e-3, "the cluster should overlap: V = {e0}");
+    for u in [
+        Quaternion::normalized(0.4, 0.7, -0.3, 0.5).unwrap(),
+        Quaternion::normalized(-0.1, 0.2, 0.9, -0.4).unwrap(),
+    ] {
+        let mut q = p.clone();
+        for (r, o) in q.positions.iter_mut().zip(q.orientations.iter_mut()) {
+            *r = centre + u.apply(&(*r - centre));
+            *o = u.mul(o).renormalized();
+        }
+        let e1 = energy(q);
+        assert!(
+            (e1 - e0).abs() < 1e-12 * e0,
+            "{shape:?}: V {e0} → {e1} after turning"
+        );
+    }
+}
+
+/// The packings of an experiment written inline (RON), run into a
+/// temporary directory; every sample must succeed.
+pub fn run_inline(text: &str) -> Vec<jamkit_format::PackingFile> {
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    e.validate().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    run_ok(&e, dir.path(), 1).packings
+}

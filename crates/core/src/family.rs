@@ -139,8 +139,13 @@ pub trait Surface: Debug + Send + Sync {
     /// The rotation from body to world frame, as a matrix (rows), of a body
     /// whose orientation is written `coords`
     /// ([`Shape::orientation_coords`](crate::Shape::orientation_coords));
-    /// `None` if the numbers are not an orientation.
-    fn rotation(&self, coords: &[f64]) -> Option<[[f64; 3]; 3]>;
+    /// `None` if the numbers are not an orientation. By default the
+    /// orientation is a unit quaternion `[w, x, y, z]`
+    /// ([`Quaternion::from_coords`](crate::Quaternion::from_coords)), as
+    /// for every 3D family that turns.
+    fn rotation(&self, coords: &[f64]) -> Option<[[f64; 3]; 3]> {
+        crate::Quaternion::from_coords(coords).map(|q| q.rows())
+    }
 }
 
 /// A shared surface (what [`Shape::surface`](crate::Shape::surface) returns).

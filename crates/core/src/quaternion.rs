@@ -146,6 +146,12 @@ impl Quaternion {
         }
     }
 
+    /// The rotation matrix by rows (`rows()[r][k]` = `columns()[k][r]`).
+    pub fn rows(&self) -> [[f64; 3]; 3] {
+        let c = self.columns();
+        std::array::from_fn(|r| std::array::from_fn(|k| c[k][r]))
+    }
+
     /// The rotation matrix `R(o)`, as its three columns `R x̂, R ŷ, R ẑ`.
     #[inline(always)]
     pub fn columns(&self) -> [Vector<3>; 3] {

@@ -408,12 +408,6 @@ impl jamkit_core::Surface for EllipsoidSurface {
         let r = self.0.ratios;
         (r[0].min(r[1]).min(r[2]), self.0.longest())
     }
-
-    fn rotation(&self, coords: &[f64]) -> Option<[[f64; 3]; 3]> {
-        let q = Shape::<3>::orientation_from_coords(&self.0, coords)?;
-        let c = q.columns();
-        Some(std::array::from_fn(|r| std::array::from_fn(|k| c[k][r])))
-    }
 }
 
 impl Shape<3> for Ellipsoid {

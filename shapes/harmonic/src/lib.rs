@@ -663,12 +663,6 @@ impl jamkit_core::Surface for HarmonicSurface {
         let b = self.0.delta * self.0.f_bound;
         (1.0 - b, 1.0 + b)
     }
-
-    fn rotation(&self, coords: &[f64]) -> Option<[[f64; 3]; 3]> {
-        let q = Shape::<3>::orientation_from_coords(&self.0, coords)?;
-        let c = q.columns();
-        Some(std::array::from_fn(|r| std::array::from_fn(|k| c[k][r])))
-    }
 }
 
 impl Shape<3> for Harmonic {
