@@ -184,3 +184,63 @@ pub fn run_inline(text: &str) -> Vec<jamkit_format::PackingFile> {
     let dir = tempfile::tempdir().unwrap();
     run_ok(&e, dir.path(), 1).packings
 }
+
+/// The rattler convention and the isostatic count of a 3D quaternion
+/// family, recomputed from one packing file alone: contacts are the pairs
+/// with a negative gap (minimum image), bodies with fewer than d + 1 = 4
+/// contacts are removed until none is left, and the remaining set must be
+/// the file's non-rattlers with its contact count; the isostatic margin
+/// must be `N_c − (f N_nr − 3)` with `f = 3 + rot_dof`, which is returned.
+pub fn check_counts_from_file<S>(shape: &S, p: &jamkit_format::PackingFile) -> i64
+where
+    S: jamkit_core::Shape<3, Orientation = jamkit_core::Quaternion>,
+{
+    use jamkit_core::Vector;
+    let n = p.particles;
+    let o: Vec<jamkit_core::Quaternion> = p
+        .orientations
+        .iter()
+        .map(|c| shape.orientation_from_coords(c).unwrap())
+        .collect();
+    assert!(p.orientations.iter().all(|q| q.len() == 4));
+    let mut pairs = Vec::new();
+    for i in 0..n {
+        for j in i + 1..n {
+            let r = Vector::<3>::from_fn(|a, _| {
+                let (d, l) = (p.positions[j][a] - p.positions[i][a], p.box_edges[a]);
+                d - l * (d / l).round()
+            });
+            for c in shape.pair_contacts(p.radii[i], &o[i], p.radii[j], &o[j], &r, 0.0) {
+                if c.gap < 0.0 {
+                    pairs.push((i, j));
+                }
+            }
+        }
+    }
+    let mut alive = vec![true; n];
+    loop {
+        let mut count = vec![0usize; n];
+        for &(i, j) in &pairs {
+            if alive[i] && alive[j] {
+                count[i] += 1;
+                count[j] += 1;
+            }
+        }
+        let drop: Vec<usize> = (0..n).filter(|&i| alive[i] && count[i] < 4).collect();
+        if drop.is_empty() {
+            break;
+        }
+        for i in drop {
+            alive[i] = false;
+        }
+    }
+    let rattler: Vec<bool> = alive.iter().map(|a| !a).collect();
+    assert_eq!(rattler, p.rattler, "rattlers of {}", p.id);
+    let n_c = pairs.iter().filter(|(i, j)| alive[*i] && alive[*j]).count();
+    let n_nr = alive.iter().filter(|a| **a).count();
+    assert_eq!(p.measures.n_contacts, Some(n_c), "{}", p.id);
+    let f = 3 + shape.rot_dof() as i64;
+    let margin = n_c as i64 - (f * n_nr as i64 - 3);
+    assert_eq!(p.measures.iso_margin, Some(margin), "{}", p.id);
+    margin
+}
