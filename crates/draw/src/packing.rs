@@ -87,18 +87,12 @@ impl Packing2d {
         }
         let outline = Outline::from_family(&file.family, &file.params)?;
         let bad = |what: String| DrawError::Inconsistent(format!("packing {}: {what}", file.id));
-        let (box_edges, centers) = configuration::<2>(file)?;
-        let n = centers.len();
         let needs_angles = outline.turns();
         // A Δ = 0 near-disk (α = 1 ellipse) is jammed as a disk and stores
         // no angles: its outline does not turn.
-        if needs_angles && file.orientations.len() != n {
-            return Err(bad(format!(
-                "orientations has {} entries for {n} positions (family `{}` needs one angle per body)",
-                file.orientations.len(),
-                file.family
-            )));
-        }
+        let (box_edges, centers) =
+            configuration::<2>(file, needs_angles.then_some("one angle"))?;
+        let n = centers.len();
         let mut bodies = Vec::with_capacity(n);
         for (i, &center) in centers.iter().enumerate() {
             let size = file.radii[i];
@@ -206,9 +200,11 @@ impl Packing2d {
 /// checked: as many radii and rattler flags (or none) as positions, every
 /// position `D` finite numbers and every radius positive and finite. What
 /// drawing needs of every file, in 2D and 3D; each error names the key and
-/// the index.
+/// the index. With `orientation = Some(what)` (a family whose bodies turn,
+/// `what` naming one body's orientation) every body must have one.
 pub(crate) fn configuration<const D: usize>(
     file: &PackingFile,
+    orientation: Option<&str>,
 ) -> Result<([f64; D], Vec<[f64; D]>), DrawError> {
     let bad = |what: String| DrawError::Inconsistent(format!("packing {}: {what}", file.id));
     let box_edges: [f64; D] = match <[f64; D]>::try_from(&file.box_edges[..]) {
@@ -237,6 +233,15 @@ pub(crate) fn configuration<const D: usize>(
         return Err(bad(format!(
             "rattler has {} entries for {n} positions",
             file.rattler.len()
+        )));
+    }
+    if let Some(what) = orientation
+        && file.orientations.len() != n
+    {
+        return Err(bad(format!(
+            "orientations has {} entries for {n} positions (family `{}` needs {what} per body)",
+            file.orientations.len(),
+            file.family
         )));
     }
     let mut centers = Vec::with_capacity(n);

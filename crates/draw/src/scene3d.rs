@@ -193,17 +193,9 @@ impl Packing3d {
         }
         let solid = Solid::from_family(&file.family, &file.params)?;
         let bad = |what: String| DrawError::Inconsistent(format!("packing {}: {what}", file.id));
-        let (box_edges, centers) = crate::packing::configuration::<3>(file)?;
+        let turns = matches!(solid, Solid::Star(_)).then_some("one orientation");
+        let (box_edges, centers) = crate::packing::configuration::<3>(file, turns)?;
         let n = centers.len();
-        if let Solid::Star(_) = solid
-            && file.orientations.len() != n
-        {
-            return Err(bad(format!(
-                "orientations has {} entries for {n} positions (family `{}` needs one orientation per body)",
-                file.orientations.len(),
-                file.family
-            )));
-        }
         let mut bodies = Vec::with_capacity(n);
         for (i, &center) in centers.iter().enumerate() {
             let size = file.radii[i];
