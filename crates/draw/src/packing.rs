@@ -90,8 +90,7 @@ impl Packing2d {
         let needs_angles = outline.turns();
         // A Δ = 0 near-disk (α = 1 ellipse) is jammed as a disk and stores
         // no angles: its outline does not turn.
-        let (box_edges, centers) =
-            configuration::<2>(file, needs_angles.then_some("one angle"))?;
+        let (box_edges, centers) = configuration::<2>(file, needs_angles.then_some("one angle"))?;
         let n = centers.len();
         let mut bodies = Vec::with_capacity(n);
         for (i, &center) in centers.iter().enumerate() {
@@ -362,7 +361,11 @@ pub(crate) mod tests {
         f.family = "fourier".into();
         f.params = serde_json::json!({"n": 2, "delta": 0.1});
         let e = Packing2d::from_file(&f).unwrap_err();
-        assert!(e.to_string().contains("orientations"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("orientations has 0 entries for 3 positions (family `fourier` needs one angle per body)"),
+            "{e}"
+        );
         // Δ = 0 near-disks are stored without angles and still drawable.
         f.params = serde_json::json!({"n": 2, "delta": 0.0});
         assert!(Packing2d::from_file(&f).is_ok());
