@@ -205,7 +205,9 @@ impl SceneVisitor for SampleVisitor<'_> {
                     if !(above.energy_per_particle > energy_high) {
                         return Err(jamkit_core::Error::JammingFailed {
                             phi: above.phi,
-                            steps: above.minimizations,
+                            // The compression's density changes: one
+                            // minimisation more (the first, at φ_J).
+                            steps: above.minimizations.saturating_sub(1),
                             reason: format!(
                                 "the packing unjammed while compressed by delta_phi = {delta_phi:e} from phi_J = {:.12} (V/N = {:.3e}, not above energy_high = {energy_high:e}): a rearrangement found a state that jams above phi_J + delta_phi; try a smaller protocol.compress_eps or another seed",
                                 jammed.phi, above.energy_per_particle
