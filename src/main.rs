@@ -448,7 +448,7 @@ fn real_main() -> Result<()> {
                     // Not the paper's near-disks: the figures of any run.
                     let p = jamkit_report::runplot::plot(&dirs, &out)?;
                     out!(
-                        "no near-disk packings with n and Δ (the paper's figures); drew the runs' own instead (jamkit plot): {} figures, {}",
+                        "no near-disk (n, Δ) or near-sphere (l, Δ) packings (the paper's figures); drew the runs' own instead (jamkit plot): {} figures, {}",
                         p.figures.len(),
                         out.join("index.md").display()
                     );

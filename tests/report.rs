@@ -88,3 +88,52 @@ fn report_refuses_directories_without_near_disks() {
     .to_string();
     assert!(err.len() > 10 && missing.contains("nowhere"), "{missing}");
 }
+
+/// Near-spheres with one mode `l` (3D `harmonic`) get the same figures and
+/// claims, named by `l`; a call mixing them with near-disks is refused.
+#[test]
+fn report_of_near_spheres_names_the_mode_l_and_refuses_mixing() {
+    let runs = tempfile::tempdir().unwrap();
+    let text = r#"(name: "rep3", dim: 3, family: "harmonic",
+        params: {"l": 2, "m": 0, "delta": [0.03, 0.1, 0.3]}, particles: 64, samples: 1, seed: 5,
+        observables: [Contacts, Spectrum()])"#;
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    common::run_ok(&e, runs.path(), 2);
+    let out = tempfile::tempdir().unwrap();
+    let options = jamkit_report::Options {
+        resamples: 20,
+        ..Default::default()
+    };
+    let r = jamkit_report::report(&[runs.path().to_path_buf()], out.path(), &options).unwrap();
+    let names: Vec<String> = r
+        .figures
+        .iter()
+        .map(|s| s.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert!(names.iter().any(|n| n == "fig12_dos_l2"), "{names:?}");
+    assert!(names.iter().all(|n| !n.ends_with("_n2")), "{names:?}");
+    let md = &r.markdown;
+    assert!(md.contains("| l | N | Δ values |"), "{md}");
+    assert!(md.contains("| 2 | 64 | 3e-2, 1e-1, 3e-1 | 1–1 |"), "{md}");
+    assert!(md.contains("φ_J rises with Δ for every l"), "{md}");
+    // δz_J is measured against the spheres' z_iso = 2d = 6 in 3D: near-spheres
+    // at Δ = 0.3 jam far above it (z_J ≈ 9 at N = 128, docs/reproduction-3d.md).
+    assert!(md.contains("l = 2: "), "{md}");
+
+    let disks = tempfile::tempdir().unwrap();
+    let text = r#"(name: "rep2", family: "fourier", params: {"n": 2, "delta": 0.1},
+        particles: 16, samples: 1, seed: 5, observables: [Contacts])"#;
+    common::run_ok(
+        &Experiment::from_ron(text, "inline").unwrap(),
+        disks.path(),
+        1,
+    );
+    let err = jamkit_report::report(
+        &[runs.path().to_path_buf(), disks.path().to_path_buf()],
+        out.path(),
+        &options,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("more than one kind (2D, n; 3D, l)"), "{err}");
+}

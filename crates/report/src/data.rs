@@ -1,5 +1,7 @@
 //! The packings of one or more runs, grouped into points of the paper's
-//! near-disk ensembles: family, mode number `n`, amplitude `Δ` and `N`.
+//! near-disk ensembles: family, mode number `n`, amplitude `Δ` and `N`; and
+//! of their 3D counterpart, near-spheres of one spherical-harmonic mode
+//! (`harmonic`, mode number `l`).
 
 use crate::ReportError;
 use jamkit_format::PackingFile;
@@ -49,6 +51,9 @@ pub struct Point {
     pub dim: usize,
     /// Mode number.
     pub n: u32,
+    /// Its name: `n` (the near-disks' `sin nθ`) or `l` (near-spheres of one
+    /// mode `Y_lm`).
+    pub mode: &'static str,
     /// Amplitude Δ.
     pub delta: f64,
     /// Bodies.
@@ -102,7 +107,7 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
     let mut points: Vec<Point> = Vec::new();
     for file in &files {
         let param = |k: &str| file.params.get(k).and_then(|v| v.as_f64());
-        let (Some(n), Some(delta)) = (param("n"), param("delta")) else {
+        let Some(((mode, n), delta)) = mode_number(file).zip(param("delta")) else {
             skipped += 1;
             continue;
         };
@@ -121,6 +126,7 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
         let key = |p: &Point| {
             p.family == file.family
                 && p.dim == file.dim
+                && p.mode == mode
                 && p.n == n as u32
                 && p.delta == delta
                 && p.particles == file.particles
@@ -131,6 +137,7 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
                 family: file.family.clone(),
                 dim: file.dim,
                 n: n as u32,
+                mode,
                 delta,
                 particles: file.particles,
                 samples: vec![sample],
@@ -143,6 +150,18 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
             .then(a.delta.total_cmp(&b.delta))
     });
     Ok((points, skipped))
+}
+
+/// The mode of a packing's shape, `(name, number)`: a near-disk's `n`, or
+/// the `l` of a near-sphere with one mode (`harmonic` with `l` and `m`, not
+/// a list of modes). `None` for every other shape.
+fn mode_number(file: &PackingFile) -> Option<(&'static str, f64)> {
+    let param = |k: &str| file.params.get(k).and_then(|v| v.as_f64());
+    match param("n") {
+        Some(n) => Some(("n", n)),
+        None if file.family == "harmonic" => param("l").map(|l| ("l", l)),
+        None => None,
+    }
 }
 
 /// How many observables a packing file holds.

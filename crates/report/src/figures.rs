@@ -55,6 +55,8 @@ pub struct FitRow {
     pub quantity: String,
     /// Mode number.
     pub n: u32,
+    /// Its name (`n` or `l`, [`Point::mode`]).
+    pub mode: &'static str,
     /// System size.
     pub particles: usize,
     /// The fit.
@@ -72,10 +74,17 @@ pub struct FitRow {
 
 impl FitRow {
     /// A row not yet fitted.
-    fn new(quantity: &str, n: u32, particles: usize, expected: f64, tolerance: f64) -> Self {
+    fn new(
+        quantity: &str,
+        (mode, n): (&'static str, u32),
+        particles: usize,
+        expected: f64,
+        tolerance: f64,
+    ) -> Self {
         Self {
             quantity: quantity.into(),
             n,
+            mode,
             particles,
             fit: PowerLaw {
                 exponent: f64::NAN,
@@ -113,6 +122,15 @@ pub fn report(dirs: &[PathBuf], out: &Path, options: &Options) -> Result<Report,
     if points.is_empty() {
         let list: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
         return Err(ReportError::NoData(list.join(", ")));
+    }
+    let mut kinds: Vec<String> = points
+        .iter()
+        .map(|p| format!("{}D, {}", p.dim, p.mode))
+        .collect();
+    kinds.sort();
+    kinds.dedup();
+    if kinds.len() > 1 {
+        return Err(ReportError::Mixed(kinds.join("; ")));
     }
     std::fs::create_dir_all(out).map_err(|e| ReportError::Io {
         path: out.to_path_buf(),
@@ -187,6 +205,12 @@ fn fmt(x: f64) -> String {
 }
 
 impl Builder {
+    /// The name of the mode number: `n` for near-disks, `l` for
+    /// near-spheres (one kind per report, [`report`] checks).
+    fn sym(&self) -> &'static str {
+        self.points.first().map_or("n", |p| p.mode)
+    }
+
     fn mode_numbers(&self) -> Vec<u32> {
         let mut ns: Vec<u32> = self.points.iter().map(|p| p.n).collect();
         ns.dedup();
@@ -238,6 +262,7 @@ impl Builder {
     /// Figs. 7 and 8.
     fn phi_and_rattlers(&mut self) -> Result<(), ReportError> {
         let ns = self.mode_numbers();
+        let sym = self.sym();
         let mut phi = Vec::new();
         let mut fr = Vec::new();
         let mut rises = Vec::new();
@@ -260,7 +285,7 @@ impl Builder {
             let r_series = series(&|s| s.rattler_fraction);
             if let (Some(a), Some(b)) = (p_series.first(), p_series.last()) {
                 rises.push(format!(
-                    "n = {n}: {:.4} → {:.4} (Δ = {:e} → {:e})",
+                    "{sym} = {n}: {:.4} → {:.4} (Δ = {:e} → {:e})",
                     a.1, b.1, a.0, b.0
                 ));
             }
@@ -269,12 +294,12 @@ impl Builder {
                 falls.push((n, a.1, b.1));
             }
             phi.push(Series {
-                label: format!("n = {n} (N = {big})"),
+                label: format!("{sym} = {n} (N = {big})"),
                 points: p_series,
                 line: false,
             });
             fr.push(Series {
-                label: format!("n = {n} (N = {big})"),
+                label: format!("{sym} = {n} (N = {big})"),
                 points: r_series,
                 line: false,
             });
@@ -321,15 +346,19 @@ impl Builder {
             }
         });
         self.claim(
-            "φ_J rises with Δ for every n (Fig. 7)",
+            &format!("φ_J rises with Δ for every {sym} (Fig. 7)"),
             rises.join("; "),
             if rise_ok { "yes" } else { "no" },
         );
-        let (order, verdict) = phi_order(&by_delta);
-        self.claim("… and more slowly for larger n (Fig. 7)", order, verdict);
+        let (order, verdict) = phi_order(&by_delta, sym);
+        self.claim(
+            &format!("… and more slowly for larger {sym} (Fig. 7)"),
+            order,
+            verdict,
+        );
         let fall_text: Vec<String> = falls
             .iter()
-            .map(|(n, a, b)| format!("n = {n}: {:.1} % → {:.1} %", 100.0 * a, 100.0 * b))
+            .map(|(n, a, b)| format!("{sym} = {n}: {:.1} % → {:.1} %", 100.0 * a, 100.0 * b))
             .collect();
         let fall_ok = !falls.is_empty() && falls.iter().all(|(_, a, b)| b < a);
         self.claim(
@@ -357,7 +386,7 @@ impl Builder {
                 })
                 .collect();
             series.push(Series {
-                label: format!("n = {n}"),
+                label: format!("{} = {n}", self.sym()),
                 points: values
                     .iter()
                     .map(|(d, v, _)| {
@@ -375,7 +404,7 @@ impl Builder {
                 })
                 .map(|(d, v, _)| (*d, v.clone()))
                 .collect();
-            let row = FitRow::new("δz_J", n, big, 0.5, 0.1);
+            let row = FitRow::new("δz_J", (self.sym(), n), big, 0.5, 0.1);
             if let Some(g) = self.fit_and_record(&fit_points, mean, row) {
                 guides.push(g.fitting(series.len() - 1));
             }
@@ -403,7 +432,7 @@ impl Builder {
         let text: Vec<String> = rows.iter().map(|f| fit_text(f)).collect();
         let ok = !rows.is_empty() && rows.iter().all(|f| f.agrees());
         self.claim(
-            "δz_J ∝ Δ^{1/2} for all n (Fig. 10)",
+            &format!("δz_J ∝ Δ^{{1/2}} for all {} (Fig. 10)", self.sym()),
             text.join("; "),
             verdict(ok, rows.is_empty()),
         );
@@ -457,7 +486,10 @@ impl Builder {
             }
         }
         let guide = Guide::power_law(
-            format!("fit {}, n = {}: Δ^{:.2}", row.quantity, row.n, f.exponent),
+            format!(
+                "fit {}, {} = {}: Δ^{:.2}",
+                row.quantity, row.mode, row.n, f.exponent
+            ),
             f.prefactor,
             f.exponent,
             f.range.0,
@@ -482,16 +514,17 @@ impl Builder {
         jamkit_format::mean_sem(&values).1 * (values.len() as f64).sqrt()
     }
 
-    /// Fig. 9: n = 2 at several N, and the collapse.
+    /// Fig. 9: n = 2 (or l = 2) at several N, and the collapse.
     fn finite_size(&mut self) -> Result<(), ReportError> {
+        let sym = self.sym();
         let pts: Vec<&Point> = self.points.iter().filter(|p| p.n == 2).collect();
         let mut sizes: Vec<usize> = pts.iter().map(|p| p.particles).collect();
         sizes.sort_unstable();
         sizes.dedup();
         if sizes.len() < 2 {
-            self.notes.push(
-                "Fig. 9 (finite size) needs n = 2 at two system sizes or more: skipped.".into(),
-            );
+            self.notes.push(format!(
+                "Fig. 9 (finite size) needs {sym} = 2 at two system sizes or more: skipped."
+            ));
             return Ok(());
         }
         let mut raw = Vec::new();
@@ -527,7 +560,7 @@ impl Builder {
         self.save(
             "fig09a_dz_finite_size",
             Figure {
-                title: "Fig. 9(a): δz_J for n = 2 and several N".into(),
+                title: format!("Fig. 9(a): δz_J for {sym} = 2 and several N"),
                 x_label: "Δ".into(),
                 y_label: "δz_J = z_J − z_iso".into(),
                 log_x: true,
@@ -573,6 +606,7 @@ impl Builder {
     fn gaps(&mut self) -> Result<(), ReportError> {
         let gamma = self.options.gamma;
         let mu = 1.0 / (2.0 * (1.0 - gamma));
+        let sym = self.sym();
         let mut any = false;
         for n in self.mode_numbers() {
             let pts: Vec<Point> = self
@@ -614,9 +648,9 @@ impl Builder {
             }
             let (h0, h1) = x_span(&raw);
             self.save(
-                &format!("fig11_gaps_n{n}"),
+                &format!("fig11_gaps_{sym}{n}"),
                 Figure {
-                    title: format!("Fig. 11: cumulative gap distribution, n = {n}"),
+                    title: format!("Fig. 11: cumulative gap distribution, {sym} = {n}"),
                     x_label: "h".into(),
                     y_label: "Z(h)".into(),
                     log_x: true,
@@ -642,9 +676,9 @@ impl Builder {
                 },
             )?;
             self.save(
-                &format!("fig11_gaps_collapse_n{n}"),
+                &format!("fig11_gaps_collapse_{sym}{n}"),
                 Figure {
-                    title: format!("Fig. 11: collapse, n = {n} (μ = {mu:.3})"),
+                    title: format!("Fig. 11: collapse, {sym} = {n} (μ = {mu:.3})"),
                     x_label: "h / Δ^μ".into(),
                     y_label: "Z / Δ^{1/2}".into(),
                     log_x: true,
@@ -662,7 +696,7 @@ impl Builder {
                 let name = format!("Z(h) at Δ = {:e}", small.0.delta);
                 self.fits.push(FitRow {
                     fit,
-                    ..FitRow::new(&name, n, big, 1.0 - gamma, 0.15)
+                    ..FitRow::new(&name, (sym, n), big, 1.0 - gamma, 0.15)
                 });
             }
             if with.len() > 1 {
@@ -671,7 +705,7 @@ impl Builder {
                     let name = format!("Z(h) at Δ = {:e}", large.0.delta);
                     self.fits.push(FitRow {
                         fit,
-                        ..FitRow::new(&name, n, big, 1.0, 0.15)
+                        ..FitRow::new(&name, (sym, n), big, 1.0, 0.15)
                     });
                 }
             }
@@ -701,7 +735,7 @@ impl Builder {
         }
         self.claim(
             "Z/Δ^{1/2} collapses against h/Δ^μ (Fig. 11)",
-            "see fig11_gaps_collapse_n*".into(),
+            format!("see fig11_gaps_collapse_{sym}*"),
             "by eye",
         );
         Ok(())
@@ -742,9 +776,12 @@ impl Builder {
             }
             any = true;
             self.save(
-                &format!("fig12_dos_n{n}"),
+                &format!("fig12_dos_{}{n}", self.sym()),
                 Figure {
-                    title: format!("Fig. 12: density of states, n = {n} (zero modes left out)"),
+                    title: format!(
+                        "Fig. 12: density of states, {} = {n} (zero modes left out)",
+                        self.sym()
+                    ),
                     x_label: "ω".into(),
                     y_label: "D(ω)".into(),
                     log_x: true,
@@ -773,7 +810,7 @@ impl Builder {
                     .map(|p| (p.delta, p.samples.clone()))
                     .collect();
                 omega.push(Series {
-                    label: format!("{name}, n = {n}"),
+                    label: format!("{name}, {} = {n}", self.sym()),
                     points: values
                         .iter()
                         .filter_map(|(d, v)| {
@@ -784,7 +821,7 @@ impl Builder {
                         .collect(),
                     line: false,
                 });
-                let row = FitRow::new(name, n, big, expected, 0.15);
+                let row = FitRow::new(name, (self.sym(), n), big, expected, 0.15);
                 if let Some(g) = self.fit_and_record(&values, stat, row) {
                     guides.push(g.fitting(omega.len() - 1));
                 }
@@ -826,7 +863,8 @@ impl Builder {
         let _ = writeln!(m, "Runs: {}.\n", list.join(", "));
         let _ = writeln!(
             m,
-            "| n | N | Δ values | packings per point |\n|---|---|---|---|"
+            "| {} | N | Δ values | packings per point |\n|---|---|---|---|",
+            self.sym()
         );
         for n in self.mode_numbers() {
             let mut sizes: Vec<usize> = self
@@ -856,7 +894,12 @@ impl Builder {
         for c in &self.claims {
             let _ = writeln!(m, "| {} | {} | {} |", c.claim, c.measured, c.agrees);
         }
-        m += "\nExponents are least-squares slopes on log–log axes through the point means; ± is the standard deviation over bootstrap resamples of the packings of each point. Fit ranges: δz_J over points with δz_J ≥ 8/N_nr and Δ ≤ 0.1; ω₁ and ω_* are read off each point's pooled D(ω) (the bootstrap resamples its packings), ω₁ over Δ ≤ 0.1 and ω_* where it is defined; Z(h) over 10 Δ^μ ≤ h ≤ 0.1 at the smallest Δ and h ≤ Δ^μ/10 at the largest, where each sample point has at least 20 gaps below it. \"Agrees\" means within the stated tolerance of the mean-field exponent (0.1 for δz_J, 0.15 otherwise).\n\n## Fits\n\n| quantity | n | N | exponent | mean field | range of Δ or h | points |\n|---|---|---|---|---|---|---|\n";
+        m += "\nExponents are least-squares slopes on log–log axes through the point means; ± is the standard deviation over bootstrap resamples of the packings of each point. Fit ranges: δz_J over points with δz_J ≥ 8/N_nr and Δ ≤ 0.1; ω₁ and ω_* are read off each point's pooled D(ω) (the bootstrap resamples its packings), ω₁ over Δ ≤ 0.1 and ω_* where it is defined; Z(h) over 10 Δ^μ ≤ h ≤ 0.1 at the smallest Δ and h ≤ Δ^μ/10 at the largest, where each sample point has at least 20 gaps below it. \"Agrees\" means within the stated tolerance of the mean-field exponent (0.1 for δz_J, 0.15 otherwise).\n\n## Fits\n\n";
+        let _ = writeln!(
+            m,
+            "| quantity | {} | N | exponent | mean field | range of Δ or h | points |\n|---|---|---|---|---|---|---|",
+            self.sym()
+        );
         for f in &self.fits {
             let _ = writeln!(
                 m,
@@ -873,7 +916,12 @@ impl Builder {
             );
         }
         if self.fits.iter().any(|f| !f.range_variants.is_empty()) {
-            m += "\n## How the exponents move with the fit range\n\nEach fit over Δ with four points or more, refitted without its smallest and without its largest Δ (same bootstrap). A claim that holds only on one side of this table depends on the choice of range.\n\n| quantity | n | N | full range | without the smallest Δ | without the largest Δ |\n|---|---|---|---|---|---|\n";
+            m += "\n## How the exponents move with the fit range\n\nEach fit over Δ with four points or more, refitted without its smallest and without its largest Δ (same bootstrap). A claim that holds only on one side of this table depends on the choice of range.\n\n";
+            let _ = writeln!(
+                m,
+                "| quantity | {} | N | full range | without the smallest Δ | without the largest Δ |\n|---|---|---|---|---|---|",
+                self.sym()
+            );
             for f in self.fits.iter().filter(|f| !f.range_variants.is_empty()) {
                 let cell = |p: &PowerLaw| {
                     format!(
@@ -943,8 +991,8 @@ fn rightmost(series: &[Series]) -> (f64, f64) {
 
 fn fit_text(f: &FitRow) -> String {
     format!(
-        "n = {}: {:.2} ± {:.2} ({:.3e}…{:.3e}, {} pts)",
-        f.n, f.fit.exponent, f.fit.error, f.fit.range.0, f.fit.range.1, f.fit.points
+        "{} = {}: {:.2} ± {:.2} ({:.3e}…{:.3e}, {} pts)",
+        f.mode, f.n, f.fit.exponent, f.fit.error, f.fit.range.0, f.fit.range.1, f.fit.points
     )
 }
 
@@ -1048,9 +1096,9 @@ type PhiSeries = Vec<(f64, f64, f64)>;
 /// if a pair is inverted, "partly" if a pair is tied at a Δ where others
 /// are ordered, "yes" if the order holds wherever the data can tell,
 /// "cannot tell" if no pair is told apart anywhere.
-fn phi_order(by_delta: &[(u32, PhiSeries)]) -> (String, &'static str) {
+fn phi_order(by_delta: &[(u32, PhiSeries)], sym: &str) -> (String, &'static str) {
     if by_delta.len() < 2 {
-        return (String::new(), "needs several n");
+        return (String::new(), "needs several mode numbers");
     }
     let deltas: Vec<f64> = by_delta[0]
         .1
@@ -1087,22 +1135,24 @@ fn phi_order(by_delta: &[(u32, PhiSeries)]) -> (String, &'static str) {
                 if z < -2.0 {
                     inverted = true;
                     notes.push(format!(
-                        "at Δ = {d:e}, n = {b} lies above n = {a} by {:.1} s.e.",
+                        "at Δ = {d:e}, {sym} = {b} lies above {sym} = {a} by {:.1} s.e.",
                         -z
                     ));
                 } else {
                     tied = true;
-                    notes.push(format!("at Δ = {d:e}, n = {a} and {b} tie ({z:+.1} s.e.)"));
+                    notes.push(format!(
+                        "at Δ = {d:e}, {sym} = {a} and {b} tie ({z:+.1} s.e.)"
+                    ));
                 }
             }
         }
     }
     let names: Vec<String> = by_delta.iter().map(|(n, _)| n.to_string()).collect();
     let mut text = if ordered.is_empty() {
-        "no Δ where every n is told apart".to_string()
+        format!("no Δ where every {sym} is told apart")
     } else {
         format!(
-            "φ_J(n = {}) in falling order at Δ = {}",
+            "φ_J({sym} = {}) in falling order at Δ = {}",
             names.join(" > "),
             ordered.join(", ")
         )
@@ -1139,26 +1189,26 @@ mod tests {
                 })
                 .collect::<Vec<_>>()
         };
-        let (text, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.9, 0.89, 0.88]));
+        let (text, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.9, 0.89, 0.88]), "n");
         assert_eq!(verdict, "yes", "{text}");
         assert!(
             text.contains("at Δ = 1e-1") && !text.contains("1e-2"),
             "{text}"
         );
-        let (text, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.9, 0.89, 0.889]));
+        let (text, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.9, 0.89, 0.889]), "n");
         assert_eq!(verdict, "partly", "{text}");
         assert!(text.contains("n = 3 and 4 tie (+0.7 s.e.)"), "{text}");
-        let (text, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.9, 0.88, 0.89]));
+        let (text, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.9, 0.88, 0.89]), "n");
         assert_eq!(verdict, "no", "{text}");
         assert!(
             text.contains("n = 4 lies above n = 3 by 7.1 s.e."),
             "{text}"
         );
-        let (_, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.85, 0.85, 0.85]));
+        let (_, verdict) = phi_order(&series([0.85, 0.85, 0.85], [0.85, 0.85, 0.85]), "n");
         assert_eq!(verdict, "cannot tell");
         assert_eq!(
-            phi_order(&series([0.9; 3], [0.9; 3])[..1]).1,
-            "needs several n"
+            phi_order(&series([0.9; 3], [0.9; 3])[..1], "n").1,
+            "needs several mode numbers"
         );
     }
 }

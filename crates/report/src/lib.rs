@@ -4,7 +4,8 @@
 //! runs, with fitted exponents beside the mean-field predictions.
 //!
 //! * [`data`]: the packing files of one or more runs, grouped into points
-//!   `(n, Δ, N)` of the near-disk ensembles;
+//!   `(n, Δ, N)` of the near-disk ensembles, or `(l, Δ, N)` of near-spheres
+//!   with one spherical-harmonic mode (the same figures and claims in 3D);
 //! * [`fit`]: power laws on log–log axes with bootstrap errors over packings;
 //! * [`plot`]: figures with error bars and guide lines, SVG and PNG;
 //! * [`runplot`]: `jamkit plot`, figures of any run (every family): each
@@ -41,9 +42,14 @@ pub enum ReportError {
     },
     /// No near-disk packing was found.
     #[error(
-        "no packings of the `fourier` family (with parameters n and delta) under {0}; give the output directories of runs of experiments/paper/"
+        "no packings of the `fourier` family (with parameters n and delta) or the `harmonic` family (with l and delta) under {0}; give the output directories of runs of experiments/paper/ or experiments/paper3d/"
     )]
     NoData(String),
+    /// The runs hold near-disks and near-spheres (or several dimensions).
+    #[error(
+        "the runs hold packings of more than one kind ({0}): report near-disks (2D, n) and near-spheres (3D, l) in separate calls"
+    )]
+    Mixed(String),
     /// No packing files at all.
     #[error("no packing files under {0}; give output directories of `jamkit run` (or archives)")]
     NoPackings(String),
