@@ -122,8 +122,9 @@ enum Command {
         #[command(subcommand)]
         what: bench::BenchCommand,
     },
-    /// The paper's figures from runs of experiments/paper/: PNG and SVG
-    /// plots, fitted exponents and a markdown summary (OUT/report.md).
+    /// The paper's figures from runs of experiments/paper/ (near-disks, n)
+    /// or experiments/paper3d/ (near-spheres, l): PNG and SVG plots, fitted
+    /// exponents and a markdown summary (OUT/report.md).
     Report {
         /// Output directories of runs (each with packings/).
         #[arg(required = true, num_args = 1..)]
