@@ -38,12 +38,11 @@ fn cell<'a>(header: &[String], row: &'a [String], column: &str) -> &'a str {
     &row[k]
 }
 
-#[test]
-fn quick_accuracy_bench_writes_tables_figures_and_the_orders_of_the_models() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
-    let runs = dir.path().join("runs");
-    let args = [
+/// `jamkit bench accuracy --quick`, tables into `dir/out`, runs into
+/// `dir/runs`, with `extra` arguments.
+fn quick_bench(dir: &Path, extra: &[&str]) -> (i32, String, String) {
+    let (out, runs) = (dir.join("out"), dir.join("runs"));
+    let mut args = vec![
         "bench",
         "accuracy",
         "--quick",
@@ -52,7 +51,16 @@ fn quick_accuracy_bench_writes_tables_figures_and_the_orders_of_the_models() {
         "--runs",
         runs.to_str().unwrap(),
     ];
-    let (code, stdout, err) = jamkit(&args);
+    args.extend_from_slice(extra);
+    jamkit(&args)
+}
+
+#[test]
+fn quick_accuracy_bench_writes_tables_figures_and_the_orders_of_the_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let runs = dir.path().join("runs");
+    let (code, stdout, err) = quick_bench(dir.path(), &[]);
     assert_eq!(code, 0, "{err}");
     for f in [
         "pairs.csv",
@@ -157,7 +165,7 @@ fn quick_accuracy_bench_writes_tables_figures_and_the_orders_of_the_models() {
 
     // A rerun reads every packing back from the runs: the same numbers.
     let before = std::fs::read_to_string(out.join("packings.csv")).unwrap();
-    let (code, _, err) = jamkit(&args);
+    let (code, _, err) = quick_bench(dir.path(), &[]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("read back from an earlier run"), "{err}");
     let after = std::fs::read_to_string(out.join("packings.csv")).unwrap();
@@ -179,19 +187,11 @@ fn gap_models_without_exact_compare_with_second_order_from_the_runners_records()
         "params.delta=0.05",
         "params.gap=[\"FirstOrder\", \"SecondOrder\"]",
     ];
-    let mut args = vec![
-        "bench",
-        "accuracy",
-        "--quick",
-        "-o",
-        out.to_str().unwrap(),
-        "--runs",
-        runs.to_str().unwrap(),
-    ];
+    let mut args = Vec::new();
     for s in &sets {
         args.extend(["--set-gap-models", s]);
     }
-    let (code, _, err) = jamkit(&args);
+    let (code, _, err) = quick_bench(dir.path(), &args);
     assert_eq!(code, 0, "{err}");
 
     let (head, packs) = table(&out.join("packings.csv"));
@@ -269,8 +269,6 @@ fn gap_models_without_exact_compare_with_second_order_from_the_runners_records()
 #[test]
 fn bad_accuracy_options_are_errors() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
-    let runs = dir.path().join("runs");
     for (args, names) in [
         (vec!["--set-gap-models", "particles=1"], "particles = 1"),
         (vec!["--set-gap-models", "params.delta=0.9"], "params.gap"),
@@ -293,22 +291,15 @@ fn bad_accuracy_options_are_errors() {
         ),
         (vec!["--jobs", "0"], "--jobs 0"),
     ] {
-        let mut all = vec![
-            "bench",
-            "accuracy",
-            "--quick",
-            "-o",
-            out.to_str().unwrap(),
-            "--runs",
-            runs.to_str().unwrap(),
-        ];
-        all.extend(args.iter());
-        let (code, _, err) = jamkit(&all);
+        let (code, _, err) = quick_bench(dir.path(), &args);
         assert_eq!(code, 1, "{args:?}: {err}");
         assert!(
             err.starts_with("error: ") && !err.contains("panicked") && err.contains(names),
             "{args:?}: {err}"
         );
     }
-    assert!(!runs.exists(), "a refused plan ran something");
+    assert!(
+        !dir.path().join("runs").exists(),
+        "a refused plan ran something"
+    );
 }
