@@ -303,3 +303,70 @@ fn bad_accuracy_options_are_errors() {
         "a refused plan ran something"
     );
 }
+
+/// The two files are the documented study's physics: `jamkit run` of one
+/// packing of each makes the packing of `docs/speed-vs-error/*.csv` (the
+/// same FIRE steps, φ_J to its 9 printed digits, N_c and rattlers).
+#[test]
+fn the_files_make_the_documented_packings() {
+    let dir = tempfile::tempdir().unwrap();
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/speed-vs-error");
+    let (phead, packings) = table(&docs.join("packings.csv"));
+    let (thead, tolerances) = table(&docs.join("tolerances.csv"));
+    let documented = |head: &[String], rows: &[Vec<String>], key: &[(&str, &str)]| {
+        rows.iter()
+            .find(|r| key.iter().all(|(c, v)| cell(head, r, c) == *v))
+            .unwrap_or_else(|| panic!("no documented row {key:?}"))
+            .clone()
+    };
+    for (file, sets, head, row) in [
+        (
+            "gap_models",
+            vec!["samples=1", "params.delta=0.01", "params.gap=FirstOrder"],
+            &phead,
+            documented(
+                &phead,
+                &packings,
+                &[("model", "FirstOrder"), ("delta", "0.01"), ("seed", "1")],
+            ),
+        ),
+        (
+            "tolerances",
+            vec!["samples=1", "minimizer.force_tol=1e-20"],
+            &thead,
+            documented(
+                &thead,
+                &tolerances,
+                &[
+                    ("energy_low", "1e-16"),
+                    ("force_tol", "1e-20"),
+                    ("seed", "1"),
+                ],
+            ),
+        ),
+    ] {
+        let out = dir.path().join(file);
+        let path = format!("experiments/accuracy/{file}.ron");
+        let mut args = vec!["run", &path, "--out", out.to_str().unwrap(), "--quiet"];
+        for s in &sets {
+            args.extend(["--set", s]);
+        }
+        let (code, _, err) = jamkit(&args);
+        assert_eq!(code, 0, "{err}");
+        let (rhead, made) = table(&out.join("results.csv"));
+        let made = &made[0];
+        let phi: f64 = cell(&rhead, made, "phi_j").parse().unwrap();
+        assert_eq!(format!("{phi:.9}"), cell(head, &row, "phi_j"), "{file}");
+        for (ours, theirs) in [
+            ("fire_steps", "fire_steps"),
+            ("n_contacts", "n_c"),
+            ("n_rattlers", "rattlers"),
+        ] {
+            assert_eq!(
+                cell(&rhead, made, ours),
+                cell(head, &row, theirs),
+                "{file}: {ours}"
+            );
+        }
+    }
+}
