@@ -220,25 +220,28 @@ pub enum BenchCommand {
         /// of docs/speed-vs-error.md.
         #[arg(short, long, value_name = "DIR", default_value = crate::bench_accuracy::DEFAULT_OUT)]
         out: std::path::PathBuf,
-        /// Small sizes, for a smoke test (seconds).
+        /// Directory of the runner's runs of experiments/accuracy/*.ron
+        /// (parts 2 and 3); a rerun into it resumes, reading back every
+        /// packing it holds.
+        #[arg(long, value_name = "DIR", default_value = crate::bench_accuracy::DEFAULT_RUNS)]
+        runs: std::path::PathBuf,
+        /// Small sizes, for a smoke test (seconds): fewer pairs, and the
+        /// files with --set particles=10 samples=1 params.delta=0.1 (gap
+        /// models) and particles=12 samples=2 (tolerances).
         #[arg(long)]
         quick: bool,
-        /// Seeds of the packings per gap model [default: 1,2,3; quick: 1].
-        #[arg(long, value_delimiter = ',')]
-        seeds: Option<Vec<u64>>,
-        /// Seeds of the tolerance ladder [default: 1,2,3,4; quick: 1,2].
-        #[arg(long, value_delimiter = ',')]
-        tol_seeds: Option<Vec<u64>>,
-        /// Bodies per packing of the tolerance ladder [default: 256; quick: 12].
-        #[arg(long)]
-        particles: Option<usize>,
-        /// Bodies per packing of the gap-model comparison [default: 64, as
-        /// an Exact packing at N = 256 takes ~15 min; quick: 10].
-        #[arg(long)]
-        packing_particles: Option<usize>,
-        /// Δ of the packings per gap model (n = 2) [default: 0.01,0.1; quick: 0.1].
-        #[arg(long, value_delimiter = ',')]
-        packing_deltas: Option<Vec<f64>>,
+        /// Override a field of experiments/accuracy/gap_models.ron, as
+        /// `jamkit run --set` does: --set-gap-models samples=1.
+        #[arg(long = "set-gap-models", value_name = "KEY=VALUE")]
+        set_gap_models: Vec<String>,
+        /// Override a field of experiments/accuracy/tolerances.ron (every
+        /// setting of the ladder): --set-tolerances particles=64.
+        #[arg(long = "set-tolerances", value_name = "KEY=VALUE")]
+        set_tolerances: Vec<String>,
+        /// Worker threads of the runs (packings in parallel; 1 keeps the
+        /// wall times of one core). Results do not depend on it.
+        #[arg(long, default_value_t = 1)]
+        jobs: usize,
     },
     /// Time Hessian assembly and eigenvalues of near-disks (n = 2, Δ = 0.1).
     Spectrum {
@@ -255,20 +258,18 @@ pub fn run(what: BenchCommand) -> Result<()> {
     match what {
         BenchCommand::Accuracy {
             out,
+            runs,
             quick,
-            seeds,
-            tol_seeds,
-            particles,
-            packing_particles,
-            packing_deltas,
+            set_gap_models,
+            set_tolerances,
+            jobs,
         } => crate::bench_accuracy::run(&crate::bench_accuracy::Options {
             out,
+            runs,
             quick,
-            seeds,
-            tol_seeds,
-            particles,
-            packing_particles,
-            packing_deltas,
+            set_gap_models,
+            set_tolerances,
+            jobs,
         }),
         BenchCommand::Spectrum {
             particles,

@@ -1,30 +1,40 @@
 //! `jamkit bench accuracy`: speed against error of the near-disk gap models
 //! (`FirstOrder`, `SecondOrder`, `Exact`) and of FIRE's tolerances, for
-//! `docs/speed-vs-error.md`. One thread throughout.
+//! `docs/speed-vs-error.md`. One thread throughout (unless `--jobs`).
 //!
-//! 1. **Pairs**: per model, `n` and `Δ`, the time of one pair evaluation
-//!    (gap and gradient, `Shape::contacts`) over a batch of random pairs
-//!    near contact, and the largest and RMS error of the gap against
-//!    `Exact` over the same pairs; fitted log–log slopes of the largest
-//!    error against `Δ`.
-//! 2. **Packings**: per model and `Δ` (`n = 2`), whole jammed packings
-//!    (the paper's protocol) from the same random starts, and their
-//!    differences in `φ_J`, `z_J`, `N_c` and rattlers from `Exact`.
-//! 3. **Tolerances**: `FirstOrder`, `n = 2`, `Δ = 0.1`: FIRE's force
-//!    tolerance and the jamming window against the change of `φ_J` and
-//!    `N_c` from the tightest setting on the same start.
+//! 1. **Pairs** (a micro-benchmark, measured here): per model, `n` and `Δ`,
+//!    the time of one pair evaluation (gap and gradient, `Shape::contacts`)
+//!    over a batch of random pairs near contact, and the largest and RMS
+//!    error of the gap against `Exact` over the same pairs; fitted log–log
+//!    slopes of the largest error against `Δ`.
+//! 2. **Packings**: the experiment file `experiments/accuracy/gap_models.ron`
+//!    (whole jammed packings per gap model and `Δ`, `n = 2`, the same seeds,
+//!    hence the same random starts, at every point), run by the runner into
+//!    `RUNS/gap_models` (resumable, `results.csv`, `summary.csv`); each
+//!    packing is compared with the packing of the most accurate model of the
+//!    run (`Exact`) of the same `Δ` and seed: `φ_J`, `z_J`, `N_c`, rattlers.
+//! 3. **Tolerances**: the experiment file `experiments/accuracy/tolerances.ron`
+//!    run by the runner once per setting of the ladder (FIRE's force
+//!    tolerance × the jamming window, as `--set` overrides) into
+//!    `RUNS/tolerances/<setting>`; differences of `φ_J` and `N_c` from the
+//!    tightest force tolerance that converged in the paper's window on the
+//!    same seed.
 //!
-//! Everything goes to `DIR` (CSV, PNG + SVG figures, `tables.md`); with the
-//! default `DIR` the generated block of `docs/speed-vs-error.md` is
-//! rewritten too.
+//! The two files are compiled in, so the command runs from any directory;
+//! `--set-gap-models` / `--set-tolerances` edit them as `jamkit run --set`
+//! does (`--quick` is a few such overrides). Everything else goes to `DIR`
+//! (CSV, PNG + SVG figures, `tables.md`); with the default `DIR` the
+//! generated block of `docs/speed-vs-error.md` is rewritten too.
 
-use crate::bench::{packing_hash, random_scene};
 use anyhow::{Context, Result, bail};
 use jamkit_core::Shape;
 use jamkit_core::Vector;
-use jamkit_engine::{Fire, FireParams, JamParams, JamSearch, jam};
+use jamkit_experiment::grid::{self, value_text};
+use jamkit_experiment::runner::{self, RunOptions};
+use jamkit_experiment::schema::{Observable, Protocol};
+use jamkit_experiment::{Experiment, ExperimentError, Log, overrides};
+use jamkit_format::PackingFile;
 use jamkit_fourier::{Angle, FourierParams, NearDisk};
-use jamkit_observe::summarize;
 use jamkit_planar::gap2d::GapModel;
 use jamkit_report::plot::{Figure, Guide, Series};
 use plotters::prelude::SeriesLabelPosition;
@@ -38,12 +48,28 @@ use std::time::Instant;
 /// The default output directory; writing there also rewrites the
 /// generated block of [`DOC`].
 pub const DEFAULT_OUT: &str = "docs/speed-vs-error";
+/// The default directory of the runner's runs (parts 2 and 3).
+pub const DEFAULT_RUNS: &str = "out/accuracy";
 /// The document whose generated block the default run rewrites.
 const DOC: &str = "docs/speed-vs-error.md";
 /// [`DEFAULT_OUT`] relative to the directory of [`DOC`].
 const LINK_DIR: &str = "speed-vs-error";
 const BEGIN: &str = "<!-- generated: jamkit bench accuracy -->";
 const END: &str = "<!-- end generated -->";
+
+/// The experiment file of part 2: its path in the repository and its text.
+const GAP_MODELS_FILE: (&str, &str) = (
+    "experiments/accuracy/gap_models.ron",
+    include_str!("../experiments/accuracy/gap_models.ron"),
+);
+/// The experiment file of part 3 (one setting of the ladder).
+const TOLERANCES_FILE: (&str, &str) = (
+    "experiments/accuracy/tolerances.ron",
+    include_str!("../experiments/accuracy/tolerances.ron"),
+);
+/// `--quick`: the overrides of the two files (before the user's own).
+const QUICK_GAP_MODELS: [&str; 3] = ["particles=10", "samples=1", "params.delta=0.1"];
+const QUICK_TOLERANCES: [&str; 2] = ["particles=12", "samples=2"];
 
 const MODELS: [GapModel; 3] = [GapModel::FirstOrder, GapModel::SecondOrder, GapModel::Exact];
 const NS: [u32; 4] = [2, 3, 4, 5];
@@ -55,108 +81,147 @@ const SIZES: (f64, f64) = (0.5, 0.7);
 /// Where `Exact` is drawn on the log axis of the speed–error figure.
 const EXACT_FLOOR: f64 = 1e-16;
 
-/// Bodies per packing of part 2 by default: an `Exact` packing costs
-/// ~7.5 µs of CPU per body and FIRE step (~200× the first-order gap), so
-/// one at N = 256 would take ~15 min; at N = 64 it takes ~1.3 min.
-pub const PACKING_PARTICLES: usize = 64;
-
 /// Where an unchanged φ_J is drawn on the log axis of the tolerance figure.
 const ZERO_FLOOR: f64 = 1e-12;
 
-/// FIRE force tolerances of part 3; the tightest that converges on a seed
-/// (in the paper's window) is that seed's reference.
+/// FIRE force tolerances of part 3 (`minimizer.force_tol`); the tightest
+/// that converges on a seed (in the paper's window) is that seed's
+/// reference. The file's `minimizer.max_steps` bounds each minimisation: a
+/// tolerance below the round-off floor of the forces is never met.
 const FORCE_TOLS: [f64; 6] = [1e-20, 1e-22, 1e-24, 1e-25, 1e-26, 1e-28];
-/// FIRE steps allowed per minimisation in part 3 (the default is 2·10⁷):
-/// a tolerance below the round-off floor of the forces is never met, and
-/// FIRE would run to the limit in every minimisation. A whole packing of
-/// N = 256 takes ~4·10⁵ steps at the default tolerance.
-const TOL_MAX_STEPS: u64 = 1_000_000;
 
-/// Jamming windows `(E_low, E_high)` of part 3: the paper's, and one 100×
-/// looser (FIRE's `energy_tol = 1e-16` stays below both; a tighter window
-/// would have to move it too).
+/// Jamming windows `(E_low, E_high)` of part 3 (`protocol.energy_low`,
+/// `protocol.energy_high`): the paper's, and one 100× looser (FIRE's
+/// `energy_tol = 1e-16` stays below both; a tighter window would have to
+/// move it too).
 const WINDOWS: [(f64, f64); 2] = [(1e-16, 2e-16), (1e-14, 2e-14)];
 
 /// What `jamkit bench accuracy` was asked for.
 pub struct Options {
-    /// Output directory.
+    /// Output directory of the tables and figures.
     pub out: PathBuf,
+    /// Directory of the runner's runs (parts 2 and 3); a rerun resumes.
+    pub runs: PathBuf,
     /// Small sizes, for a smoke test.
     pub quick: bool,
-    /// Seeds of the packings of part 2 (default 1,2,3; quick: 1).
-    pub seeds: Option<Vec<u64>>,
-    /// Seeds of part 3 (default 1,2,3,4; quick: 1,2).
-    pub tol_seeds: Option<Vec<u64>>,
-    /// Bodies per packing of part 3 (default 256; quick: 12).
-    pub particles: Option<usize>,
-    /// Bodies per packing of part 2 (default 64, see [`PACKING_PARTICLES`];
-    /// quick: 10).
-    pub packing_particles: Option<usize>,
-    /// Δ of the packings of part 2.
-    pub packing_deltas: Option<Vec<f64>>,
+    /// `KEY=VALUE` overrides of `experiments/accuracy/gap_models.ron`.
+    pub set_gap_models: Vec<String>,
+    /// `KEY=VALUE` overrides of `experiments/accuracy/tolerances.ron`.
+    pub set_tolerances: Vec<String>,
+    /// Worker threads of the runs (1: the wall times of one core).
+    pub jobs: usize,
 }
 
 /// Sizes of one run.
 struct Plan {
     pairs: usize,
     min_secs: f64,
-    particles: usize,
-    packing_particles: usize,
-    seeds: Vec<u64>,
-    tol_seeds: Vec<u64>,
-    packing_deltas: Vec<f64>,
+    /// Part 2, overrides applied.
+    gap_models: Experiment,
+    /// Part 3 (one setting; the ladder overrides it).
+    tolerances: Experiment,
+    /// Its one grid point.
+    tolerance_point: grid::Point,
 }
 
 impl Plan {
     fn of(o: &Options) -> Result<Self> {
         let q = o.quick;
-        let plan = Plan {
-            pairs: if q { 512 } else { 4096 },
-            min_secs: if q { 0.002 } else { 0.05 },
-            particles: o.particles.unwrap_or(if q { 12 } else { 256 }),
-            packing_particles: o.packing_particles.unwrap_or(if q {
-                10
-            } else {
-                PACKING_PARTICLES
-            }),
-            seeds: o
-                .seeds
-                .clone()
-                .unwrap_or_else(|| if q { vec![1] } else { vec![1, 2, 3] }),
-            tol_seeds: o
-                .tol_seeds
-                .clone()
-                .unwrap_or_else(|| if q { vec![1, 2] } else { vec![1, 2, 3, 4] }),
-            packing_deltas: o
-                .packing_deltas
-                .clone()
-                .unwrap_or_else(|| if q { vec![0.1] } else { vec![0.01, 0.1] }),
+        if o.jobs == 0 {
+            bail!("--jobs 0: must be at least 1");
+        }
+        let quick = |sets: &[&'static str]| -> Vec<&'static str> {
+            if q { sets.to_vec() } else { Vec::new() }
         };
-        if plan.particles < 4 {
-            bail!("--particles {}: must be at least 4", plan.particles);
-        }
-        if plan.packing_particles < 4 {
-            bail!(
-                "--packing-particles {}: must be at least 4",
-                plan.packing_particles
-            );
-        }
-        if plan.seeds.is_empty() || plan.tol_seeds.is_empty() {
-            bail!("--seeds / --tol-seeds: give at least one seed");
-        }
-        for &d in &plan.packing_deltas {
-            if !(d > 0.0 && d < 1.0) {
-                bail!("--packing-deltas {d}: each Δ must lie in (0, 1)");
-            }
-            if !shape(2, d, GapModel::FirstOrder)?.is_convex() {
+        let gap_models = experiment(
+            GAP_MODELS_FILE,
+            &quick(&QUICK_GAP_MODELS),
+            &o.set_gap_models,
+        )
+        .context("--set-gap-models")?;
+        let tolerances = experiment(
+            TOLERANCES_FILE,
+            &quick(&QUICK_TOLERANCES),
+            &o.set_tolerances,
+        )
+        .context("--set-tolerances")?;
+        for (name, e) in [
+            ("--set-gap-models", &gap_models),
+            ("--set-tolerances", &tolerances),
+        ] {
+            if !e.wants(&Observable::Contacts) {
                 bail!(
-                    "--packing-deltas {d}: the n = 2 outline is not convex there, \
-                     so there is no Exact packing to compare with"
+                    "{name}: observables = {:?}: must include Contacts (z_J, N_c and \
+                     rattlers are compared)",
+                    e.observables
+                );
+            }
+            if !matches!(e.protocol, Protocol::Jam { .. }) {
+                bail!(
+                    "{name}: protocol = {}: the study compares jammed packings; use Jam",
+                    e.protocol.name()
                 );
             }
         }
+        // The comparisons group packings by Δ and gap model (part 2) and by
+        // the ladder's setting (part 3): nothing else may scan.
+        let mut keys = Vec::new();
+        for p in grid::points(&gap_models).context("--set-gap-models")? {
+            let key = (param(&p.params, "delta"), param(&p.params, "gap"));
+            if key.0.is_none() || key.1.is_none() {
+                bail!(
+                    "--set-gap-models: family = {:?}: the comparison needs the parameters \
+                     `delta` and `gap` (families fourier and fourier_sum)",
+                    gap_models.family
+                );
+            }
+            if keys.contains(&key) {
+                bail!(
+                    "--set-gap-models: the comparison groups packings by params.delta and \
+                     params.gap; scan nothing else (dim, particles, other parameters)"
+                );
+            }
+            keys.push(key);
+        }
+        let mut points = grid::points(&tolerances).context("--set-tolerances")?;
+        if points.len() != 1 {
+            bail!(
+                "--set-tolerances: {} grid points: the ladder is the scan; give one value of \
+                 dim, particles and every parameter",
+                points.len()
+            );
+        }
+        let plan = Plan {
+            pairs: if q { 512 } else { 4096 },
+            min_secs: if q { 0.002 } else { 0.05 },
+            gap_models,
+            tolerances,
+            tolerance_point: points.remove(0),
+        };
         Ok(plan)
     }
+}
+
+/// The experiment of `file` (path, text) with `quick` and then `sets`
+/// applied, checked as `jamkit run` checks it.
+fn experiment(file: (&str, &str), quick: &[&str], sets: &[String]) -> Result<Experiment> {
+    let e = Experiment::from_ron(file.1, file.0)?;
+    let sets: Vec<String> = quick
+        .iter()
+        .map(|s| s.to_string())
+        .chain(sets.iter().cloned())
+        .collect();
+    let e = overrides::apply(&e, &sets)?;
+    e.validate()?;
+    Ok(e)
+}
+
+/// A family parameter of a grid point as text (`0.01`, `Exact`), `None`
+/// when the family has no such parameter.
+fn param(params: &jamkit_registry::ParamMap, name: &str) -> Option<String> {
+    params
+        .get(name)
+        .map(|v| value_text(v).trim_matches('"').to_string())
 }
 
 fn shape(n: u32, delta: f64, gap: GapModel) -> Result<NearDisk> {
@@ -337,10 +402,10 @@ fn slopes(rows: &[PairRow]) -> Vec<(GapModel, u32, f64, usize)> {
 }
 
 /// One packing of parts 2 and 3.
+/// One packing of parts 2 and 3, as the runner recorded it.
 #[derive(Clone)]
 struct PackRow {
     seed: u64,
-    start_hash: u64,
     /// `Err`: the protocol failed (message).
     result: std::result::Result<PackResult, String>,
 }
@@ -353,110 +418,117 @@ struct PackResult {
     z: f64,
     n_c: usize,
     rattlers: usize,
-    hash: u64,
 }
 
-fn one_packing(
-    s: NearDisk,
-    particles: usize,
-    seed: u64,
-    fire: FireParams,
-    jam_params: &JamParams,
-) -> Result<PackRow> {
-    let mut scene = random_scene::<2, _>(s, particles, seed, 0.1, 0.4)?;
-    let start_hash = packing_hash(scene.packing());
-    let mut fire = Fire::new(fire);
-    let t = Instant::now();
-    let result = match jam(&mut scene, &mut fire, jam_params) {
-        Ok(out) => {
-            let wall_s = t.elapsed().as_secs_f64();
-            let threshold = scene.packing().shape.rattler_threshold();
-            let sum = summarize(&mut scene, threshold);
-            Ok(PackResult {
-                wall_s,
-                steps: out.fire_steps,
-                phi: out.phi,
-                z: sum.z_j,
-                n_c: sum.n_contacts,
-                rattlers: sum.n_rattlers,
-                hash: packing_hash(scene.packing()),
-            })
-        }
-        Err(e) => Err(e.to_string()),
-    };
-    Ok(PackRow {
-        seed,
-        start_hash,
-        result,
-    })
-}
-
-/// Part 2: `(Δ, model, rows)`, the Exact packings first.
-type ModelRuns = Vec<(f64, GapModel, Vec<PackRow>)>;
-
-fn bench_packings(plan: &Plan) -> Result<ModelRuns> {
-    let mut runs = Vec::new();
-    for &delta in &plan.packing_deltas {
-        for model in [GapModel::Exact, GapModel::FirstOrder, GapModel::SecondOrder] {
-            let mut rows = Vec::new();
-            for &seed in &plan.seeds {
-                let row = one_packing(
-                    shape(2, delta, model)?,
-                    plan.packing_particles,
-                    seed,
-                    FireParams::default(),
-                    &study_jam_params(),
-                )?;
-                progress(
-                    &format!("packing Δ = {delta} {} seed {seed}", model.name()),
-                    &row,
-                );
-                rows.push(row);
-            }
-            runs.push((delta, model, rows));
+impl PackRow {
+    fn of(f: &PackingFile) -> Self {
+        let m = &f.measures;
+        PackRow {
+            seed: f.seed,
+            result: Ok(PackResult {
+                wall_s: m.wall_s,
+                steps: m.fire_steps,
+                phi: m.phi,
+                z: m.z_j.unwrap_or(f64::NAN),
+                n_c: m.n_contacts.unwrap_or(0),
+                rattlers: m.n_rattlers.unwrap_or(0),
+            }),
         }
     }
-    // The same seed must give the same start whatever the model.
-    for (delta, model, rows) in &runs {
-        let exact = reference_rows(&runs, *delta);
-        for (r, e) in rows.iter().zip(exact) {
-            if r.start_hash != e.start_hash {
-                bail!(
-                    "Δ = {delta}, {}: seed {} started from another configuration than Exact",
-                    model.name(),
-                    r.seed
-                );
+}
+
+/// Run `e` into `out` by the runner (resuming what is there) and return
+/// every job's packing, in grid order, with its point: the recorded
+/// measures, or the error of a sample that failed.
+fn run_rows(e: &Experiment, out: &Path, jobs: usize) -> Result<Vec<(grid::Point, PackRow)>> {
+    let report = runner::run(
+        e,
+        &RunOptions {
+            out: out.to_path_buf(),
+            jobs: Some(jobs),
+            log: Log::for_stderr(false, false),
+            shard: None,
+        },
+    )
+    .with_context(|| format!("running {} into {}", e.name, out.display()))?;
+    if !report.elsewhere.is_empty() {
+        bail!(
+            "{}: another process is making {} of its packings ({}, …); run again when it is done",
+            out.display(),
+            report.elsewhere.len(),
+            report.elsewhere[0]
+        );
+    }
+    let points = grid::points(e)?;
+    let mut rows = Vec::new();
+    for job in grid::jobs(e, &points) {
+        let row = if let Some(f) = report.packings.iter().find(|f| f.id == job.id) {
+            PackRow::of(f)
+        } else {
+            let error = report.failures.iter().find_map(|err| match err {
+                ExperimentError::Sample { sample, .. } if *sample == job.id => {
+                    Some(err.to_string())
+                }
+                _ => None,
+            });
+            match error {
+                Some(error) => PackRow {
+                    seed: job.seed,
+                    result: Err(error),
+                },
+                // Not a failed sample: an error of the run itself.
+                None => match report.failures.first() {
+                    Some(err) => bail!("{}: {err}", out.display()),
+                    None => bail!("{}: the run made no packing {}", out.display(), job.id),
+                },
             }
+        };
+        rows.push((points[job.point].clone(), row));
+    }
+    Ok(rows)
+}
+
+/// Part 2 per `Δ` and model, in the file's order: `(Δ, n, model, rows)`.
+type ModelRuns = Vec<(String, String, String, Vec<PackRow>)>;
+
+fn run_gap_models(plan: &Plan, o: &Options) -> Result<ModelRuns> {
+    let mut runs: ModelRuns = Vec::new();
+    for (point, row) in run_rows(&plan.gap_models, &o.runs.join("gap_models"), o.jobs)? {
+        let p = |name| param(&point.params, name).unwrap_or_default();
+        let (delta, n, model) = (p("delta"), p("n"), p("gap"));
+        match runs.iter_mut().find(|r| r.0 == delta && r.2 == model) {
+            Some(run) => run.3.push(row),
+            None => runs.push((delta, n, model, vec![row])),
         }
     }
     Ok(runs)
 }
 
-/// The jamming search of the study: the bisection it was measured with
-/// (docs/speed-vs-error.md), kept when the default became `Extrapolated`
-/// so that the documented tables come out again bit for bit.
-fn study_jam_params() -> JamParams {
-    JamParams {
-        search: JamSearch::Bisection,
-        ..JamParams::default()
-    }
+/// How close a gap model is to the exact gap (the most accurate one of a
+/// `Δ` is the reference of its packings).
+fn accuracy_rank(model: &str) -> usize {
+    ["FirstOrder", "SecondOrder", "Exact"]
+        .iter()
+        .position(|m| *m == model)
+        .unwrap_or(0)
 }
 
-fn reference_rows(runs: &ModelRuns, delta: f64) -> &[PackRow] {
+/// The model whose packings are the reference at `delta`: `Exact` when
+/// the run has it.
+fn reference_model(runs: &ModelRuns, delta: &str) -> String {
     runs.iter()
-        .find(|(d, m, _)| *d == delta && *m == GapModel::Exact)
-        .map(|(_, _, r)| r.as_slice())
-        .unwrap_or(&[])
+        .filter(|r| r.0 == delta)
+        .max_by_key(|r| accuracy_rank(&r.2))
+        .map(|r| r.2.clone())
+        .unwrap_or_default()
 }
 
-fn progress(what: &str, row: &PackRow) {
-    match &row.result {
-        Ok(r) => eprintln!(
-            "{what}: phi_J = {:.6}, N_c = {}, {:.2} s",
-            r.phi, r.n_c, r.wall_s
-        ),
-        Err(e) => eprintln!("{what}: failed: {e}"),
-    }
+fn reference_rows<'a>(runs: &'a ModelRuns, delta: &str) -> &'a [PackRow] {
+    let model = reference_model(runs, delta);
+    runs.iter()
+        .find(|r| r.0 == delta && r.2 == model)
+        .map(|r| r.3.as_slice())
+        .unwrap_or(&[])
 }
 
 /// Part 3: `((window, force_tol), rows)`.
@@ -485,39 +557,30 @@ fn is_reference(refs: &[(PackRow, f64)], setting: ((f64, f64), f64)) -> bool {
     setting.0 == WINDOWS[0] && !refs.is_empty() && refs.iter().all(|(_, ft)| *ft == setting.1)
 }
 
-fn bench_tolerances(plan: &Plan) -> Result<TolRuns> {
+/// The directory of one setting of the ladder under `RUNS/tolerances`.
+fn setting_dir(runs: &Path, (lo, hi): (f64, f64), force_tol: f64) -> PathBuf {
+    runs.join("tolerances")
+        .join(format!("window{lo:e}-{hi:e}_force_tol{force_tol:e}"))
+}
+
+fn run_tolerances(plan: &Plan, o: &Options) -> Result<TolRuns> {
     let mut runs = Vec::new();
     for &window in &WINDOWS {
         for &force_tol in &FORCE_TOLS {
-            let mut rows = Vec::new();
-            for &seed in &plan.tol_seeds {
-                let fire = FireParams {
-                    force_tol,
-                    max_steps: TOL_MAX_STEPS,
-                    ..FireParams::default()
-                };
-                let jp = JamParams {
-                    energy_low: window.0,
-                    energy_high: window.1,
-                    ..study_jam_params()
-                };
-                let row = one_packing(
-                    shape(2, 0.1, GapModel::FirstOrder)?,
-                    plan.particles,
-                    seed,
-                    fire,
-                    &jp,
-                )?;
-                progress(
-                    &format!(
-                        "tolerance window {:e} force_tol {force_tol:e} seed {seed}",
-                        window.0
-                    ),
-                    &row,
-                );
-                rows.push(row);
-            }
-            runs.push(((window, force_tol), rows));
+            let sets = [
+                format!("minimizer.force_tol={force_tol:e}"),
+                format!("protocol.energy_low={:e}", window.0),
+                format!("protocol.energy_high={:e}", window.1),
+            ];
+            let e = overrides::apply(&plan.tolerances, &sets)?;
+            e.validate()?;
+            let dir = setting_dir(&o.runs, window, force_tol);
+            eprintln!("{}", dir.display());
+            let rows = run_rows(&e, &dir, o.jobs)?;
+            runs.push((
+                (window, force_tol),
+                rows.into_iter().map(|(_, r)| r).collect(),
+            ));
         }
     }
     Ok(runs)
@@ -612,6 +675,7 @@ fn load() -> String {
 }
 
 /// Run the whole benchmark.
+/// Run the whole benchmark.
 pub fn run(o: &Options) -> Result<()> {
     let plan = Plan::of(o)?;
     std::fs::create_dir_all(&o.out).with_context(|| format!("creating {}", o.out.display()))?;
@@ -622,24 +686,37 @@ pub fn run(o: &Options) -> Result<()> {
     eprintln!("part 1: pair evaluations");
     let pairs = bench_pairs(&plan)?;
     let fitted = slopes(&pairs);
-    eprintln!("part 2: packings");
-    let packs = bench_packings(&plan)?;
-    eprintln!("part 3: tolerances");
-    let tols = bench_tolerances(&plan)?;
+    eprintln!("part 2: packings ({})", GAP_MODELS_FILE.0);
+    let packs = run_gap_models(&plan, o)?;
+    eprintln!("part 3: tolerances ({})", TOLERANCES_FILE.0);
+    let tols = run_tolerances(&plan, o)?;
     let total = t0.elapsed().as_secs_f64();
     let load_end = load();
 
-    write_csvs(&o.out, &plan, &pairs, &fitted, &packs, &tols)?;
-    figures(&o.out, &pairs, &tols)?;
+    write_csvs(&o.out, &pairs, &fitted, &packs, &tols, &plan)?;
+    figures(&o.out, &pairs, &tols, &plan)?;
 
     let mut md = String::new();
-    let args = if o.quick { " --quick" } else { "" };
+    let mut args = String::new();
+    if o.quick {
+        args.push_str(" --quick");
+    }
+    for (flag, sets) in [
+        ("--set-gap-models", &o.set_gap_models),
+        ("--set-tolerances", &o.set_tolerances),
+    ] {
+        for s in sets {
+            let _ = write!(args, " {flag} '{s}'");
+        }
+    }
     let _ = writeln!(
         md,
         "Generated by `jamkit bench accuracy{args}` on {date}, commit `{commit}`, \
-         {machine}, one thread; load average (1, 5, 15 min) {load_start} at the start \
-         and {load_end} at the end; {total:.0} s in all. Wall times are from a shared \
-         machine: compare them within one run."
+         {machine}, one thread per packing; load average (1, 5, 15 min) {load_start} at the \
+         start and {load_end} at the end; {total:.0} s in all (packings the runs of `{}` \
+         already held were read back, not timed again). Wall times are from a shared \
+         machine: compare them within one run.",
+        o.runs.display()
     );
     md.push('\n');
     md.push_str(&pair_tables(&plan, &pairs, &fitted));
@@ -656,7 +733,11 @@ pub fn run(o: &Options) -> Result<()> {
     if o.out == Path::new(DEFAULT_OUT) {
         rewrite_doc(Path::new(DOC), &md)?;
     }
-    out!("written to {}", o.out.display());
+    out!(
+        "written to {} (the runs: {})",
+        o.out.display(),
+        o.runs.display()
+    );
     Ok(())
 }
 
@@ -718,11 +799,11 @@ fn splice(text: &str, body: &str) -> std::result::Result<String, String> {
 
 fn write_csvs(
     dir: &Path,
-    plan: &Plan,
     pairs: &[PairRow],
     fitted: &[(GapModel, u32, f64, usize)],
     packs: &ModelRuns,
     tols: &TolRuns,
+    plan: &Plan,
 ) -> Result<()> {
     let mut s = String::from("model,n,delta,convex,ns_per_pair,max_err,rms_err,note\n");
     for r in pairs {
@@ -752,43 +833,51 @@ fn write_csvs(
     }
     write(&dir.join("slopes.csv"), &s)?;
 
-    let header = "seed,start_hash,wall_s,fire_steps,phi_j,z_j,n_c,rattlers,packing_hash,error\n";
-    let line = |s: &mut String, prefix: String, r: &PackRow| {
+    // One line per packing, with its differences from the reference packing
+    // of its seed (empty when either failed; exactly 0 on the reference's
+    // own line).
+    let header = "seed,wall_s,fire_steps,phi_j,z_j,n_c,rattlers,\
+                  d_phi_j,d_z_j,d_n_c,d_rattlers,error\n";
+    let line = |s: &mut String, prefix: String, r: &PackRow, reference: &[PackRow]| {
+        let d = differences(std::slice::from_ref(r), reference);
+        let d = match d.first() {
+            Some((dp, dz, dn, dr)) => format!("{dp:e},{dz:e},{dn},{dr}"),
+            None => ",,,".into(),
+        };
         let _ = match &r.result {
             Ok(p) => writeln!(
                 s,
-                "{prefix},{},{:016x},{:.3},{},{:.9},{:.5},{},{},{:016x},",
-                r.seed, r.start_hash, p.wall_s, p.steps, p.phi, p.z, p.n_c, p.rattlers, p.hash
+                "{prefix},{},{:.3},{},{:.9},{:.5},{},{},{d},",
+                r.seed, p.wall_s, p.steps, p.phi, p.z, p.n_c, p.rattlers
             ),
             Err(e) => writeln!(
                 s,
-                "{prefix},{},{:016x},,,,,,,,\"{}\"",
+                "{prefix},{},,,,,,,{d},\"{}\"",
                 r.seed,
-                r.start_hash,
                 e.replace(['"', ','], ";")
             ),
         };
     };
-    let mut s = format!("model,n,delta,particles,{header}");
-    for (delta, model, rows) in packs {
+    let particles = |e: &Experiment| e.particles.first().unwrap_or_default();
+    let mut s = format!("model,n,delta,particles,reference,{header}");
+    for (delta, n, model, rows) in packs {
+        let reference = reference_model(packs, delta);
         for r in rows {
-            line(
-                &mut s,
-                format!("{},2,{delta},{}", model.name(), plan.packing_particles),
-                r,
+            let prefix = format!(
+                "{model},{n},{delta},{},{reference}",
+                particles(&plan.gap_models)
             );
+            line(&mut s, prefix, r, reference_rows(packs, delta));
         }
     }
     write(&dir.join("packings.csv"), &s)?;
 
+    let reference: Vec<PackRow> = tol_reference(tols).into_iter().map(|(r, _)| r).collect();
     let mut s = format!("energy_low,energy_high,force_tol,particles,{header}");
     for (((lo, hi), ft), rows) in tols {
         for r in rows {
-            line(
-                &mut s,
-                format!("{lo:e},{hi:e},{ft:e},{}", plan.particles),
-                r,
-            );
+            let prefix = format!("{lo:e},{hi:e},{ft:e},{}", particles(&plan.tolerances));
+            line(&mut s, prefix, r, &reference);
         }
     }
     write(&dir.join("tolerances.csv"), &s)?;
@@ -889,42 +978,67 @@ fn pair_tables(plan: &Plan, rows: &[PairRow], fitted: &[(GapModel, u32, f64, usi
     md
 }
 
+/// The seeds of `e`'s packings, `seed, seed + 1, …`, as a list.
+fn seed_list(e: &Experiment) -> String {
+    (0..e.samples as u64)
+        .map(|k| e.seed.wrapping_add(k).to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The jamming window of a `Jam` protocol, `(E_low, E_high)`.
+fn window(e: &Experiment) -> (f64, f64) {
+    match e.protocol {
+        Protocol::Jam {
+            energy_low,
+            energy_high,
+            ..
+        } => (energy_low, energy_high),
+        _ => (f64::NAN, f64::NAN),
+    }
+}
+
 fn packing_table(plan: &Plan, runs: &ModelRuns) -> String {
+    let e = &plan.gap_models;
     let mut md = String::new();
-    let seeds: Vec<String> = plan.seeds.iter().map(|s| s.to_string()).collect();
+    let particles = e.particles.first().unwrap_or_default();
+    let (lo, hi) = window(e);
     let _ = writeln!(
         md,
         "## Packings\n\n\
-         Near-disks n = 2, N = {}{}, the paper's protocol (FIRE force tolerance 1e-25, \
-         window 1e-16 < V/N < 2e-16), seeds {}: one packing per seed and model, all \
-         from the same random start per seed (checked by a hash of the start). \
-         Means over seeds; \"vs Exact\": the largest difference over seeds from the \
-         Exact packing of the same seed (signed mean in brackets); \"sd\": the \
-         standard deviation of φ_J across seeds, the statistical error one pays anyway.\n",
-        plan.packing_particles,
-        if plan.packing_particles < plan.particles {
+         `{}`: near-disks, N = {particles}{}, the paper's protocol (FIRE force tolerance \
+         {:e}, window {lo:e} < V/N < {hi:e}, bisection), seeds {}: one packing per seed \
+         and model, each seed the same random start for every model (the runner seeds a \
+         start by its seed alone). Means over seeds; \"vs ref.\": the largest difference \
+         over seeds from the packing of the same seed with the most accurate model of the \
+         run (the \"ref.\" row: Exact), signed mean in brackets; \"sd\": the standard \
+         deviation of φ_J across seeds, the statistical error one pays anyway. The run: \
+         `RUNS/gap_models` (`results.csv`, `summary.csv`).\n",
+        GAP_MODELS_FILE.0,
+        if particles < 256 {
             " (not more: Exact packings take minutes each at N = 256; the N = 256 \
              comparison is the Fig. 5 gap-model run of docs/reproduction.md)"
         } else {
             ""
         },
-        seeds.join(", ")
+        e.minimizer.force_tol,
+        seed_list(e),
     );
     md.push_str(
         "| Δ | model | ok | wall s | FIRE steps | φ_J | sd φ_J | z_J | N_c | rattlers \
          | max \\|Δφ_J\\| (mean Δφ_J) | max \\|Δz_J\\| | max \\|ΔN_c\\| | max \\|Δrattlers\\| |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
-    for (delta, model, rows) in runs {
+    for (delta, _, model, rows) in runs {
         let ok = ok_results(rows);
         let col = |f: fn(&PackResult) -> f64, digits: usize| {
             fixed(mean(&ok.iter().map(f).collect::<Vec<_>>()), digits)
         };
         let phis: Vec<f64> = ok.iter().map(|r| r.phi).collect();
-        let diffs = if *model == GapModel::Exact {
+        let diffs = if *model == reference_model(runs, delta) {
             None
         } else {
-            Some(differences(rows, reference_rows(runs, *delta)))
+            Some(differences(rows, reference_rows(runs, delta)))
         };
         let dcol = |f: &dyn Fn(&Diff) -> f64, digits: usize| match &diffs {
             Some(d) if !d.is_empty() => {
@@ -944,8 +1058,7 @@ fn packing_table(plan: &Plan, runs: &ModelRuns) -> String {
         };
         let _ = writeln!(
             md,
-            "| {delta} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {dphi} | {} | {} | {} |",
-            model.name(),
+            "| {delta} | {model} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {dphi} | {} | {} | {} |",
             ok.len(),
             rows.len(),
             col(|r| r.wall_s, 2),
@@ -960,15 +1073,10 @@ fn packing_table(plan: &Plan, runs: &ModelRuns) -> String {
             dcol(&|x| x.3.abs() as f64, 0),
         );
     }
-    for (delta, model, rows) in runs {
+    for (delta, _, model, rows) in runs {
         for r in rows {
             if let Err(e) = &r.result {
-                let _ = writeln!(
-                    md,
-                    "\nΔ = {delta}, {}, seed {}: failed: {e}",
-                    model.name(),
-                    r.seed
-                );
+                let _ = writeln!(md, "\nΔ = {delta}, {model}, seed {}: failed: {e}", r.seed);
             }
         }
     }
@@ -977,28 +1085,35 @@ fn packing_table(plan: &Plan, runs: &ModelRuns) -> String {
 }
 
 fn tolerance_table(plan: &Plan, runs: &TolRuns) -> String {
+    let e = &plan.tolerances;
     let mut md = String::new();
-    let seeds: Vec<String> = plan.tol_seeds.iter().map(|s| s.to_string()).collect();
     let refs = tol_reference(runs);
     let reference: Vec<PackRow> = refs.iter().map(|(r, _)| r.clone()).collect();
     let ref_text: Vec<String> = refs
         .iter()
         .map(|(r, ft)| format!("seed {}: {ft:.0e}", r.seed))
         .collect();
+    let p = |name| param(&plan.tolerance_point.params, name).unwrap_or_default();
     let _ = writeln!(
         md,
         "## Tolerances\n\n\
-         FirstOrder near-disks n = 2, Δ = 0.1, N = {}, seeds {}: FIRE's force \
+         `{}`: {} near-disks n = {}, Δ = {}, N = {}, seeds {}, run once per setting \
+         (`RUNS/tolerances/<setting>`): FIRE's force \
          tolerance (stop when Σ(∂V/∂q)² falls below it; the default is 1e-25) and \
          the jamming window (the paper's 1e-16 < V/N < 2e-16, and one 100× looser, \
          the shortcut a user would try; a tighter one would need FIRE's \
-         energy_tol = 1e-16 moved as well, mixing two changes). At most {TOL_MAX_STEPS} \
+         energy_tol = 1e-16 moved as well, mixing two changes). At most {} \
          FIRE steps per minimisation: a tolerance FIRE cannot reach fails. Differences \
          are from the tightest force tolerance that converged in the paper's window on \
          the same seed ({}), largest over seeds; \"sd φ_J\" is the spread across seeds \
          at that setting.\n",
-        plan.particles,
-        seeds.join(", "),
+        TOLERANCES_FILE.0,
+        p("gap"),
+        p("n"),
+        p("delta"),
+        e.particles.first().unwrap_or_default(),
+        seed_list(e),
+        e.minimizer.max_steps,
         ref_text.join(", ")
     );
     md.push_str(
@@ -1053,7 +1168,8 @@ fn tolerance_table(plan: &Plan, runs: &TolRuns) -> String {
     md
 }
 
-fn figures(dir: &Path, pairs: &[PairRow], tols: &TolRuns) -> Result<()> {
+fn figures(dir: &Path, pairs: &[PairRow], tols: &TolRuns, plan: &Plan) -> Result<()> {
+    let p = |name| param(&plan.tolerance_point.params, name).unwrap_or_default();
     let mut series = Vec::new();
     for model in [GapModel::FirstOrder, GapModel::SecondOrder] {
         for &n in &NS {
@@ -1169,7 +1285,12 @@ fn figures(dir: &Path, pairs: &[PairRow], tols: &TolRuns) -> Result<()> {
         line: false,
     });
     Figure {
-        title: "FIRE tolerance: time against change of φ_J (FirstOrder, n = 2, Δ = 0.1)".into(),
+        title: format!(
+            "FIRE tolerance: time against change of φ_J ({}, n = {}, Δ = {})",
+            p("gap"),
+            p("n"),
+            p("delta")
+        ),
         x_label: "wall time per packing (s)".into(),
         y_label: "max |φ_J − φ_J(tightest converged)|".into(),
         log_x: true,
