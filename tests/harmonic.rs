@@ -24,6 +24,7 @@ fn single(l: u32, m: i32, delta: f64) -> Harmonic {
         modes: None,
         delta,
         inertia: None,
+        gap: Default::default(),
     })
     .unwrap()
 }
@@ -48,6 +49,7 @@ fn mixed(delta: f64) -> Harmonic {
         ]),
         delta,
         inertia: None,
+        gap: Default::default(),
     })
     .unwrap()
 }

@@ -84,6 +84,8 @@
 
 pub mod solid;
 
+use jamkit_core::gap_model::GapModel;
+use jamkit_core::gap3d::{self, ExactGap3, RadialSupport};
 use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, Matrix, ParamSpec, Quaternion, RotVec,
     Shape, ShapeVisitor, Vector,
@@ -95,7 +97,7 @@ use std::f64::consts::PI;
 /// The family's self-description.
 pub const INFO: FamilyInfo = FamilyInfo {
     name: "harmonic",
-    about: "near-spheres R(û) = R0 [1 + Δ F(Qᵀû)], F a sum of real spherical harmonics Y_lm (l ≥ 2) each scaled to largest slope 1, with the paper's first-order gap (3D)",
+    about: "near-spheres R(û) = R0 [1 + Δ F(Qᵀû)], F a sum of real spherical harmonics Y_lm (l ≥ 2) each scaled to largest slope 1, with the paper's first-order gap or the exact gap of convex bodies (3D)",
     dims: Dims::Only(&[3]),
     params: &[
         ParamSpec {
@@ -128,8 +130,18 @@ pub const INFO: FamilyInfo = FamilyInfo {
             is_list: false,
             default: Some("None"),
         },
+        ParamSpec {
+            name: "gap",
+            about: "gap model, a string: \"FirstOrder\" (the paper's, error O(Δ²)) or \"Exact\" (signed distance along the common normal from the support functions; convex bodies only); None: FirstOrder",
+            is_list: false,
+            default: Some("None"),
+        },
     ],
 };
+
+/// How finely [`Harmonic::new`] samples the surface (`n × 2n` directions)
+/// before it accepts the exact gap.
+pub const CONVEXITY_GRID: usize = 64;
 
 /// One mode `c Ŷ_lm`.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -162,6 +174,9 @@ pub struct HarmonicParams {
     /// Moment of inertia (`None`: `Δ`).
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
+    /// The gap model (default: the paper's first order).
+    #[serde(default, deserialize_with = "jamkit_core::gap_model::deserialize_gap")]
+    pub gap: GapModel,
 }
 
 fn err(
@@ -215,6 +230,7 @@ pub struct Harmonic {
     /// `V / (R⁰)³`.
     unit_volume: f64,
     inertia: f64,
+    gap: GapModel,
 }
 
 /// The value and derivatives of one body's term `G̃(x) = F(Qᵀx/|x|)` and
@@ -361,7 +377,14 @@ impl Harmonic {
             .iter()
             .map(|(_, p)| p.mul(p).sphere_mean())
             .collect();
-        Ok(Self {
+        if p.gap == GapModel::SecondOrder {
+            return Err(err(
+                "params.gap",
+                "SecondOrder",
+                "\"FirstOrder\" (default) or \"Exact\": harmonic has no second-order gap",
+            ));
+        }
+        let shape = Self {
             delta: d,
             axisymmetric: modes.iter().all(|md| md.m == 0 || md.c == 0.0),
             modes,
@@ -370,7 +393,25 @@ impl Harmonic {
             mean_squares,
             unit_volume,
             inertia,
-        })
+            gap: p.gap,
+        };
+        if p.gap == GapModel::Exact && !shape.is_convex(CONVEXITY_GRID) {
+            return Err(err(
+                "params.gap",
+                "Exact",
+                format!(
+                    "needs a convex body, and Δ = {d} makes this one non-convex (its curvature changes sign on a {0} × {1} grid of directions; the common normal is then not unique); use \"FirstOrder\" or a smaller Δ",
+                    CONVEXITY_GRID,
+                    2 * CONVEXITY_GRID
+                ),
+            ));
+        }
+        Ok(shape)
+    }
+
+    /// The gap model.
+    pub fn gap_model(&self) -> GapModel {
+        self.gap
     }
 
     /// `Δ`.
@@ -521,15 +562,7 @@ impl Harmonic {
         inv_r: f64,
     ) -> BodyJet {
         let (_, grad, y) = self.value_grad(columns, x, inv_r);
-        let mut hb = Matrix::<3>::zeros();
-        for (l, p) in &self.by_degree {
-            let lf = *l as f64;
-            let (v, g) = p.value_grad(&y);
-            let h = p.hessian(&y);
-            let gy = g * y.transpose();
-            hb += h - (gy + gy.transpose()) * lf - Matrix::<3>::identity() * (lf * v)
-                + y * y.transpose() * (lf * (lf + 2.0) * v);
-        }
+        let hb = self.unit_hessian(&y);
         let mut jet = BodyJet {
             hess: Matrix::<3>::zeros(),
             x_rot: [Vector::<3>::zeros(); MAX_ROT],
@@ -553,6 +586,81 @@ impl Harmonic {
             }
         }
         jet
+    }
+
+    /// `∇∇F̃` at the body-frame unit vector `y`, with `F̃(x) = F(x/|x|)`
+    /// (crate documentation, `Q = 1`, `|x| = 1`).
+    #[inline(always)]
+    fn unit_hessian(&self, y: &Vector<3>) -> Matrix<3> {
+        let mut hb = Matrix::<3>::zeros();
+        for (l, p) in &self.by_degree {
+            let lf = *l as f64;
+            let (v, g) = p.value_grad(y);
+            let h = p.hessian(y);
+            let gy = g * y.transpose();
+            hb += h - (gy + gy.transpose()) * lf - Matrix::<3>::identity() * (lf * v)
+                + y * y.transpose() * (lf * (lf + 2.0) * v);
+        }
+        hb
+    }
+
+    /// `ρ = R⁰(1 + ΔF)`, `∇ρ̃` and `∇∇ρ̃` at the body-frame unit vector `y`
+    /// (`ρ̃(x) = ρ(x/|x|)`): the radial function
+    /// [`gap3d::radial_support`] reads.
+    #[inline(always)]
+    fn radial_jet(&self, size: f64, y: &Vector<3>) -> (f64, Vector<3>, Matrix<3>) {
+        let mut value = 0.0;
+        let mut grad = Vector::<3>::zeros();
+        for (l, p) in &self.by_degree {
+            let (v, g) = p.value_grad(y);
+            value += v;
+            grad += g - y * (*l as f64 * v);
+        }
+        let a = size * self.delta;
+        (size + a * value, grad * a, self.unit_hessian(y) * a)
+    }
+
+    /// The support function of a body of size `size` whose rotation has
+    /// the columns `columns`, in the world direction `u` (unit), with its
+    /// gradient (the support point) and Hessian, world frame: the search
+    /// of [`gap3d::radial_support`] in the body frame, started at `Qᵀu`.
+    /// Meaningful for a convex body (checked by [`Harmonic::new`] for the
+    /// exact gap).
+    pub fn support(&self, size: f64, columns: &[Vector<3>; 3], u: &Vector<3>) -> RadialSupport {
+        let [c0, c1, c2] = columns;
+        let ub = Vector::<3>::new(c0.dot(u), c1.dot(u), c2.dot(u));
+        let mut out = gap3d::radial_support(&ub, &ub, |y| self.radial_jet(size, y));
+        let rot = Matrix::<3>::from_columns(columns);
+        let pb = out.jet.point;
+        out.jet.point = c0 * pb[0] + c1 * pb[1] + c2 * pb[2];
+        out.jet.hess = rot * out.jet.hess * rot.transpose();
+        out.y = rot * out.y;
+        out
+    }
+
+    /// The exact gap of two bodies (crate documentation), or `None` when it
+    /// certainly exceeds `max_gap`, whatever the family's gap model.
+    #[inline]
+    pub fn exact_gap(
+        &self,
+        size_i: f64,
+        o_i: &Quaternion,
+        size_j: f64,
+        o_j: &Quaternion,
+        r_ij: &Vector<3>,
+        max_gap: f64,
+    ) -> Option<ExactGap3> {
+        let r = r_ij.norm();
+        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
+            return None;
+        }
+        let (ci, cj) = (o_i.columns(), o_j.columns());
+        gap3d::exact(
+            r_ij,
+            |u| self.support(size_i, &ci, u).jet,
+            |u| self.support(size_j, &cj, u).jet,
+            max_gap,
+        )
     }
 
     /// `∂G̃/∂q_p = g · t_p = g · (x × e_p) = e_p · (g × x)`.
@@ -735,6 +843,13 @@ impl Shape<3> for Harmonic {
         max_gap: f64,
         mut visit: F,
     ) {
+        if self.gap == GapModel::Exact {
+            if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
+                let (c_i, c_j) = (o_i.columns(), o_j.columns());
+                visit(e.contact(&self.axes(&c_i), &self.axes(&c_j), self.rot_dof()));
+            }
+            return;
+        }
         if let Some((r, x, inv_r, u)) = self.direction(size_i, size_j, r_ij, max_gap) {
             let (c_i, c_j) = (o_i.columns(), o_j.columns());
             visit(self.contact(size_i, &c_i, size_j, &c_j, r, &x, inv_r, &u));
@@ -754,6 +869,13 @@ impl Shape<3> for Harmonic {
         max_gap: f64,
         mut visit: F,
     ) -> jamkit_core::Result<()> {
+        if self.gap == GapModel::Exact {
+            if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
+                let (c_i, c_j) = (o_i.columns(), o_j.columns());
+                visit(e.hessian(&self.axes(&c_i), &self.axes(&c_j), self.rot_dof()));
+            }
+            return Ok(());
+        }
         let Some((r, x, inv_r, u)) = self.direction(size_i, size_j, r_ij, max_gap) else {
             return Ok(());
         };
@@ -795,6 +917,7 @@ mod tests {
             modes: None,
             delta,
             inertia: None,
+            gap: GapModel::FirstOrder,
         })
         .unwrap()
     }
@@ -850,6 +973,7 @@ mod tests {
             ]),
             delta,
             inertia: None,
+            gap: GapModel::FirstOrder,
         })
         .unwrap()
     }
@@ -1214,6 +1338,7 @@ mod tests {
             modes: None,
             delta: 0.1,
             inertia: None,
+            gap: GapModel::FirstOrder,
         };
         let cases: Vec<(HarmonicParams, &str)> = vec![
             (
