@@ -619,7 +619,8 @@ mod tests {
             let (q1, q3, q5) = (q.powf(-0.5), q.powf(-1.5), q.powf(-2.5));
             let p = Matrix::<3>::identity() - y * y.transpose();
             let cross = y * ay.transpose();
-            let h = p * q1 - (cross + cross.transpose() + a) * q3 + ay * ay.transpose() * (3.0 * q5);
+            let h =
+                p * q1 - (cross + cross.transpose() + a) * q3 + ay * ay.transpose() * (3.0 * q5);
             (q1, y * q1 - ay * q3, h)
         }
     }

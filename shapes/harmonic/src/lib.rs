@@ -377,13 +377,6 @@ impl Harmonic {
             .iter()
             .map(|(_, p)| p.mul(p).sphere_mean())
             .collect();
-        if p.gap == GapModel::SecondOrder {
-            return Err(err(
-                "params.gap",
-                "SecondOrder",
-                "\"FirstOrder\" (default) or \"Exact\": harmonic has no second-order gap",
-            ));
-        }
         let shape = Self {
             delta: d,
             axisymmetric: modes.iter().all(|md| md.m == 0 || md.c == 0.0),
@@ -393,20 +386,37 @@ impl Harmonic {
             mean_squares,
             unit_volume,
             inertia,
-            gap: p.gap,
+            gap: GapModel::FirstOrder,
         };
-        if p.gap == GapModel::Exact && !shape.is_convex(CONVEXITY_GRID) {
+        shape.with_gap(p.gap)
+    }
+
+    /// The same body with the gap model `gap`. Refused with the field
+    /// named: `SecondOrder` (no second-order gap in 3D), and `Exact` for a
+    /// body that is not convex on the [`CONVEXITY_GRID`] sample of
+    /// directions ([`Harmonic::is_convex`]).
+    pub fn with_gap(mut self, gap: GapModel) -> jamkit_core::Result<Self> {
+        if gap == GapModel::SecondOrder {
+            return Err(err(
+                "params.gap",
+                "SecondOrder",
+                "\"FirstOrder\" (default) or \"Exact\": harmonic has no second-order gap",
+            ));
+        }
+        if gap == GapModel::Exact && !self.is_convex(CONVEXITY_GRID) {
             return Err(err(
                 "params.gap",
                 "Exact",
                 format!(
-                    "needs a convex body, and Δ = {d} makes this one non-convex (its curvature changes sign on a {0} × {1} grid of directions; the common normal is then not unique); use \"FirstOrder\" or a smaller Δ",
+                    "needs a convex body, and Δ = {} makes this one non-convex (its curvature changes sign on a {} × {} grid of directions; the common normal is then not unique); use \"FirstOrder\" or a smaller Δ",
+                    self.delta,
                     CONVEXITY_GRID,
                     2 * CONVEXITY_GRID
                 ),
             ));
         }
-        Ok(shape)
+        self.gap = gap;
+        Ok(self)
     }
 
     /// The gap model.
@@ -906,11 +916,14 @@ impl Shape<3> for Harmonic {
 }
 
 #[cfg(test)]
+mod exact_tests;
+
+#[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
-    fn single(l: u32, m: i32, delta: f64) -> Harmonic {
+    pub(crate) fn single(l: u32, m: i32, delta: f64) -> Harmonic {
         Harmonic::new(&HarmonicParams {
             l: Some(l),
             m: Some(m),
@@ -953,7 +966,7 @@ mod tests {
         assert!(s.rotation(&[1.0, 0.0, 0.0]).is_none());
     }
 
-    fn mixed(delta: f64) -> Harmonic {
+    pub(crate) fn mixed(delta: f64) -> Harmonic {
         Harmonic::new(&HarmonicParams {
             l: None,
             m: None,
@@ -1087,7 +1100,7 @@ mod tests {
         );
     }
 
-    fn orientations() -> Vec<Quaternion> {
+    pub(crate) fn orientations() -> Vec<Quaternion> {
         vec![
             Quaternion::IDENTITY,
             Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap(),
@@ -1097,7 +1110,7 @@ mod tests {
 
     /// Separations along `±Q_i e_z` (the poles of the zonal modes, where
     /// their gradient vanishes), 10⁻³ off them, and generic.
-    fn separations(o_i: &Quaternion) -> Vec<Vector<3>> {
+    pub(crate) fn separations(o_i: &Quaternion) -> Vec<Vector<3>> {
         let pole = o_i.apply(&Vector::<3>::z());
         let tilt = o_i.apply(&Vector::<3>::new(1e-3, -2e-3, 1.0)).normalize();
         vec![
@@ -1167,18 +1180,6 @@ mod tests {
         }
     }
 
-    /// The gap as a function of the pair's coordinates `z = (r_j, q_i, q_j)`,
-    /// rotations applied through `rotate` (all increments of a body at
-    /// once: `exp(Σ q_p e_p)`, the convention of the second derivatives).
-    fn gap_at(s: &Harmonic, o_i: &Quaternion, o_j: &Quaternion, r: &Vector<3>, z: &[f64]) -> f64 {
-        let m = Shape::<3>::rot_dof(s);
-        let (mut a, mut b) = (*o_i, *o_j);
-        s.rotate(&mut a, &z[3..3 + m]);
-        s.rotate(&mut b, &z[3 + m..3 + 2 * m]);
-        let rr = r + Vector::<3>::new(z[0], z[1], z[2]);
-        s.pair_contacts(0.5, &a, 0.7, &b, &rr, f64::INFINITY)[0].gap
-    }
-
     /// Every first derivative of one contact against central differences
     /// of its gap (ε = 1e-6: truncation ε²|h'''| ~ 1e-11, round-off
     /// 1e-16/ε ~ 1e-10; bound 1e-8), and every second derivative against
@@ -1190,75 +1191,15 @@ mod tests {
     #[test]
     fn pair_derivatives_match_finite_differences() {
         for s in shapes() {
-            let m = Shape::<3>::rot_dof(&s);
-            let n = 3 + 2 * m;
             for o_i in orientations() {
                 for o_j in orientations().iter().rev() {
                     for r in separations(&o_i) {
-                        let mut hess = None;
-                        s.gap_hessians(0.5, &o_i, 0.7, o_j, &r, f64::INFINITY, |h| hess = Some(h))
-                            .unwrap();
-                        let h = hess.unwrap();
-                        let c = s.pair_contacts(0.5, &o_i, 0.7, o_j, &r, f64::INFINITY)[0];
-                        assert_eq!(h.contact, c, "gap_hessians and contacts agree");
-                        // Analytic first and second derivatives in z.
-                        let mut grad = vec![0.0; n];
-                        let mut hm = vec![vec![0.0; n]; n];
-                        for a in 0..3 {
-                            grad[a] = c.grad_r[a];
-                            for b in 0..3 {
-                                hm[a][b] = h.rr[(a, b)];
-                            }
-                        }
-                        for p in 0..m {
-                            grad[3 + p] = c.grad_rot_i[p];
-                            grad[3 + m + p] = c.grad_rot_j[p];
-                            for a in 0..3 {
-                                hm[a][3 + p] = h.r_qi[p][a];
-                                hm[3 + p][a] = h.r_qi[p][a];
-                                hm[a][3 + m + p] = h.r_qj[p][a];
-                                hm[3 + m + p][a] = h.r_qj[p][a];
-                            }
-                            for q in 0..m {
-                                hm[3 + p][3 + q] = h.qi_qi[p][q];
-                                hm[3 + m + p][3 + m + q] = h.qj_qj[p][q];
-                                hm[3 + p][3 + m + q] = h.qi_qj[p][q];
-                                hm[3 + m + q][3 + p] = h.qi_qj[p][q];
-                            }
-                        }
-                        let at = |z: &[f64]| gap_at(&s, &o_i, o_j, &r, z);
-                        let e1 = 1e-6;
-                        for a in 0..n {
-                            let mut zp = vec![0.0; n];
-                            let mut zm = vec![0.0; n];
-                            zp[a] = e1;
-                            zm[a] = -e1;
-                            let fd = (at(&zp) - at(&zm)) / (2.0 * e1);
-                            assert!(
-                                (fd - grad[a]).abs() < 1e-8,
-                                "{s:?}: ∂h/∂z[{a}] {} vs fd {fd}",
-                                grad[a]
-                            );
-                        }
-                        let e2 = 1e-4;
-                        for a in 0..n {
-                            for b in 0..n {
-                                let d = |sa: f64, sb: f64| {
-                                    let mut z = vec![0.0; n];
-                                    z[a] += sa * e2;
-                                    z[b] += sb * e2;
-                                    at(&z)
-                                };
-                                let fd = (d(1.0, 1.0) - d(1.0, -1.0) - d(-1.0, 1.0)
-                                    + d(-1.0, -1.0))
-                                    / (4.0 * e2 * e2);
-                                assert!(
-                                    (fd - hm[a][b]).abs() < 1e-5,
-                                    "{s:?}: ∂²h/∂z[{a}]∂z[{b}] {} vs fd {fd} at r = {r:?}",
-                                    hm[a][b]
-                                );
-                            }
-                        }
+                        let d =
+                            jamkit_kit::pair_derivatives(&s, (0.5, 0.7), &o_i, o_j, &r, 1e-6, 1e-4);
+                        assert!(
+                            d.grad_error() < 1e-8 && d.hess_error() < 1e-5,
+                            "{s:?} at r = {r:?}: {d:?}"
+                        );
                     }
                 }
             }
