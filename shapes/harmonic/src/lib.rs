@@ -92,6 +92,7 @@ use jamkit_core::{
 };
 use serde::Deserialize;
 use solid::{LMAX, Poly};
+use std::cell::Cell;
 use std::f64::consts::PI;
 
 /// The family's self-description.
@@ -572,7 +573,7 @@ impl Harmonic {
         inv_r: f64,
     ) -> BodyJet {
         let (_, grad, y) = self.value_grad(columns, x, inv_r);
-        let hb = self.unit_hessian(&y);
+        let (_, _, hb) = self.unit_jet(&y);
         let mut jet = BodyJet {
             hess: Matrix::<3>::zeros(),
             x_rot: [Vector::<3>::zeros(); MAX_ROT],
@@ -598,20 +599,24 @@ impl Harmonic {
         jet
     }
 
-    /// `∇∇F̃` at the body-frame unit vector `y`, with `F̃(x) = F(x/|x|)`
-    /// (crate documentation, `Q = 1`, `|x| = 1`).
+    /// `F̃`, `∇F̃` and `∇∇F̃` at the body-frame unit vector `y`, with
+    /// `F̃(x) = F(x/|x|)` (crate documentation, `Q = 1`, `|x| = 1`).
     #[inline(always)]
-    fn unit_hessian(&self, y: &Vector<3>) -> Matrix<3> {
+    fn unit_jet(&self, y: &Vector<3>) -> (f64, Vector<3>, Matrix<3>) {
+        let mut value = 0.0;
+        let mut grad = Vector::<3>::zeros();
         let mut hb = Matrix::<3>::zeros();
         for (l, p) in &self.by_degree {
             let lf = *l as f64;
             let (v, g) = p.value_grad(y);
             let h = p.hessian(y);
+            value += v;
+            grad += g - y * (lf * v);
             let gy = g * y.transpose();
             hb += h - (gy + gy.transpose()) * lf - Matrix::<3>::identity() * (lf * v)
                 + y * y.transpose() * (lf * (lf + 2.0) * v);
         }
-        hb
+        (value, grad, hb)
     }
 
     /// `ρ = R⁰(1 + ΔF)`, `∇ρ̃` and `∇∇ρ̃` at the body-frame unit vector `y`
@@ -619,15 +624,9 @@ impl Harmonic {
     /// [`gap3d::radial_support`] reads.
     #[inline(always)]
     fn radial_jet(&self, size: f64, y: &Vector<3>) -> (f64, Vector<3>, Matrix<3>) {
-        let mut value = 0.0;
-        let mut grad = Vector::<3>::zeros();
-        for (l, p) in &self.by_degree {
-            let (v, g) = p.value_grad(y);
-            value += v;
-            grad += g - y * (*l as f64 * v);
-        }
+        let (value, grad, hess) = self.unit_jet(y);
         let a = size * self.delta;
-        (size + a * value, grad * a, self.unit_hessian(y) * a)
+        (size + a * value, grad * a, hess * a)
     }
 
     /// The support function of a body of size `size` whose rotation has
@@ -637,15 +636,49 @@ impl Harmonic {
     /// Meaningful for a convex body (checked by [`Harmonic::new`] for the
     /// exact gap).
     pub fn support(&self, size: f64, columns: &[Vector<3>; 3], u: &Vector<3>) -> RadialSupport {
+        self.support_from(size, columns, u, u)
+    }
+
+    /// [`Harmonic::support`] with the search started at the world-frame
+    /// unit vector `start` (a warm start: where a search for a nearby
+    /// direction ended).
+    pub fn support_from(
+        &self,
+        size: f64,
+        columns: &[Vector<3>; 3],
+        u: &Vector<3>,
+        start: &Vector<3>,
+    ) -> RadialSupport {
         let [c0, c1, c2] = columns;
-        let ub = Vector::<3>::new(c0.dot(u), c1.dot(u), c2.dot(u));
-        let mut out = gap3d::radial_support(&ub, &ub, |y| self.radial_jet(size, y));
+        let body = |v: &Vector<3>| Vector::<3>::new(c0.dot(v), c1.dot(v), c2.dot(v));
+        let ub = body(u);
+        let mut out = gap3d::radial_support(&ub, &body(start), |y| self.radial_jet(size, y));
         let rot = Matrix::<3>::from_columns(columns);
         let pb = out.jet.point;
         out.jet.point = c0 * pb[0] + c1 * pb[1] + c2 * pb[2];
         out.jet.hess = rot * out.jet.hess * rot.transpose();
         out.y = rot * out.y;
         out
+    }
+
+    /// The support jet at `u`, the search started where the last one
+    /// (`last`: its direction and support unit vector) ended, moved with the
+    /// direction; `last` updated.
+    #[inline(always)]
+    fn warm_support(
+        &self,
+        size: f64,
+        columns: &[Vector<3>; 3],
+        u: &Vector<3>,
+        last: &Cell<Option<(Vector<3>, Vector<3>)>>,
+    ) -> gap3d::SupportJet3 {
+        let start = match last.get() {
+            Some((u0, y0)) => (y0 + (u - u0)).normalize(),
+            None => *u,
+        };
+        let found = self.support_from(size, columns, u, &start);
+        last.set(Some((*u, found.y)));
+        found.jet
     }
 
     /// The exact gap of two bodies (crate documentation), or `None` when it
@@ -665,10 +698,13 @@ impl Harmonic {
             return None;
         }
         let (ci, cj) = (o_i.columns(), o_j.columns());
+        // Warm starts: each search begins where the body's last one ended,
+        // moved with the direction (`y* − u` changes slowly, by O(Δ|δu|)).
+        let (last_i, last_j) = (Cell::new(None), Cell::new(None));
         gap3d::exact(
             r_ij,
-            |u| self.support(size_i, &ci, u).jet,
-            |u| self.support(size_j, &cj, u).jet,
+            |u| self.warm_support(size_i, &ci, u, &last_i),
+            |u| self.warm_support(size_j, &cj, u, &last_j),
             max_gap,
         )
     }
