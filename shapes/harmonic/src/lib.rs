@@ -55,6 +55,23 @@
 //! a sphere adds `∂h/∂r_j = r̂` and `(1 − r̂ r̂ᵀ)/r`. The two bodies'
 //! rotations do not mix (`∂²h/∂ω_i∂ω_j = 0`).
 //!
+//! **Exact gap** (`gap: "Exact"`; the default `"FirstOrder"` is the gap
+//! above, bit for bit). The signed distance of two convex bodies along
+//! their common normal, `h = max_u [u·r_ij − s_i(u) − s_j(−u)]`, with its
+//! gradient and Hessian in positions and rotations by
+//! [`jamkit_core::gap3d::exact`], from each body's support function: the
+//! body-frame surface `x(y) = ρ(y) y`, `ρ = R⁰(1 + ΔF)`, has its support
+//! point in the direction `u` where its normal is `u`, found by Newton's
+//! method on the sphere ([`jamkit_core::gap3d::radial_support`], whose
+//! documentation derives `s`, `∇s = ρ(y*) y*` and
+//! `∇∇s = B A⁺ Bᵀ`, the inverse Weingarten map), each search started where
+//! the body's previous one in the same gap ended ([`Harmonic::support`]
+//! gives it for one direction). It needs a convex body:
+//! [`Harmonic::new`] refuses `Exact`, naming `params.gap`, when the
+//! convexity condition of [`Harmonic::is_convex`] fails anywhere on
+//! [`CONVEXITY_GRID`] × 2·[`CONVEXITY_GRID`] directions, and refuses
+//! `"SecondOrder"` (there is none in 3D).
+//!
 //! **Rotational coordinates.** Three (`ω` in the world frame, the nmer
 //! convention: `Q → exp(ω) Q`), or two when `F` is axisymmetric (every mode
 //! with a non-zero coefficient has `m = 0`): then the rotation about the
