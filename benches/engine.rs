@@ -5,6 +5,10 @@
 //! * `energy_gradient_near_disks/N`: the same for the paper's near-disks
 //!   (`fourier`, n = 2, Δ = 0.1, φ = 0.86), N = 256 and 1024.
 //! * `jam_disks/256`: one whole N = 256 packing with the paper's protocol.
+//! * `energy_gradient_harmonic/{FirstOrder,Exact}`: one energy-and-gradient
+//!   evaluation of N = 128 `harmonic` near-spheres (`Ŷ_22`, Δ = 0.1,
+//!   φ = 0.66, random, overlapping) with the first-order and the exact gap
+//!   (docs/reproduction-3d.md, "Exact gap").
 //!
 //! The N = 1024 packing benchmark is `jamkit bench packing` (one packing is
 //! seconds long, too long for criterion's repetitions).
@@ -73,11 +77,37 @@ fn jam_disks(c: &mut Criterion) {
     group.finish();
 }
 
+fn energy_gradient_harmonic(c: &mut Criterion) {
+    use jamkit_core::gap_model::GapModel;
+    use jamkit_harmonic::{Harmonic, HarmonicParams};
+    let mut group = c.benchmark_group("energy_gradient_harmonic");
+    for gap in [GapModel::FirstOrder, GapModel::Exact] {
+        let shape = Harmonic::new(&HarmonicParams {
+            l: Some(2),
+            m: Some(2),
+            modes: None,
+            delta: 0.1,
+            inertia: None,
+            gap,
+        })
+        .unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let sizes = SizeDistribution::default().sample(128, &mut rng);
+        let packing = Packing::<3, Harmonic>::random(shape, sizes, 0.66, &mut rng).unwrap();
+        let mut scene = Scene::new(packing, Potential::Harmonic, 0.2);
+        let mut grad = vec![0.0; scene.dof()];
+        group.bench_function(gap.name(), |b| {
+            b.iter(|| black_box(scene.energy_gradient(&mut grad)))
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     name = benches;
     // NOTE: no plots: criterion's plotters backend panicked on a machine
     // without system fonts (the numbers are what docs/performance.md uses).
     config = Criterion::default().without_plots();
-    targets = energy_gradient, energy_gradient_near_disks, jam_disks
+    targets = energy_gradient, energy_gradient_near_disks, jam_disks, energy_gradient_harmonic
 );
 criterion_main!(benches);

@@ -157,6 +157,9 @@ fn harmonic_single_modes_sums_and_the_sphere_limit() {
             ),
             ("(l: 2, delta: 0.1, inertia: Some(-1.0))", "params.inertia"),
             ("(l: 2, delta: 0.1, colour: 3)", "colour"),
+            ("(l: 2, delta: 0.1, gap: \"SecondOrder\")", "params.gap"),
+            ("(l: 6, m: 3, delta: 0.2, gap: \"Exact\")", "params.gap"),
+            ("(l: 2, delta: 0.1, gap: \"Exactly\")", "Exactly"),
         ],
     );
 }

@@ -90,6 +90,61 @@
 //! their radii of curvature: never in a jamming run) the `W⁺` terms are
 //! dropped, as `gap2d` does with `1/k`.
 //!
+//! ## The support function of a star-shaped surface
+//!
+//! A body whose surface is `x(y) = ρ(y) y` over the unit sphere (body
+//! frame, `ρ > 0`: star-shaped about its centre), like the `harmonic`
+//! family's `ρ = R⁰(1 + ΔF)`, has no closed-form support function;
+//! [`radial_support`] finds it. Write `ρ̃(x) = ρ(x/|x|)` (constant along
+//! rays) with `g = ∇ρ̃` (tangent to the sphere) and `H = ∇∇ρ̃` at the unit
+//! vector `y`, `P = 1 − y yᵀ`, `c = u·y`. For a direction `u` the support
+//! point maximises the height `φ(y) = u·x(y) = ρ(y) c` over the sphere; its
+//! Riemannian gradient and Hessian (the derivatives of the degree-0
+//! extension `ρ̃(x) u·x/|x|`, tangential block) are
+//!
+//! ```text
+//! t = c g + ρ P u,
+//! ∇_S∇_S φ = −A,     A = ρ c P − c P H P − (g (Pu)ᵀ + (Pu) gᵀ).
+//! ```
+//!
+//! `t = 0` says that the surface normal `N ∝ ρ y − ∇_S ρ` (that of a radial
+//! graph) is along `u`. `A` is the surface's second fundamental form
+//! written in the sphere's coordinates: `∂²(u·x)/∂a∂b = u·x_ab` where the
+//! first derivatives vanish, and `u·x_ab = −II_ab` with `u` the outward
+//! unit normal. The search is Newton's method on the sphere from `y₀`
+//! (`u` itself, the sphere's answer): solve `A δ = t` in the tangent plane
+//! (`(A + y yᵀ) δ = t` by Cholesky), step `y → (y + δ)/|y + δ|`, capped at
+//! 0.3 and halved until `φ` does not decrease; a gradient step `0.1 t/|t|`
+//! where `A` is not positive definite (far from the maximum). Converged
+//! after a Newton step below 10⁻⁷, taken without the descent test: the
+//! error left, `~C·10⁻¹⁴` with `C = O(1)` the ratio of third to second
+//! derivatives of `φ`, moves `s` by `~10⁻²⁸` (`φ` is stationary) and the
+//! support point by `~10⁻¹⁴`.
+//!
+//! At the optimum `y*`, `s(u) = ρ c`, and by the envelope theorem
+//! (`s(u) = max_y u·x(y)`) its gradient is the support point itself,
+//! `∇s = p = ρ(y*) y*`. Its Hessian follows by differentiating the
+//! optimum: `t(y*(u), u) = 0` with `∂t/∂u = g yᵀ + ρ P` (`t` is linear in
+//! `u`) gives `dy* = A⁺ (g yᵀ + ρ P) du`, and `dx = (ρ 1 + y gᵀ) dy` on
+//! tangent vectors, so with `B = ρ P + y gᵀ` (the differential of the map
+//! `y ↦ x(y)`, tangent plane of the sphere to tangent plane of the
+//! surface, which is `u⊥`)
+//!
+//! ```text
+//! ∇∇s(u) = B A⁺ Bᵀ,     A⁺ = (A + y yᵀ)⁻¹ − y yᵀ.
+//! ```
+//!
+//! This is the inverse of the Weingarten map. With the first fundamental
+//! form `I = BᵀB` and the second `II = A` in the sphere's coordinates, the
+//! Weingarten map is `L = I⁻¹ II`; on `u⊥`, in the surface's own tangent
+//! coordinates `dx = B dy`, `B A⁻¹ Bᵀ` has the eigenvalues of
+//! `(BᵀB) A⁻¹ = I II⁻¹ = L⁻¹`, the principal radii of curvature. It is
+//! symmetric, `∇∇s u = B A⁺ t = 0` at the optimum (`Bᵀ u = t`), and positive
+//! on `u⊥` exactly where `A` is: where the surface is strictly convex. On a
+//! non-convex surface the search may stop at a local maximum of the
+//! height (the convex hull's support function is the global one): callers
+//! check convexity first.
+//!
 //! [`QuadraticSupport`] is the support function of an ellipsoid,
 //! `s(x) = √(xᵀ M x)`, the body the `ellipsoid` family is made of and the
 //! one the tests here use.
@@ -278,6 +333,125 @@ where
     })
 }
 
+/// Where a [`radial_support`] search ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadialSupport {
+    /// `s(u)`, `∇s` (the support point) and `∇∇s` (module documentation).
+    pub jet: SupportJet3,
+    /// The unit vector `y*` of the support point `p = ρ(y*) y*`.
+    pub y: Vector<3>,
+    /// Newton or gradient steps taken.
+    pub iterations: u32,
+    /// False when the search stopped at its cap (the last iterate is used).
+    pub converged: bool,
+}
+
+/// The support jet of the star-shaped surface `x(y) = ρ(y) y` in the
+/// direction `u` (unit; the frame of `radial`), from the surface point
+/// whose outward normal is `u` (module documentation), searched from the
+/// unit vector `start`. `radial(y)` gives `ρ`, `∇ρ̃` and `∇∇ρ̃` at the unit
+/// vector `y`, with `ρ̃(x) = ρ(x/|x|)` constant along rays.
+#[inline]
+pub fn radial_support<F>(u: &Vector<3>, start: &Vector<3>, radial: F) -> RadialSupport
+where
+    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+{
+    struct At {
+        y: Vector<3>,
+        rho: f64,
+        g: Vector<3>,
+        h: Matrix<3>,
+        phi: f64,
+    }
+    let at = |y: Vector<3>| {
+        let (rho, g, h) = radial(&y);
+        At {
+            phi: rho * u.dot(&y),
+            y,
+            rho,
+            g,
+            h,
+        }
+    };
+    // t and A (module documentation) at a point.
+    let tangent = |a: &At| {
+        let y = a.y;
+        let c = u.dot(&y);
+        let p = Matrix::<3>::identity() - y * y.transpose();
+        let pu = u - y * c;
+        let g = a.g - y * y.dot(&a.g);
+        let t = g * c + pu * a.rho;
+        let gp = g * pu.transpose();
+        let big = p * (a.rho * c) - p * a.h * p * c - (gp + gp.transpose());
+        (t, big)
+    };
+    let mut cur = at(start.normalize());
+    let mut iterations = 0;
+    let mut converged = false;
+    while iterations < 60 {
+        iterations += 1;
+        let y = cur.y;
+        let (t, big) = tangent(&cur);
+        let newton = (big + y * y.transpose())
+            .cholesky()
+            .map(|c| c.solve(&t))
+            .map(|d| d - y * y.dot(&d))
+            .filter(|d| d.dot(&t) > 0.0);
+        let (mut step, is_newton) = match newton {
+            Some(d) => (d, true),
+            None => {
+                let n = t.norm();
+                if n == 0.0 {
+                    converged = true;
+                    break;
+                }
+                (t * (0.1 / n), false)
+            }
+        };
+        let len = step.norm();
+        if len > 0.3 {
+            step *= 0.3 / len;
+        }
+        if is_newton && len < 1e-7 {
+            cur = at(along_sphere(&y, &step));
+            converged = true;
+            break;
+        }
+        let mut next = at(along_sphere(&y, &step));
+        let mut halvings = 0;
+        while next.phi < cur.phi && halvings < 40 {
+            step *= 0.5;
+            next = at(along_sphere(&y, &step));
+            halvings += 1;
+        }
+        if next.phi < cur.phi {
+            converged = true;
+            break;
+        }
+        cur = next;
+    }
+    let y = cur.y;
+    let (_, big) = tangent(&cur);
+    let yy = y * y.transpose();
+    let inv = match (big + yy).cholesky() {
+        Some(c) => c.inverse() - yy,
+        None => Matrix::<3>::zeros(),
+    };
+    let g = cur.g - y * y.dot(&cur.g);
+    let b = (Matrix::<3>::identity() - yy) * cur.rho + y * g.transpose();
+    let hess = b * inv * b.transpose();
+    RadialSupport {
+        jet: SupportJet3 {
+            h: cur.phi,
+            point: y * cur.rho,
+            hess: (hess + hess.transpose()) * 0.5,
+        },
+        y,
+        iterations,
+        converged,
+    }
+}
+
 /// `∂²s(exp(−Σω e) v)/∂ω_p∂ω_q` at `ω = 0` for the support jet `jet` at
 /// `v` (module documentation).
 #[inline]
@@ -427,6 +601,56 @@ mod tests {
                 let col = (grad(u + d) - grad(u - d)) / (2.0 * e);
                 for b in 0..3 {
                     assert!((col[b] - j.hess[(b, a)]).abs() < 1e-8);
+                }
+            }
+        }
+    }
+
+    /// `ρ(y) = (yᵀ M⁻¹ y)^{−1/2}`, the ellipsoid `{x : xᵀ M⁻¹ x ≤ 1}` as a
+    /// radial function, with `∇ρ̃` and `∇∇ρ̃` written out (`q = yᵀAy`,
+    /// `A = M⁻¹`): `g = q^{−1/2} y − q^{−3/2} A y` and
+    /// `H = q^{−1/2} P − q^{−3/2}(y (Ay)ᵀ + (Ay) yᵀ + A) + 3 q^{−5/2} (Ay)(Ay)ᵀ`.
+    fn ellipsoid_radial(form: &Matrix<3>) -> impl Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>) {
+        let a = form.try_inverse().unwrap();
+        move |y: &Vector<3>| {
+            let ay = a * y;
+            let q = y.dot(&ay);
+            let (q1, q3, q5) = (q.powf(-0.5), q.powf(-1.5), q.powf(-2.5));
+            let p = Matrix::<3>::identity() - y * y.transpose();
+            let cross = y * ay.transpose();
+            let h =
+                p * q1 - (cross + cross.transpose() + a) * q3 + ay * ay.transpose() * (3.0 * q5);
+            (q1, y * q1 - ay * q3, h)
+        }
+    }
+
+    /// The radial support search against the closed form of the same
+    /// body: for ellipsoids of axis ratio up to 2 (far from the
+    /// near-spheres it is built for, so the safeguards are exercised),
+    /// turned, in 40 directions, started at `u`, `s`, `∇s` and `∇∇s` agree
+    /// with [`QuadraticSupport::jet`] to 1e-12 (round-off of order-1
+    /// numbers through a 3 × 3 inverse), converged in at most 12 steps.
+    /// The search also finds the support point from a start far from it.
+    #[test]
+    fn radial_support_of_an_ellipsoid_is_its_support_function() {
+        let q = Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap();
+        for semi in [[0.4, 0.55, 0.8], [1.0, 1.05, 0.97]] {
+            let e = ellipsoid(&q, semi);
+            let radial = ellipsoid_radial(&e.form);
+            for k in 0..40 {
+                let x = k as f64;
+                let u = Vector::<3>::new((x * 1.3).sin(), (x * 0.7).cos(), (x * 2.1).sin() + 0.1)
+                    .normalize();
+                let want = e.jet(&u);
+                for start in [u, -u + Vector::<3>::new(0.3, 0.2, 0.1)] {
+                    let got = radial_support(&u, &start, &radial);
+                    assert!(got.converged, "{semi:?} {u:?}");
+                    if start == u {
+                        assert!(got.iterations <= 12, "{} steps", got.iterations);
+                    }
+                    assert_relative_eq!(got.jet.h, want.h, epsilon = 1e-12);
+                    assert_relative_eq!(got.jet.point, want.point, epsilon = 1e-12);
+                    assert_relative_eq!(got.jet.hess, want.hess, epsilon = 1e-12);
                 }
             }
         }

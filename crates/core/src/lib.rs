@@ -31,6 +31,7 @@
 pub mod error;
 pub mod family;
 pub mod gap3d;
+pub mod gap_model;
 pub mod math;
 pub mod orientation;
 pub mod packing;

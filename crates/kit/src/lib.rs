@@ -406,6 +406,151 @@ pub fn check_registered(family: &str, dim: usize, params: &str) -> Checked {
         .unwrap_or_else(|e| panic!("{family} in D = {dim}: {e}"))
 }
 
+/// One pair's gap as a function of the pair coordinates
+/// `z = (r_j, q_i, q_j)` (`D` translations, then each body's `rot_dof`
+/// rotational coordinates, applied through the family's own `rotate`: all
+/// increments of a body at once, the convention of the second
+/// derivatives), at `r_ij + z[..D]`, sizes `sizes`. Panics unless the pair
+/// has exactly one contact.
+pub fn pair_gap_at<const D: usize, S: Shape<D>>(
+    shape: &S,
+    sizes: (f64, f64),
+    o_i: &S::Orientation,
+    o_j: &S::Orientation,
+    r_ij: &Vector<D>,
+    z: &[f64],
+) -> f64 {
+    let m = shape.rot_dof();
+    let (mut a, mut b) = (*o_i, *o_j);
+    shape.rotate(&mut a, &z[D..D + m]);
+    shape.rotate(&mut b, &z[D + m..D + 2 * m]);
+    let mut r = *r_ij;
+    for k in 0..D {
+        r[k] += z[k];
+    }
+    let c = shape.pair_contacts(sizes.0, &a, sizes.1, &b, &r, f64::INFINITY);
+    assert_eq!(c.len(), 1, "{}: one contact per pair", describe(shape));
+    c[0].gap
+}
+
+/// One pair's analytic first and second derivatives in
+/// `z = (r_j, q_i, q_j)` (from `Shape::contacts` and `Shape::gap_hessians`,
+/// which must agree on the contact bit for bit), beside central
+/// differences of [`pair_gap_at`]: of the gap with step `e1` for the
+/// gradient, second central differences with step `e2` for the Hessian.
+/// The caller asserts with the tolerances its family's derivatives allow.
+#[derive(Clone, Debug)]
+pub struct PairDerivatives {
+    /// `∂h/∂z`, analytic.
+    pub grad: Vec<f64>,
+    /// `∂²h/∂z∂z`, analytic.
+    pub hess: Vec<Vec<f64>>,
+    /// `∂h/∂z` by central differences.
+    pub fd_grad: Vec<f64>,
+    /// `∂²h/∂z∂z` by second central differences.
+    pub fd_hess: Vec<Vec<f64>>,
+}
+
+impl PairDerivatives {
+    /// The largest `|analytic − finite difference|` of the gradient.
+    pub fn grad_error(&self) -> f64 {
+        let pairs = self.grad.iter().zip(&self.fd_grad);
+        pairs.map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
+    }
+
+    /// The largest `|analytic − finite difference|` of the Hessian.
+    pub fn hess_error(&self) -> f64 {
+        let rows = self.hess.iter().zip(&self.fd_hess);
+        rows.flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+            .fold(0.0, f64::max)
+    }
+
+    /// The largest `|∂²h/∂z∂z|` (so a test can show it has teeth).
+    pub fn largest_second(&self) -> f64 {
+        self.hess.iter().flatten().fold(0.0, |m, x| m.max(x.abs()))
+    }
+}
+
+/// [`PairDerivatives`] of one pair (sizes `sizes`, orientations `o_i`,
+/// `o_j`, separation `r_ij`).
+pub fn pair_derivatives<const D: usize, S: Shape<D>>(
+    shape: &S,
+    sizes: (f64, f64),
+    o_i: &S::Orientation,
+    o_j: &S::Orientation,
+    r_ij: &Vector<D>,
+    e1: f64,
+    e2: f64,
+) -> PairDerivatives {
+    let m = shape.rot_dof();
+    let n = D + 2 * m;
+    let mut found = None;
+    shape
+        .gap_hessians(sizes.0, o_i, sizes.1, o_j, r_ij, f64::INFINITY, |h| {
+            found = Some(h)
+        })
+        .unwrap();
+    let h = found.expect("gap_hessians visits the pair");
+    let c = shape.pair_contacts(sizes.0, o_i, sizes.1, o_j, r_ij, f64::INFINITY);
+    assert_eq!(c.len(), 1, "{}: one contact per pair", describe(shape));
+    let c = c[0];
+    assert_eq!(h.contact, c, "gap_hessians and contacts agree bit for bit");
+    let mut grad = vec![0.0; n];
+    let mut hess = vec![vec![0.0; n]; n];
+    for a in 0..D {
+        grad[a] = c.grad_r[a];
+        for b in 0..D {
+            hess[a][b] = h.rr[(a, b)];
+        }
+    }
+    for p in 0..m {
+        grad[D + p] = c.grad_rot_i[p];
+        grad[D + m + p] = c.grad_rot_j[p];
+        for a in 0..D {
+            hess[a][D + p] = h.r_qi[p][a];
+            hess[D + p][a] = h.r_qi[p][a];
+            hess[a][D + m + p] = h.r_qj[p][a];
+            hess[D + m + p][a] = h.r_qj[p][a];
+        }
+        for q in 0..m {
+            hess[D + p][D + q] = h.qi_qi[p][q];
+            hess[D + m + p][D + m + q] = h.qj_qj[p][q];
+            hess[D + p][D + m + q] = h.qi_qj[p][q];
+            hess[D + m + q][D + p] = h.qi_qj[p][q];
+        }
+    }
+    let at = |z: &[f64]| pair_gap_at(shape, sizes, o_i, o_j, r_ij, z);
+    let fd_grad = (0..n)
+        .map(|a| {
+            let (mut zp, mut zm) = (vec![0.0; n], vec![0.0; n]);
+            zp[a] = e1;
+            zm[a] = -e1;
+            (at(&zp) - at(&zm)) / (2.0 * e1)
+        })
+        .collect();
+    let fd_hess = (0..n)
+        .map(|a| {
+            (0..n)
+                .map(|b| {
+                    let d = |sa: f64, sb: f64| {
+                        let mut z = vec![0.0; n];
+                        z[a] += sa * e2;
+                        z[b] += sb * e2;
+                        at(&z)
+                    };
+                    (d(1.0, 1.0) - d(1.0, -1.0) - d(-1.0, 1.0) + d(-1.0, -1.0)) / (4.0 * e2 * e2)
+                })
+                .collect()
+        })
+        .collect();
+    PairDerivatives {
+        grad,
+        hess,
+        fd_grad,
+        fd_hess,
+    }
+}
+
 /// The dimensions `family` claims (`Dims::Any`: every compiled one).
 pub fn claimed_dims(family: &str) -> Vec<usize> {
     let info = registry::family_info(family).unwrap();

@@ -72,62 +72,6 @@ fn contact(s: &Ellipsoid, o_i: &Quaternion, o_j: &Quaternion, r: &Vector<3>) -> 
     c[0]
 }
 
-/// The gap as a function of the pair's coordinates `z = (r_j, q_i, q_j)`,
-/// rotations applied through `rotate` (all increments of a body at once:
-/// the convention of the second derivatives).
-fn gap_at(s: &Ellipsoid, o_i: &Quaternion, o_j: &Quaternion, r: &Vector<3>, z: &[f64]) -> f64 {
-    let m = s.rot_dof();
-    let (mut a, mut b) = (*o_i, *o_j);
-    s.rotate(&mut a, &z[3..3 + m]);
-    s.rotate(&mut b, &z[3 + m..3 + 2 * m]);
-    let rr = r + Vector::<3>::new(z[0], z[1], z[2]);
-    contact(s, &a, &b, &rr).gap
-}
-
-/// The analytic gradient and Hessian of one pair's gap in `z`.
-fn analytic(
-    s: &Ellipsoid,
-    o_i: &Quaternion,
-    o_j: &Quaternion,
-    r: &Vector<3>,
-) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let m = s.rot_dof();
-    let n = 3 + 2 * m;
-    let mut hess = None;
-    s.gap_hessians(SIZES.0, o_i, SIZES.1, o_j, r, f64::INFINITY, |h| {
-        hess = Some(h)
-    })
-    .unwrap();
-    let h = hess.unwrap();
-    let c = contact(s, o_i, o_j, r);
-    assert_eq!(h.contact, c, "gap_hessians and contacts agree bit for bit");
-    let mut grad = vec![0.0; n];
-    let mut hm = vec![vec![0.0; n]; n];
-    for a in 0..3 {
-        grad[a] = c.grad_r[a];
-        for b in 0..3 {
-            hm[a][b] = h.rr[(a, b)];
-        }
-    }
-    for p in 0..m {
-        grad[3 + p] = c.grad_rot_i[p];
-        grad[3 + m + p] = c.grad_rot_j[p];
-        for a in 0..3 {
-            hm[a][3 + p] = h.r_qi[p][a];
-            hm[3 + p][a] = h.r_qi[p][a];
-            hm[a][3 + m + p] = h.r_qj[p][a];
-            hm[3 + m + p][a] = h.r_qj[p][a];
-        }
-        for q in 0..m {
-            hm[3 + p][3 + q] = h.qi_qi[p][q];
-            hm[3 + m + p][3 + m + q] = h.qj_qj[p][q];
-            hm[3 + p][3 + m + q] = h.qi_qj[p][q];
-            hm[3 + m + q][3 + p] = h.qi_qj[p][q];
-        }
-    }
-    (grad, hm)
-}
-
 /// Every first derivative of one contact against central differences of
 /// its gap (ε = 1e-6: truncation ε²|h'''|/6 ≲ 1e-10 for these radii of
 /// curvature ≥ 0.1, round-off 1e-16/ε ~ 1e-10; bound 1e-8), and every
@@ -142,45 +86,15 @@ fn analytic(
 fn pair_derivatives_match_finite_differences() {
     let mut largest: f64 = 0.0;
     for s in shapes() {
-        let m = s.rot_dof();
-        let n = 3 + 2 * m;
         for o_i in orientations() {
             for o_j in orientations().iter().rev() {
                 for r in separations(&s, &o_i, o_j) {
-                    let (grad, hm) = analytic(&s, &o_i, o_j, &r);
-                    let at = |z: &[f64]| gap_at(&s, &o_i, o_j, &r, z);
-                    let e1 = 1e-6;
-                    for a in 0..n {
-                        let mut zp = vec![0.0; n];
-                        let mut zm = vec![0.0; n];
-                        zp[a] = e1;
-                        zm[a] = -e1;
-                        let fd = (at(&zp) - at(&zm)) / (2.0 * e1);
-                        assert!(
-                            (fd - grad[a]).abs() < 1e-8,
-                            "{s:?}: ∂h/∂z[{a}] {} vs fd {fd} at r = {r:?}",
-                            grad[a]
-                        );
-                    }
-                    let e2 = 1e-4;
-                    for a in 0..n {
-                        for b in 0..n {
-                            let d = |sa: f64, sb: f64| {
-                                let mut z = vec![0.0; n];
-                                z[a] += sa * e2;
-                                z[b] += sb * e2;
-                                at(&z)
-                            };
-                            let fd = (d(1.0, 1.0) - d(1.0, -1.0) - d(-1.0, 1.0) + d(-1.0, -1.0))
-                                / (4.0 * e2 * e2);
-                            largest = largest.max(hm[a][b].abs());
-                            assert!(
-                                (fd - hm[a][b]).abs() < 1e-5,
-                                "{s:?}: ∂²h/∂z[{a}]∂z[{b}] {} vs fd {fd} at r = {r:?}, o_i = {o_i:?}",
-                                hm[a][b]
-                            );
-                        }
-                    }
+                    let d = jamkit_kit::pair_derivatives(&s, SIZES, &o_i, o_j, &r, 1e-6, 1e-4);
+                    largest = largest.max(d.largest_second());
+                    assert!(
+                        d.grad_error() < 1e-8 && d.hess_error() < 1e-5,
+                        "{s:?} at r = {r:?}, o_i = {o_i:?}: {d:?}"
+                    );
                 }
             }
         }

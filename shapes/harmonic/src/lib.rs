@@ -55,6 +55,23 @@
 //! a sphere adds `∂h/∂r_j = r̂` and `(1 − r̂ r̂ᵀ)/r`. The two bodies'
 //! rotations do not mix (`∂²h/∂ω_i∂ω_j = 0`).
 //!
+//! **Exact gap** (`gap: "Exact"`; the default `"FirstOrder"` is the gap
+//! above, bit for bit). The signed distance of two convex bodies along
+//! their common normal, `h = max_u [u·r_ij − s_i(u) − s_j(−u)]`, with its
+//! gradient and Hessian in positions and rotations by
+//! [`jamkit_core::gap3d::exact`], from each body's support function: the
+//! body-frame surface `x(y) = ρ(y) y`, `ρ = R⁰(1 + ΔF)`, has its support
+//! point in the direction `u` where its normal is `u`, found by Newton's
+//! method on the sphere ([`jamkit_core::gap3d::radial_support`], whose
+//! documentation derives `s`, `∇s = ρ(y*) y*` and
+//! `∇∇s = B A⁺ Bᵀ`, the inverse Weingarten map), each search started where
+//! the body's previous one in the same gap ended ([`Harmonic::support`]
+//! gives it for one direction). It needs a convex body:
+//! [`Harmonic::new`] refuses `Exact`, naming `params.gap`, when the
+//! convexity condition of [`Harmonic::is_convex`] fails anywhere on
+//! [`CONVEXITY_GRID`] × 2·[`CONVEXITY_GRID`] directions, and refuses
+//! `"SecondOrder"` (there is none in 3D).
+//!
 //! **Rotational coordinates.** Three (`ω` in the world frame, the nmer
 //! convention: `Q → exp(ω) Q`), or two when `F` is axisymmetric (every mode
 //! with a non-zero coefficient has `m = 0`): then the rotation about the
@@ -84,18 +101,21 @@
 
 pub mod solid;
 
+use jamkit_core::gap_model::GapModel;
+use jamkit_core::gap3d::{self, ExactGap3, RadialSupport};
 use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, Matrix, ParamSpec, Quaternion, RotVec,
     Shape, ShapeVisitor, Vector,
 };
 use serde::Deserialize;
 use solid::{LMAX, Poly};
+use std::cell::Cell;
 use std::f64::consts::PI;
 
 /// The family's self-description.
 pub const INFO: FamilyInfo = FamilyInfo {
     name: "harmonic",
-    about: "near-spheres R(û) = R0 [1 + Δ F(Qᵀû)], F a sum of real spherical harmonics Y_lm (l ≥ 2) each scaled to largest slope 1, with the paper's first-order gap (3D)",
+    about: "near-spheres R(û) = R0 [1 + Δ F(Qᵀû)], F a sum of real spherical harmonics Y_lm (l ≥ 2) each scaled to largest slope 1, with the paper's first-order gap or the exact gap of convex bodies (3D)",
     dims: Dims::Only(&[3]),
     params: &[
         ParamSpec {
@@ -128,8 +148,18 @@ pub const INFO: FamilyInfo = FamilyInfo {
             is_list: false,
             default: Some("None"),
         },
+        ParamSpec {
+            name: "gap",
+            about: "gap model, a string: \"FirstOrder\" (the paper's, error O(Δ²)) or \"Exact\" (signed distance along the common normal from the support functions; convex bodies only); None: FirstOrder",
+            is_list: false,
+            default: Some("None"),
+        },
     ],
 };
+
+/// How finely [`Harmonic::new`] samples the surface (`n × 2n` directions)
+/// before it accepts the exact gap.
+pub const CONVEXITY_GRID: usize = 64;
 
 /// One mode `c Ŷ_lm`.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -162,6 +192,9 @@ pub struct HarmonicParams {
     /// Moment of inertia (`None`: `Δ`).
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
+    /// The gap model (default: the paper's first order).
+    #[serde(default, deserialize_with = "jamkit_core::gap_model::deserialize_gap")]
+    pub gap: GapModel,
 }
 
 fn err(
@@ -215,6 +248,7 @@ pub struct Harmonic {
     /// `V / (R⁰)³`.
     unit_volume: f64,
     inertia: f64,
+    gap: GapModel,
 }
 
 /// The value and derivatives of one body's term `G̃(x) = F(Qᵀx/|x|)` and
@@ -361,7 +395,7 @@ impl Harmonic {
             .iter()
             .map(|(_, p)| p.mul(p).sphere_mean())
             .collect();
-        Ok(Self {
+        let shape = Self {
             delta: d,
             axisymmetric: modes.iter().all(|md| md.m == 0 || md.c == 0.0),
             modes,
@@ -370,7 +404,42 @@ impl Harmonic {
             mean_squares,
             unit_volume,
             inertia,
-        })
+            gap: GapModel::FirstOrder,
+        };
+        shape.with_gap(p.gap)
+    }
+
+    /// The same body with the gap model `gap`. Refused with the field
+    /// named: `SecondOrder` (no second-order gap in 3D), and `Exact` for a
+    /// body that is not convex on the [`CONVEXITY_GRID`] sample of
+    /// directions ([`Harmonic::is_convex`]).
+    pub fn with_gap(mut self, gap: GapModel) -> jamkit_core::Result<Self> {
+        if gap == GapModel::SecondOrder {
+            return Err(err(
+                "params.gap",
+                "SecondOrder",
+                "\"FirstOrder\" (default) or \"Exact\": harmonic has no second-order gap",
+            ));
+        }
+        if gap == GapModel::Exact && !self.is_convex(CONVEXITY_GRID) {
+            return Err(err(
+                "params.gap",
+                "Exact",
+                format!(
+                    "needs a convex body, and Δ = {} makes this one non-convex (its curvature changes sign on a {} × {} grid of directions; the common normal is then not unique); use \"FirstOrder\" or a smaller Δ",
+                    self.delta,
+                    CONVEXITY_GRID,
+                    2 * CONVEXITY_GRID
+                ),
+            ));
+        }
+        self.gap = gap;
+        Ok(self)
+    }
+
+    /// The gap model.
+    pub fn gap_model(&self) -> GapModel {
+        self.gap
     }
 
     /// `Δ`.
@@ -521,15 +590,7 @@ impl Harmonic {
         inv_r: f64,
     ) -> BodyJet {
         let (_, grad, y) = self.value_grad(columns, x, inv_r);
-        let mut hb = Matrix::<3>::zeros();
-        for (l, p) in &self.by_degree {
-            let lf = *l as f64;
-            let (v, g) = p.value_grad(&y);
-            let h = p.hessian(&y);
-            let gy = g * y.transpose();
-            hb += h - (gy + gy.transpose()) * lf - Matrix::<3>::identity() * (lf * v)
-                + y * y.transpose() * (lf * (lf + 2.0) * v);
-        }
+        let (_, _, hb) = self.unit_jet(&y);
         let mut jet = BodyJet {
             hess: Matrix::<3>::zeros(),
             x_rot: [Vector::<3>::zeros(); MAX_ROT],
@@ -553,6 +614,116 @@ impl Harmonic {
             }
         }
         jet
+    }
+
+    /// `F̃`, `∇F̃` and `∇∇F̃` at the body-frame unit vector `y`, with
+    /// `F̃(x) = F(x/|x|)` (crate documentation, `Q = 1`, `|x| = 1`).
+    #[inline(always)]
+    fn unit_jet(&self, y: &Vector<3>) -> (f64, Vector<3>, Matrix<3>) {
+        let mut value = 0.0;
+        let mut grad = Vector::<3>::zeros();
+        let mut hb = Matrix::<3>::zeros();
+        for (l, p) in &self.by_degree {
+            let lf = *l as f64;
+            let (v, g) = p.value_grad(y);
+            let h = p.hessian(y);
+            value += v;
+            grad += g - y * (lf * v);
+            let gy = g * y.transpose();
+            hb += h - (gy + gy.transpose()) * lf - Matrix::<3>::identity() * (lf * v)
+                + y * y.transpose() * (lf * (lf + 2.0) * v);
+        }
+        (value, grad, hb)
+    }
+
+    /// `ρ = R⁰(1 + ΔF)`, `∇ρ̃` and `∇∇ρ̃` at the body-frame unit vector `y`
+    /// (`ρ̃(x) = ρ(x/|x|)`): the radial function
+    /// [`gap3d::radial_support`] reads.
+    #[inline(always)]
+    fn radial_jet(&self, size: f64, y: &Vector<3>) -> (f64, Vector<3>, Matrix<3>) {
+        let (value, grad, hess) = self.unit_jet(y);
+        let a = size * self.delta;
+        (size + a * value, grad * a, hess * a)
+    }
+
+    /// The support function of a body of size `size` whose rotation has
+    /// the columns `columns`, in the world direction `u` (unit), with its
+    /// gradient (the support point) and Hessian, world frame: the search
+    /// of [`gap3d::radial_support`] in the body frame, started at `Qᵀu`.
+    /// Meaningful for a convex body (checked by [`Harmonic::new`] for the
+    /// exact gap).
+    pub fn support(&self, size: f64, columns: &[Vector<3>; 3], u: &Vector<3>) -> RadialSupport {
+        self.support_from(size, columns, u, u)
+    }
+
+    /// [`Harmonic::support`] with the search started at the world-frame
+    /// unit vector `start` (a warm start: where a search for a nearby
+    /// direction ended).
+    pub fn support_from(
+        &self,
+        size: f64,
+        columns: &[Vector<3>; 3],
+        u: &Vector<3>,
+        start: &Vector<3>,
+    ) -> RadialSupport {
+        let [c0, c1, c2] = columns;
+        let body = |v: &Vector<3>| Vector::<3>::new(c0.dot(v), c1.dot(v), c2.dot(v));
+        let ub = body(u);
+        let mut out = gap3d::radial_support(&ub, &body(start), |y| self.radial_jet(size, y));
+        let rot = Matrix::<3>::from_columns(columns);
+        let pb = out.jet.point;
+        out.jet.point = c0 * pb[0] + c1 * pb[1] + c2 * pb[2];
+        out.jet.hess = rot * out.jet.hess * rot.transpose();
+        out.y = rot * out.y;
+        out
+    }
+
+    /// The support jet at `u`, the search started where the last one
+    /// (`last`: its direction and support unit vector) ended, moved with the
+    /// direction; `last` updated.
+    #[inline(always)]
+    fn warm_support(
+        &self,
+        size: f64,
+        columns: &[Vector<3>; 3],
+        u: &Vector<3>,
+        last: &Cell<Option<(Vector<3>, Vector<3>)>>,
+    ) -> gap3d::SupportJet3 {
+        let start = match last.get() {
+            Some((u0, y0)) => (y0 + (u - u0)).normalize(),
+            None => *u,
+        };
+        let found = self.support_from(size, columns, u, &start);
+        last.set(Some((*u, found.y)));
+        found.jet
+    }
+
+    /// The exact gap of two bodies (crate documentation), or `None` when it
+    /// certainly exceeds `max_gap`, whatever the family's gap model.
+    #[inline]
+    pub fn exact_gap(
+        &self,
+        size_i: f64,
+        o_i: &Quaternion,
+        size_j: f64,
+        o_j: &Quaternion,
+        r_ij: &Vector<3>,
+        max_gap: f64,
+    ) -> Option<ExactGap3> {
+        let r = r_ij.norm();
+        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
+            return None;
+        }
+        let (ci, cj) = (o_i.columns(), o_j.columns());
+        // Warm starts: each search begins where the body's last one ended,
+        // moved with the direction (`y* − u` changes slowly, by O(Δ|δu|)).
+        let (last_i, last_j) = (Cell::new(None), Cell::new(None));
+        gap3d::exact(
+            r_ij,
+            |u| self.warm_support(size_i, &ci, u, &last_i),
+            |u| self.warm_support(size_j, &cj, u, &last_j),
+            max_gap,
+        )
     }
 
     /// `∂G̃/∂q_p = g · t_p = g · (x × e_p) = e_p · (g × x)`.
@@ -735,6 +906,13 @@ impl Shape<3> for Harmonic {
         max_gap: f64,
         mut visit: F,
     ) {
+        if self.gap == GapModel::Exact {
+            if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
+                let (c_i, c_j) = (o_i.columns(), o_j.columns());
+                visit(e.contact(&self.axes(&c_i), &self.axes(&c_j), self.rot_dof()));
+            }
+            return;
+        }
         if let Some((r, x, inv_r, u)) = self.direction(size_i, size_j, r_ij, max_gap) {
             let (c_i, c_j) = (o_i.columns(), o_j.columns());
             visit(self.contact(size_i, &c_i, size_j, &c_j, r, &x, inv_r, &u));
@@ -754,6 +932,13 @@ impl Shape<3> for Harmonic {
         max_gap: f64,
         mut visit: F,
     ) -> jamkit_core::Result<()> {
+        if self.gap == GapModel::Exact {
+            if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
+                let (c_i, c_j) = (o_i.columns(), o_j.columns());
+                visit(e.hessian(&self.axes(&c_i), &self.axes(&c_j), self.rot_dof()));
+            }
+            return Ok(());
+        }
         let Some((r, x, inv_r, u)) = self.direction(size_i, size_j, r_ij, max_gap) else {
             return Ok(());
         };
@@ -784,17 +969,21 @@ impl Shape<3> for Harmonic {
 }
 
 #[cfg(test)]
+mod exact_tests;
+
+#[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
-    fn single(l: u32, m: i32, delta: f64) -> Harmonic {
+    pub(crate) fn single(l: u32, m: i32, delta: f64) -> Harmonic {
         Harmonic::new(&HarmonicParams {
             l: Some(l),
             m: Some(m),
             modes: None,
             delta,
             inertia: None,
+            gap: GapModel::FirstOrder,
         })
         .unwrap()
     }
@@ -830,7 +1019,7 @@ mod tests {
         assert!(s.rotation(&[1.0, 0.0, 0.0]).is_none());
     }
 
-    fn mixed(delta: f64) -> Harmonic {
+    pub(crate) fn mixed(delta: f64) -> Harmonic {
         Harmonic::new(&HarmonicParams {
             l: None,
             m: None,
@@ -850,6 +1039,7 @@ mod tests {
             ]),
             delta,
             inertia: None,
+            gap: GapModel::FirstOrder,
         })
         .unwrap()
     }
@@ -963,7 +1153,7 @@ mod tests {
         );
     }
 
-    fn orientations() -> Vec<Quaternion> {
+    pub(crate) fn orientations() -> Vec<Quaternion> {
         vec![
             Quaternion::IDENTITY,
             Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap(),
@@ -973,7 +1163,7 @@ mod tests {
 
     /// Separations along `±Q_i e_z` (the poles of the zonal modes, where
     /// their gradient vanishes), 10⁻³ off them, and generic.
-    fn separations(o_i: &Quaternion) -> Vec<Vector<3>> {
+    pub(crate) fn separations(o_i: &Quaternion) -> Vec<Vector<3>> {
         let pole = o_i.apply(&Vector::<3>::z());
         let tilt = o_i.apply(&Vector::<3>::new(1e-3, -2e-3, 1.0)).normalize();
         vec![
@@ -1043,18 +1233,6 @@ mod tests {
         }
     }
 
-    /// The gap as a function of the pair's coordinates `z = (r_j, q_i, q_j)`,
-    /// rotations applied through `rotate` (all increments of a body at
-    /// once: `exp(Σ q_p e_p)`, the convention of the second derivatives).
-    fn gap_at(s: &Harmonic, o_i: &Quaternion, o_j: &Quaternion, r: &Vector<3>, z: &[f64]) -> f64 {
-        let m = Shape::<3>::rot_dof(s);
-        let (mut a, mut b) = (*o_i, *o_j);
-        s.rotate(&mut a, &z[3..3 + m]);
-        s.rotate(&mut b, &z[3 + m..3 + 2 * m]);
-        let rr = r + Vector::<3>::new(z[0], z[1], z[2]);
-        s.pair_contacts(0.5, &a, 0.7, &b, &rr, f64::INFINITY)[0].gap
-    }
-
     /// Every first derivative of one contact against central differences
     /// of its gap (ε = 1e-6: truncation ε²|h'''| ~ 1e-11, round-off
     /// 1e-16/ε ~ 1e-10; bound 1e-8), and every second derivative against
@@ -1066,75 +1244,15 @@ mod tests {
     #[test]
     fn pair_derivatives_match_finite_differences() {
         for s in shapes() {
-            let m = Shape::<3>::rot_dof(&s);
-            let n = 3 + 2 * m;
             for o_i in orientations() {
                 for o_j in orientations().iter().rev() {
                     for r in separations(&o_i) {
-                        let mut hess = None;
-                        s.gap_hessians(0.5, &o_i, 0.7, o_j, &r, f64::INFINITY, |h| hess = Some(h))
-                            .unwrap();
-                        let h = hess.unwrap();
-                        let c = s.pair_contacts(0.5, &o_i, 0.7, o_j, &r, f64::INFINITY)[0];
-                        assert_eq!(h.contact, c, "gap_hessians and contacts agree");
-                        // Analytic first and second derivatives in z.
-                        let mut grad = vec![0.0; n];
-                        let mut hm = vec![vec![0.0; n]; n];
-                        for a in 0..3 {
-                            grad[a] = c.grad_r[a];
-                            for b in 0..3 {
-                                hm[a][b] = h.rr[(a, b)];
-                            }
-                        }
-                        for p in 0..m {
-                            grad[3 + p] = c.grad_rot_i[p];
-                            grad[3 + m + p] = c.grad_rot_j[p];
-                            for a in 0..3 {
-                                hm[a][3 + p] = h.r_qi[p][a];
-                                hm[3 + p][a] = h.r_qi[p][a];
-                                hm[a][3 + m + p] = h.r_qj[p][a];
-                                hm[3 + m + p][a] = h.r_qj[p][a];
-                            }
-                            for q in 0..m {
-                                hm[3 + p][3 + q] = h.qi_qi[p][q];
-                                hm[3 + m + p][3 + m + q] = h.qj_qj[p][q];
-                                hm[3 + p][3 + m + q] = h.qi_qj[p][q];
-                                hm[3 + m + q][3 + p] = h.qi_qj[p][q];
-                            }
-                        }
-                        let at = |z: &[f64]| gap_at(&s, &o_i, o_j, &r, z);
-                        let e1 = 1e-6;
-                        for a in 0..n {
-                            let mut zp = vec![0.0; n];
-                            let mut zm = vec![0.0; n];
-                            zp[a] = e1;
-                            zm[a] = -e1;
-                            let fd = (at(&zp) - at(&zm)) / (2.0 * e1);
-                            assert!(
-                                (fd - grad[a]).abs() < 1e-8,
-                                "{s:?}: ∂h/∂z[{a}] {} vs fd {fd}",
-                                grad[a]
-                            );
-                        }
-                        let e2 = 1e-4;
-                        for a in 0..n {
-                            for b in 0..n {
-                                let d = |sa: f64, sb: f64| {
-                                    let mut z = vec![0.0; n];
-                                    z[a] += sa * e2;
-                                    z[b] += sb * e2;
-                                    at(&z)
-                                };
-                                let fd = (d(1.0, 1.0) - d(1.0, -1.0) - d(-1.0, 1.0)
-                                    + d(-1.0, -1.0))
-                                    / (4.0 * e2 * e2);
-                                assert!(
-                                    (fd - hm[a][b]).abs() < 1e-5,
-                                    "{s:?}: ∂²h/∂z[{a}]∂z[{b}] {} vs fd {fd} at r = {r:?}",
-                                    hm[a][b]
-                                );
-                            }
-                        }
+                        let d =
+                            jamkit_kit::pair_derivatives(&s, (0.5, 0.7), &o_i, o_j, &r, 1e-6, 1e-4);
+                        assert!(
+                            d.grad_error() < 1e-8 && d.hess_error() < 1e-5,
+                            "{s:?} at r = {r:?}: {d:?}"
+                        );
                     }
                 }
             }
@@ -1214,6 +1332,7 @@ mod tests {
             modes: None,
             delta: 0.1,
             inertia: None,
+            gap: GapModel::FirstOrder,
         };
         let cases: Vec<(HarmonicParams, &str)> = vec![
             (
