@@ -1,7 +1,8 @@
 //! The committed paper-size data (`data/`, issue "The paper at the paper's
 //! size"): every archived packing loads and is a jammed packing of the
 //! profile, and `jamkit report` regenerates the report from a slice of
-//! them (the n = 2 packings), with φ_J as the files say.
+//! them (the n = 2 packings), with φ_J as the files say; the same for the
+//! 3D near-spheres at N = 512 (`data/paper3d-n512`, issue 20).
 
 use jamkit_format::PackingFile;
 use std::path::{Path, PathBuf};
@@ -107,4 +108,60 @@ fn the_report_regenerates_from_a_slice_of_the_data() {
         "φ_J {printed} not in the report:\n{}",
         r.markdown
     );
+}
+
+/// The committed 3D data (`data/paper3d-n512`, issue 20): every archived
+/// packing is a jammed `harmonic` packing at N = 512 with its contacts,
+/// gaps and spectrum, and `jamkit report` regenerates `report/paper3d`'s
+/// fits from it, named by `l`, with ω_* read off below ω = 1 as the
+/// experiment file asks.
+#[test]
+fn the_3d_data_regenerates_its_report() {
+    let dir = data("paper3d-n512");
+    let files = packing_files(&dir);
+    assert!(files.len() >= 12, "{} files", files.len());
+    for path in &files {
+        let f = PackingFile::load_checked(path).unwrap();
+        assert!(
+            f.positions.is_empty(),
+            "{}: configuration kept",
+            path.display()
+        );
+        assert_eq!(
+            (f.family.as_str(), f.dim, f.particles),
+            ("harmonic", 3, 512)
+        );
+        assert!(
+            f.energy_per_particle > 1e-16 && f.energy_per_particle < 2e-16,
+            "{}: V/N = {}",
+            path.display(),
+            f.energy_per_particle
+        );
+        let m = &f.measures;
+        assert!(m.z_j.is_some() && m.gaps.is_some(), "{}", f.id);
+        let s = m
+            .spectrum
+            .as_ref()
+            .unwrap_or_else(|| panic!("{}: no spectrum", f.id));
+        assert_eq!(s.dos.omega_star_below, 1.0, "{}", f.id);
+    }
+    let out = tempfile::tempdir().unwrap();
+    let options = jamkit_report::Options {
+        resamples: 50,
+        ..Default::default()
+    };
+    let r = jamkit_report::report(&[dir], out.path(), &options).unwrap();
+    assert!(
+        r.markdown.contains("| l | N | Δ values |"),
+        "{}",
+        r.markdown
+    );
+    for quantity in ["δz_J", "ω₁", "ω_*"] {
+        let f = r
+            .fits
+            .iter()
+            .find(|f| f.quantity == quantity && f.n == 2 && f.mode == "l");
+        let f = f.unwrap_or_else(|| panic!("no {quantity} fit for l = 2: {:?}", r.fits));
+        assert!(f.fit.points >= 3 && f.fit.exponent.is_finite(), "{f:?}");
+    }
 }
