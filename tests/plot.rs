@@ -97,3 +97,30 @@ fn report_on_the_quickstart_draws_its_figures() {
     assert!(index.contains("phi_j_vs_"), "{index}");
     assert!(fig.join("dos.png").exists() || index.contains("no Spectrum measured"));
 }
+
+#[test]
+fn z_above_jam_goes_on_a_log_axis_without_its_exact_zeros() {
+    // Disks compressed by δφ = 1e-7 above their own jamming point gain no
+    // contact (z − z_J = 0 exactly at N = 64); at 1e-4 and 1e-1 they do,
+    // a factor ~30 apart: the figure is log-scaled with the zero left off,
+    // and its caption says so (a log axis cannot show 0).
+    let text = r#"(name: "zaj", family: "sphere", particles: 64, samples: 1, seed: 1,
+        protocol: AboveJam(delta_phi: [1e-7, 1e-4, 1e-1]), observables: [Contacts, Pressure])"#;
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    let run = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&e, run.path(), 1);
+    let dz: Vec<f64> = report
+        .packings
+        .iter()
+        .map(|p| p.measures.z_j.unwrap() - p.measures.jam_point.as_ref().unwrap().z.unwrap())
+        .collect();
+    assert_eq!(dz.iter().filter(|&&d| d == 0.0).count(), 1, "{dz:?}");
+    let out = tempfile::tempdir().unwrap();
+    let p = jamkit_report::runplot::plot(&[run.path().to_path_buf()], out.path()).unwrap();
+    assert!(
+        p.index
+            .contains("(1 point with a mean of exactly 0 left off the log axis)"),
+        "{}",
+        p.index
+    );
+}

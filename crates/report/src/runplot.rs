@@ -369,18 +369,32 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
             });
             // Pressure and moduli on a log axis when every mean is positive
             // and they span a factor of 20 (a negative mean G stays on a
-            // linear axis, where it shows).
+            // linear axis, where it shows). `z − z_J` is exactly 0 where a
+            // compression gained no contact: such points are left off a
+            // log axis (the caption counts them), a negative one keeps the
+            // axis linear.
+            let zero_ok = key == "z_above_jam";
+            let ys: Vec<f64> = groups
+                .iter()
+                .flat_map(|g| g.2.iter().map(|p| p.1))
+                .collect();
+            let zeros = ys.iter().filter(|&&y| y == 0.0).count();
+            let positive = ys.iter().copied().filter(|&y| y > 0.0);
+            let lo = positive.clone().fold(f64::INFINITY, f64::min);
+            let hi = positive.fold(f64::NEG_INFINITY, f64::max);
             let log_y = matches!(
                 key,
                 "pressure" | "shear_modulus" | "bulk_modulus" | "z_above_jam"
-            ) && {
-                let ys: Vec<f64> = groups
-                    .iter()
-                    .flat_map(|g| g.2.iter().map(|p| p.1))
-                    .collect();
-                let lo = ys.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = ys.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-                lo > 0.0 && hi >= 20.0 * lo
+            ) && ys.iter().all(|&y| y > 0.0 || (zero_ok && y == 0.0))
+                && hi >= 20.0 * lo;
+            let left_off = if log_y && zeros > 0 {
+                for g in groups.iter_mut() {
+                    g.2.retain(|p| p.1 > 0.0);
+                }
+                let points = if zeros == 1 { "point" } else { "points" };
+                format!(" ({zeros} {points} with a mean of exactly 0 left off the log axis)")
+            } else {
+                String::new()
             };
             let series = groups
                 .into_iter()
@@ -406,7 +420,7 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
                     legend: SeriesLabelPosition::UpperLeft,
                 },
                 format!(
-                    "{y_label} against {}, mean ± s.e.m. over each point's packings",
+                    "{y_label} against {}, mean ± s.e.m. over each point's packings{left_off}",
                     axis_name(x_name)
                 ),
             )?;
