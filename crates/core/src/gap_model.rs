@@ -27,19 +27,47 @@ impl std::str::FromStr for GapModel {
     type Err = String;
 
     fn from_str(text: &str) -> Result<Self, String> {
+        GapModel::parse_among(text, &GapModel::ALL)
+    }
+}
+
+impl GapModel {
+    /// Every model, in the order of their accuracy.
+    pub const ALL: [GapModel; 3] = [GapModel::FirstOrder, GapModel::SecondOrder, GapModel::Exact];
+
+    /// Read a model's name (case, `_`, `-` and spaces ignored; `first`,
+    /// `second` for short) among the `allowed` ones; the error names what
+    /// is allowed.
+    pub fn parse_among(text: &str, allowed: &[GapModel]) -> Result<GapModel, String> {
         let key: String = text
             .chars()
             .filter(|c| !matches!(c, '_' | '-' | ' '))
             .collect::<String>()
             .to_ascii_lowercase();
-        match key.as_str() {
-            "firstorder" | "first" => Ok(GapModel::FirstOrder),
-            "secondorder" | "second" => Ok(GapModel::SecondOrder),
-            "exact" => Ok(GapModel::Exact),
-            _ => Err(format!(
-                "unknown gap model {text:?}: allowed are \"FirstOrder\", \"SecondOrder\", \"Exact\""
+        let model = match key.as_str() {
+            "firstorder" | "first" => Some(GapModel::FirstOrder),
+            "secondorder" | "second" => Some(GapModel::SecondOrder),
+            "exact" => Some(GapModel::Exact),
+            _ => None,
+        };
+        match model {
+            Some(m) if allowed.contains(&m) => Ok(m),
+            Some(m) => Err(format!(
+                "gap model {:?} is not offered by this family: allowed are {}",
+                m.name(),
+                GapModel::names(allowed)
+            )),
+            None => Err(format!(
+                "unknown gap model {text:?}: allowed are {}",
+                GapModel::names(allowed)
             )),
         }
+    }
+
+    /// `"FirstOrder", "Exact"`: the names of `models` for messages.
+    fn names(models: &[GapModel]) -> String {
+        let names: Vec<String> = models.iter().map(|m| format!("{:?}", m.name())).collect();
+        names.join(", ")
     }
 }
 
@@ -48,6 +76,21 @@ impl std::str::FromStr for GapModel {
 /// (`gap: Exact`) reaches a family as a unit value without its name, and
 /// is refused with a message saying how to write it.
 pub fn deserialize_gap<'de, D: serde::Deserializer<'de>>(d: D) -> Result<GapModel, D::Error> {
+    deserialize_among(d, &GapModel::ALL)
+}
+
+/// [`deserialize_gap`] for a family without the second-order gap (the 3D
+/// `harmonic`): `"FirstOrder"` or `"Exact"`, and the error says so.
+pub fn deserialize_first_or_exact<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<GapModel, D::Error> {
+    deserialize_among(d, &[GapModel::FirstOrder, GapModel::Exact])
+}
+
+fn deserialize_among<'de, D: serde::Deserializer<'de>>(
+    d: D,
+    allowed: &[GapModel],
+) -> Result<GapModel, D::Error> {
     #[derive(serde::Deserialize)]
     #[serde(untagged)]
     enum Raw {
@@ -59,11 +102,14 @@ pub fn deserialize_gap<'de, D: serde::Deserializer<'de>>(d: D) -> Result<GapMode
     use serde::Deserialize;
     use serde::de::Error;
     match Raw::deserialize(d)? {
-        Raw::Name(s) | Raw::Wrapped(Some(s)) => s.parse().map_err(D::Error::custom),
+        Raw::Name(s) | Raw::Wrapped(Some(s)) => {
+            GapModel::parse_among(&s, allowed).map_err(D::Error::custom)
+        }
         Raw::Wrapped(None) => Ok(GapModel::FirstOrder),
-        Raw::Unit(()) => Err(D::Error::custom(
-            "write the gap model as a string, e.g. gap: \"Exact\" (allowed: \"FirstOrder\", \"SecondOrder\", \"Exact\")",
-        )),
+        Raw::Unit(()) => Err(D::Error::custom(format!(
+            "write the gap model as a string, e.g. gap: \"Exact\" (allowed: {})",
+            GapModel::names(allowed)
+        ))),
     }
 }
 
@@ -75,5 +121,32 @@ impl GapModel {
             GapModel::SecondOrder => "SecondOrder",
             GapModel::Exact => "Exact",
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::GapModel;
+
+    #[test]
+    fn names_are_read_loosely_and_refused_with_what_is_allowed() {
+        assert_eq!("second_order".parse(), Ok(GapModel::SecondOrder));
+        assert_eq!("Exact".parse(), Ok(GapModel::Exact));
+        let planar = &GapModel::ALL;
+        let solid = &[GapModel::FirstOrder, GapModel::Exact];
+        assert_eq!(
+            GapModel::parse_among("first-order", solid),
+            Ok(GapModel::FirstOrder)
+        );
+        let e = GapModel::parse_among("Exactly", planar).unwrap_err();
+        assert_eq!(
+            e,
+            r#"unknown gap model "Exactly": allowed are "FirstOrder", "SecondOrder", "Exact""#
+        );
+        let e = GapModel::parse_among("second", solid).unwrap_err();
+        assert_eq!(
+            e,
+            r#"gap model "SecondOrder" is not offered by this family: allowed are "FirstOrder", "Exact""#
+        );
     }
 }

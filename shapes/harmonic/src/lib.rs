@@ -193,7 +193,10 @@ pub struct HarmonicParams {
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
     /// The gap model (default: the paper's first order).
-    #[serde(default, deserialize_with = "jamkit_core::gap_model::deserialize_gap")]
+    #[serde(
+        default,
+        deserialize_with = "jamkit_core::gap_model::deserialize_first_or_exact"
+    )]
     pub gap: GapModel,
 }
 
