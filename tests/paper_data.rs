@@ -21,6 +21,26 @@ fn packing_files(dir: &Path) -> Vec<PathBuf> {
     paths
 }
 
+/// An archived packing of the profile: it loads, holds no configuration, is
+/// of the given `(family, dim, particles)` and ended in the paper's window
+/// 1e-16 < V/N < 2e-16.
+fn load_archived(path: &Path, kind: (&str, usize, usize)) -> PackingFile {
+    let f = PackingFile::load_checked(path).unwrap();
+    assert!(
+        f.positions.is_empty(),
+        "{}: configuration kept",
+        path.display()
+    );
+    assert_eq!((f.family.as_str(), f.dim, f.particles), kind);
+    assert!(
+        f.energy_per_particle > 1e-16 && f.energy_per_particle < 2e-16,
+        "{}: V/N = {}",
+        path.display(),
+        f.energy_per_particle
+    );
+    f
+}
+
 /// Every archived packing of the N = 1024 set loads, holds no
 /// configuration, and ended in the paper's window 1e-16 < V/N < 2e-16 with
 /// its contacts, gaps and spectrum measured.
@@ -29,22 +49,7 @@ fn the_archived_packings_are_jammed_packings_of_the_profile() {
     let files = packing_files(&data("paper-full"));
     assert!(files.len() >= 32, "{} files", files.len());
     for path in &files {
-        let f = PackingFile::load_checked(path).unwrap();
-        assert!(
-            f.positions.is_empty(),
-            "{}: configuration kept",
-            path.display()
-        );
-        assert_eq!(
-            (f.family.as_str(), f.dim, f.particles),
-            ("fourier", 2, 1024)
-        );
-        assert!(
-            f.energy_per_particle > 1e-16 && f.energy_per_particle < 2e-16,
-            "{}: V/N = {}",
-            path.display(),
-            f.energy_per_particle
-        );
+        let f = load_archived(path, ("fourier", 2, 1024));
         let m = &f.measures;
         assert!(
             m.z_j.is_some() && m.gaps.is_some() && m.spectrum.is_some(),
@@ -121,22 +126,7 @@ fn the_3d_data_regenerates_its_report() {
     let files = packing_files(&dir);
     assert!(files.len() >= 12, "{} files", files.len());
     for path in &files {
-        let f = PackingFile::load_checked(path).unwrap();
-        assert!(
-            f.positions.is_empty(),
-            "{}: configuration kept",
-            path.display()
-        );
-        assert_eq!(
-            (f.family.as_str(), f.dim, f.particles),
-            ("harmonic", 3, 512)
-        );
-        assert!(
-            f.energy_per_particle > 1e-16 && f.energy_per_particle < 2e-16,
-            "{}: V/N = {}",
-            path.display(),
-            f.energy_per_particle
-        );
+        let f = load_archived(path, ("harmonic", 3, 512));
         let m = &f.measures;
         assert!(m.z_j.is_some() && m.gaps.is_some(), "{}", f.id);
         let s = m
