@@ -34,6 +34,9 @@ pub const LMAX: u32 = 8;
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Poly {
     terms: Vec<(f64, [u8; 3])>,
+    /// The largest exponent of any variable (the powers a jet needs),
+    /// kept with the terms: the pair loop asked for it on every call.
+    top: usize,
 }
 
 fn binomial(n: u32, k: u32) -> f64 {
@@ -56,20 +59,26 @@ fn odd_double_factorial(n: i32) -> f64 {
 }
 
 impl Poly {
+    fn from_terms(terms: Vec<(f64, [u8; 3])>) -> Self {
+        let top = terms
+            .iter()
+            .flat_map(|(_, e)| e.iter().copied())
+            .max()
+            .unwrap_or(0) as usize;
+        Self { terms, top }
+    }
+
     fn from_map(map: BTreeMap<[u8; 3], f64>) -> Self {
-        Self {
-            terms: map
-                .into_iter()
+        Self::from_terms(
+            map.into_iter()
                 .filter(|(_, c)| *c != 0.0)
                 .map(|(e, c)| (c, e))
                 .collect(),
-        }
+        )
     }
 
     fn monomial(c: f64, e: [u8; 3]) -> Self {
-        Self {
-            terms: vec![(c, e)],
-        }
+        Self::from_terms(vec![(c, e)])
     }
 
     /// The monomials.
@@ -100,9 +109,7 @@ impl Poly {
 
     /// `s · self`.
     pub fn scaled(&self, s: f64) -> Self {
-        Self {
-            terms: self.terms.iter().map(|(c, e)| (c * s, *e)).collect(),
-        }
+        Self::from_terms(self.terms.iter().map(|(c, e)| (c * s, *e)).collect())
     }
 
     /// The Laplacian, as a polynomial.
@@ -157,12 +164,9 @@ impl Poly {
     }
 
     /// The largest exponent of any variable (the powers a jet needs).
+    #[inline(always)]
     fn top_power(&self) -> usize {
-        self.terms
-            .iter()
-            .flat_map(|(_, e)| e.iter().copied())
-            .max()
-            .unwrap_or(0) as usize
+        self.top
     }
 
     /// `v_a^k` for `k = 0 … top` (`top ≤ LMAX`).
