@@ -240,6 +240,60 @@ fn along_sphere(u: &Vector<3>, d: &Vector<3>) -> Vector<3> {
     (u + d).normalize()
 }
 
+/// The step of both searches on the sphere ([`exact`], [`radial_support`]):
+/// the Newton step `newton` when there is one, else a gradient step of
+/// length 0.1 along the tangent ascent direction `t`; either cut to length
+/// 0.3. Gives the step, whether it is Newton's, and its length before the
+/// cut; `None` when there is no Newton step and `t = 0` (a stationary
+/// point: converged).
+#[inline(always)]
+fn safeguarded_step(newton: Option<Vector<3>>, t: &Vector<3>) -> Option<(Vector<3>, bool, f64)> {
+    let (mut step, is_newton) = match newton {
+        Some(d) => (d, true),
+        None => {
+            let n = t.norm();
+            if n == 0.0 {
+                return None;
+            }
+            (t * (0.1 / n), false)
+        }
+    };
+    let len = step.norm();
+    if len > 0.3 {
+        step *= 0.3 / len;
+    }
+    Some((step, is_newton, len))
+}
+
+/// The line search of both searches: `x` moved along `step`
+/// ([`along_sphere`]), the step halved (up to 40 times) while the
+/// objective `value` of the evaluation `eval` there falls below `current`.
+/// The point and its evaluation, or `None` when even the last is below
+/// `current` (no ascent along `step` at round-off level).
+#[inline(always)]
+fn ascend<T>(
+    x: &Vector<3>,
+    mut step: Vector<3>,
+    current: f64,
+    eval: impl Fn(&Vector<3>) -> T,
+    value: impl Fn(&T) -> f64,
+) -> Option<(Vector<3>, T)> {
+    let mut next_x = along_sphere(x, &step);
+    let mut next = eval(&next_x);
+    let mut halvings = 0;
+    while value(&next) < current && halvings < 40 {
+        step *= 0.5;
+        next_x = along_sphere(x, &step);
+        next = eval(&next_x);
+        halvings += 1;
+    }
+    if value(&next) < current {
+        None
+    } else {
+        Some((next_x, next))
+    }
+}
+
 /// The exact signed distance `h = max_{|u|=1} [u·r_ij − s_i(u) − s_j(−u)]`
 /// (module documentation), with `sup_i(u)` and `sup_j(v)` the two bodies'
 /// world-frame support jets (the solver asks body `j` at `v = −u`), started
@@ -281,21 +335,10 @@ where
             .cholesky()
             .map(|c| c.solve(&t))
             .map(|d| d - u * u.dot(&d));
-        let (mut step, is_newton) = match newton {
-            Some(d) => (d, true),
-            None => {
-                let n = t.norm();
-                if n == 0.0 {
-                    converged = true;
-                    break;
-                }
-                (t * (0.1 / n), false)
-            }
+        let Some((step, is_newton, len)) = safeguarded_step(newton, &t) else {
+            converged = true;
+            break;
         };
-        let len = step.norm();
-        if len > 0.3 {
-            step *= 0.3 / len;
-        }
         if is_newton && len < 1e-6 {
             u = along_sphere(&u, &step);
             cur = eval(&u);
@@ -305,21 +348,12 @@ where
             }
             continue;
         }
-        let mut next_u = along_sphere(&u, &step);
-        let mut next = eval(&next_u);
-        let mut halvings = 0;
-        while next.g < cur.g && halvings < 40 {
-            step *= 0.5;
-            next_u = along_sphere(&u, &step);
-            next = eval(&next_u);
-            halvings += 1;
-        }
-        if next.g < cur.g {
+        let Some((next_u, next)) = ascend(&u, step, cur.g, &eval, |e| e.g) else {
             // No ascent along this direction at round-off level: u is the
             // maximum to machine precision.
             converged = true;
             break;
-        }
+        };
         u = next_u;
         cur = next;
     }
@@ -397,37 +431,19 @@ where
             .map(|c| c.solve(&t))
             .map(|d| d - y * y.dot(&d))
             .filter(|d| d.dot(&t) > 0.0);
-        let (mut step, is_newton) = match newton {
-            Some(d) => (d, true),
-            None => {
-                let n = t.norm();
-                if n == 0.0 {
-                    converged = true;
-                    break;
-                }
-                (t * (0.1 / n), false)
-            }
+        let Some((step, is_newton, len)) = safeguarded_step(newton, &t) else {
+            converged = true;
+            break;
         };
-        let len = step.norm();
-        if len > 0.3 {
-            step *= 0.3 / len;
-        }
         if is_newton && len < 1e-7 {
             cur = at(along_sphere(&y, &step));
             converged = true;
             break;
         }
-        let mut next = at(along_sphere(&y, &step));
-        let mut halvings = 0;
-        while next.phi < cur.phi && halvings < 40 {
-            step *= 0.5;
-            next = at(along_sphere(&y, &step));
-            halvings += 1;
-        }
-        if next.phi < cur.phi {
+        let Some((_, next)) = ascend(&y, step, cur.phi, |y| at(*y), |a| a.phi) else {
             converged = true;
             break;
-        }
+        };
         cur = next;
     }
     let y = cur.y;
