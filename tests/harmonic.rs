@@ -13,10 +13,7 @@ mod common;
 
 use jamkit_core::Shape;
 use jamkit_core::gap_model::GapModel;
-use jamkit_experiment::runner::{RunOptions, run};
-use jamkit_experiment::{Experiment, overrides};
 use jamkit_harmonic::{Harmonic, HarmonicParams, Mode};
-use std::path::Path;
 
 fn single(l: u32, m: i32, delta: f64) -> Harmonic {
     Harmonic::new(&HarmonicParams {
@@ -176,29 +173,13 @@ fn rattlers_and_the_isostatic_count_use_the_real_coordinates() {
 /// jams every packing into the paper's window 1e-16 < V/N < 2e-16.
 #[test]
 fn quick_experiment_jams() {
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper3d/quick.ron");
-    let e = Experiment::from_file(&file).unwrap();
-    let e = overrides::apply(&e, &["particles=64".into(), "samples=1".into()]).unwrap();
-    e.validate().unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let report = run(
-        &e,
-        &RunOptions {
-            out: dir.path().to_path_buf(),
-            jobs: Some(2),
-            log: jamkit_experiment::Log::Quiet,
-            shard: None,
-        },
-    )
-    .unwrap();
-    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let report = common::run_file(
+        "experiments/paper3d/quick.ron",
+        &["particles=64", "samples=1"],
+        2,
+    );
     assert_eq!(report.packings.len(), 5, "one packing per Δ");
     for p in &report.packings {
-        assert!(
-            p.energy_per_particle > 1e-16 && p.energy_per_particle < 2e-16,
-            "{}: V/N = {}",
-            p.id,
-            p.energy_per_particle
-        );
+        common::assert_in_window(p);
     }
 }

@@ -185,6 +185,16 @@ pub fn run_inline(text: &str) -> Vec<jamkit_format::PackingFile> {
     run_ok(&e, dir.path(), 1).packings
 }
 
+/// A jammed packing: inside the paper's window `10⁻¹⁶ < V/N < 2·10⁻¹⁶`.
+pub fn assert_in_window(p: &jamkit_format::PackingFile) {
+    assert!(
+        p.energy_per_particle > 1e-16 && p.energy_per_particle < 2e-16,
+        "{}: V/N = {}",
+        p.id,
+        p.energy_per_particle
+    );
+}
+
 /// The rattler convention and the isostatic count of a 3D quaternion
 /// family, recomputed from one packing file alone: contacts are the pairs
 /// with a negative gap (minimum image), bodies with fewer than d + 1 = 4
