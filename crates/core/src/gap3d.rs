@@ -348,7 +348,7 @@ where
             }
             continue;
         }
-        let Some((next_u, next)) = ascend(&u, step, cur.g, &eval, |e| e.g) else {
+        let Some((next_u, next)) = ascend(&u, step, cur.g, eval, |e| e.g) else {
             // No ascent along this direction at round-off level: u is the
             // maximum to machine precision.
             converged = true;
