@@ -21,12 +21,7 @@ fn spheroid(alpha: f64) -> Ellipsoid {
 }
 
 fn triaxial(axes: [f64; 3]) -> Ellipsoid {
-    Ellipsoid::new(&EllipsoidParams {
-        alpha: None,
-        axes: Some(axes),
-        inertia: None,
-    })
-    .unwrap()
+    Ellipsoid::triaxial(axes).unwrap()
 }
 
 /// The kit's forces and torques, Hessian (central differences of the

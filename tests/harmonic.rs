@@ -16,15 +16,7 @@ use jamkit_core::gap_model::GapModel;
 use jamkit_harmonic::{Harmonic, HarmonicParams, Mode};
 
 fn single(l: u32, m: i32, delta: f64) -> Harmonic {
-    Harmonic::new(&HarmonicParams {
-        l: Some(l),
-        m: Some(m),
-        modes: None,
-        delta,
-        inertia: None,
-        gap: Default::default(),
-    })
-    .unwrap()
+    Harmonic::single(l, m, delta).unwrap()
 }
 
 fn mixed(delta: f64) -> Harmonic {

@@ -272,6 +272,16 @@ impl Ellipsoid {
         })
     }
 
+    /// The ellipsoid with semi-axis ratios `axes` (body `x, y, z`) and the
+    /// default inertia.
+    pub fn triaxial(axes: [f64; 3]) -> jamkit_core::Result<Self> {
+        Self::new(&EllipsoidParams {
+            alpha: None,
+            axes: Some(axes),
+            inertia: None,
+        })
+    }
+
     /// The ratios `ξ` (unit product) of the semi-axes along body `x, y, z`.
     pub fn ratios(&self) -> [f64; 3] {
         self.ratios

@@ -12,12 +12,7 @@ fn spheroid(alpha: f64) -> Ellipsoid {
 }
 
 fn triaxial(axes: [f64; 3]) -> Ellipsoid {
-    Ellipsoid::new(&EllipsoidParams {
-        alpha: None,
-        axes: Some(axes),
-        inertia: None,
-    })
-    .unwrap()
+    Ellipsoid::triaxial(axes).unwrap()
 }
 
 /// Prolate, oblate, near the sphere, long, flat and triaxial.

@@ -417,6 +417,19 @@ impl Harmonic {
         shape.with_gap(p.gap)
     }
 
+    /// The single mode `Y_l^m` of amplitude `delta`, with the default
+    /// inertia and the first-order gap.
+    pub fn single(l: u32, m: i32, delta: f64) -> jamkit_core::Result<Self> {
+        Self::new(&HarmonicParams {
+            l: Some(l),
+            m: Some(m),
+            modes: None,
+            delta,
+            inertia: None,
+            gap: GapModel::FirstOrder,
+        })
+    }
+
     /// The same body with the gap model `gap`. Refused with the field
     /// named: `SecondOrder` (no second-order gap in 3D), and `Exact` for a
     /// body that is not convex on the [`CONVEXITY_GRID`] sample of
@@ -981,15 +994,7 @@ mod tests {
     use approx::assert_relative_eq;
 
     pub(crate) fn single(l: u32, m: i32, delta: f64) -> Harmonic {
-        Harmonic::new(&HarmonicParams {
-            l: Some(l),
-            m: Some(m),
-            modes: None,
-            delta,
-            inertia: None,
-            gap: GapModel::FirstOrder,
-        })
-        .unwrap()
+        Harmonic::single(l, m, delta).unwrap()
     }
 
     /// The drawing surface agrees with the shape: its rotation of the
