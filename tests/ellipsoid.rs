@@ -66,11 +66,7 @@ fn alpha_one_reproduces_the_sphere_packing() {
     assert_eq!(spheres.len(), 2);
     for params in [r#"{"alpha": 1.0}"#, r#"{"axes": [1.5, 1.5, 1.5]}"#] {
         let round = common::run_inline(&text(&format!(r#""ellipsoid", params: {params}"#)));
-        for (a, b) in spheres.iter().zip(&round) {
-            assert_eq!(a.positions, b.positions);
-            assert_eq!(a.phi.to_bits(), b.phi.to_bits());
-            assert!(b.orientations.is_empty());
-        }
+        common::assert_sphere_packings(&spheres, &round);
     }
 }
 
@@ -88,16 +84,11 @@ fn rattlers_and_the_isostatic_count_use_the_real_coordinates() {
         (r#"{"alpha": 1.3}"#, 5),
         (r#"{"axes": [1.0, 1.15, 1.3]}"#, 6),
     ] {
-        let text = format!(
-            r#"(name: "r", dim: 3, family: "ellipsoid", params: {params}, particles: 64, samples: 1, seed: 2, observables: [Contacts])"#
-        );
-        let packings = common::run_inline(&text);
-        let p = &packings[0];
-        let map = jamkit_registry::params_from_json(&p.params).unwrap();
+        let (p, map) = common::packing_with_params_3d("ellipsoid", params);
         let shape: EllipsoidParams = jamkit_registry::parse_params("ellipsoid", &map).unwrap();
         let shape = Ellipsoid::new(&shape).unwrap();
         assert_eq!(Shape::<3>::rot_dof(&shape) + 3, f);
-        let margin = common::check_counts_from_file(&shape, p);
+        let margin = common::check_counts_from_file(&shape, &p);
         assert!(margin < 0, "{params}: iso margin {margin}");
     }
 }

@@ -126,11 +126,7 @@ fn delta_zero_reproduces_the_sphere_packing() {
         r#""harmonic", params: {"l": 3, "m": 1, "delta": 0.0}"#,
     ));
     assert_eq!(spheres.len(), 2);
-    for (a, b) in spheres.iter().zip(&near) {
-        assert_eq!(a.positions, b.positions);
-        assert_eq!(a.phi.to_bits(), b.phi.to_bits());
-        assert!(b.orientations.is_empty());
-    }
+    common::assert_sphere_packings(&spheres, &near);
 }
 
 /// The rattler convention and the isostatic count, recomputed from the
@@ -146,16 +142,11 @@ fn rattlers_and_the_isostatic_count_use_the_real_coordinates() {
         (r#"{"l": 2, "m": 0, "delta": 0.2}"#, 5),
         (r#"{"l": 2, "m": 2, "delta": 0.2}"#, 6),
     ] {
-        let text = format!(
-            r#"(name: "r", dim: 3, family: "harmonic", params: {params}, particles: 64, samples: 1, seed: 2, observables: [Contacts])"#
-        );
-        let packings = common::run_inline(&text);
-        let p = &packings[0];
-        let map = jamkit_registry::params_from_json(&p.params).unwrap();
+        let (p, map) = common::packing_with_params_3d("harmonic", params);
         let shape: HarmonicParams = jamkit_registry::parse_params("harmonic", &map).unwrap();
         let shape = Harmonic::new(&shape).unwrap();
         assert_eq!(Shape::<3>::rot_dof(&shape) + 3, f);
-        common::check_counts_from_file(&shape, p);
+        common::check_counts_from_file(&shape, &p);
     }
 }
 
