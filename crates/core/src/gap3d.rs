@@ -265,35 +265,6 @@ fn safeguarded_step(newton: Option<Vector<3>>, t: &Vector<3>) -> Option<(Vector<
     Some((step, is_newton, len))
 }
 
-/// The line search of both searches: `x` moved along `step`
-/// ([`along_sphere`]), the step halved (up to 40 times) while the
-/// objective `value` of the evaluation `eval` there falls below `current`.
-/// The point and its evaluation, or `None` when even the last is below
-/// `current` (no ascent along `step` at round-off level).
-#[inline(always)]
-fn ascend<T>(
-    x: &Vector<3>,
-    mut step: Vector<3>,
-    current: f64,
-    eval: impl Fn(&Vector<3>) -> T,
-    value: impl Fn(&T) -> f64,
-) -> Option<(Vector<3>, T)> {
-    let mut next_x = along_sphere(x, &step);
-    let mut next = eval(&next_x);
-    let mut halvings = 0;
-    while value(&next) < current && halvings < 40 {
-        step *= 0.5;
-        next_x = along_sphere(x, &step);
-        next = eval(&next_x);
-        halvings += 1;
-    }
-    if value(&next) < current {
-        None
-    } else {
-        Some((next_x, next))
-    }
-}
-
 /// The exact signed distance `h = max_{|u|=1} [u·r_ij − s_i(u) − s_j(−u)]`
 /// (module documentation), with `sup_i(u)` and `sup_j(v)` the two bodies'
 /// world-frame support jets (the solver asks body `j` at `v = −u`), started
@@ -335,7 +306,7 @@ where
             .cholesky()
             .map(|c| c.solve(&t))
             .map(|d| d - u * u.dot(&d));
-        let Some((step, is_newton, len)) = safeguarded_step(newton, &t) else {
+        let Some((mut step, is_newton, len)) = safeguarded_step(newton, &t) else {
             converged = true;
             break;
         };
@@ -348,12 +319,24 @@ where
             }
             continue;
         }
-        let Some((next_u, next)) = ascend(&u, step, cur.g, eval, |e| e.g) else {
+        // NOTE: this halving line search and `radial_support`'s are written
+        // out each: one generic helper for both made ellipsoid packings 15 %
+        // slower (same bits).
+        let mut next_u = along_sphere(&u, &step);
+        let mut next = eval(&next_u);
+        let mut halvings = 0;
+        while next.g < cur.g && halvings < 40 {
+            step *= 0.5;
+            next_u = along_sphere(&u, &step);
+            next = eval(&next_u);
+            halvings += 1;
+        }
+        if next.g < cur.g {
             // No ascent along this direction at round-off level: u is the
             // maximum to machine precision.
             converged = true;
             break;
-        };
+        }
         u = next_u;
         cur = next;
     }
@@ -431,7 +414,7 @@ where
             .map(|c| c.solve(&t))
             .map(|d| d - y * y.dot(&d))
             .filter(|d| d.dot(&t) > 0.0);
-        let Some((step, is_newton, len)) = safeguarded_step(newton, &t) else {
+        let Some((mut step, is_newton, len)) = safeguarded_step(newton, &t) else {
             converged = true;
             break;
         };
@@ -440,10 +423,17 @@ where
             converged = true;
             break;
         }
-        let Some((_, next)) = ascend(&y, step, cur.phi, |y| at(*y), |a| a.phi) else {
+        let mut next = at(along_sphere(&y, &step));
+        let mut halvings = 0;
+        while next.phi < cur.phi && halvings < 40 {
+            step *= 0.5;
+            next = at(along_sphere(&y, &step));
+            halvings += 1;
+        }
+        if next.phi < cur.phi {
             converged = true;
             break;
-        };
+        }
         cur = next;
     }
     let y = cur.y;
