@@ -337,25 +337,23 @@ pub fn run(what: BenchCommand) -> Result<()> {
                 "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s"
             );
             for seed in seeds {
+                // One packing of `shape` in `D` dimensions with this seed.
+                macro_rules! bench {
+                    ($d:literal, $shape:expr) => {
+                        bench_packing::<$d, _>(
+                            $shape,
+                            particles,
+                            seed,
+                            skin,
+                            &fire,
+                            &jam_params,
+                            trace_out.as_mut(),
+                        )?
+                    };
+                }
                 match (family, dim) {
-                    (BenchFamily::Sphere, 2) => bench_packing::<2, _>(
-                        Sphere,
-                        particles,
-                        seed,
-                        skin,
-                        &fire,
-                        &jam_params,
-                        trace_out.as_mut(),
-                    )?,
-                    (BenchFamily::Sphere, 3) => bench_packing::<3, _>(
-                        Sphere,
-                        particles,
-                        seed,
-                        skin,
-                        &fire,
-                        &jam_params,
-                        trace_out.as_mut(),
-                    )?,
+                    (BenchFamily::Sphere, 2) => bench!(2, Sphere),
+                    (BenchFamily::Sphere, 3) => bench!(3, Sphere),
                     (BenchFamily::Fourier, 2) => {
                         let shape = NearDisk::fourier(&FourierParams {
                             n,
@@ -364,40 +362,10 @@ pub fn run(what: BenchCommand) -> Result<()> {
                             gap: gap.into(),
                         })
                         .map_err(|e| anyhow::anyhow!("{e}"))?;
-                        bench_packing::<2, _>(
-                            shape,
-                            particles,
-                            seed,
-                            skin,
-                            &fire,
-                            &jam_params,
-                            trace_out.as_mut(),
-                        )?
+                        bench!(2, shape)
                     }
-                    (BenchFamily::Nmer, 2) => {
-                        let shape = dimer::<2>(alpha)?;
-                        bench_packing::<2, _>(
-                            shape,
-                            particles,
-                            seed,
-                            skin,
-                            &fire,
-                            &jam_params,
-                            trace_out.as_mut(),
-                        )?
-                    }
-                    (BenchFamily::Nmer, 3) => {
-                        let shape = dimer::<3>(alpha)?;
-                        bench_packing::<3, _>(
-                            shape,
-                            particles,
-                            seed,
-                            skin,
-                            &fire,
-                            &jam_params,
-                            trace_out.as_mut(),
-                        )?
-                    }
+                    (BenchFamily::Nmer, 2) => bench!(2, dimer::<2>(alpha)?),
+                    (BenchFamily::Nmer, 3) => bench!(3, dimer::<3>(alpha)?),
                     _ => anyhow::bail!("--dim {dim}: must be 2 or 3 (2 for near-disks)"),
                 }
             }

@@ -13,21 +13,10 @@ mod common;
 
 use jamkit_core::Shape;
 use jamkit_core::gap_model::GapModel;
-use jamkit_experiment::runner::{RunOptions, run};
-use jamkit_experiment::{Experiment, overrides};
 use jamkit_harmonic::{Harmonic, HarmonicParams, Mode};
-use std::path::Path;
 
 fn single(l: u32, m: i32, delta: f64) -> Harmonic {
-    Harmonic::new(&HarmonicParams {
-        l: Some(l),
-        m: Some(m),
-        modes: None,
-        delta,
-        inertia: None,
-        gap: Default::default(),
-    })
-    .unwrap()
+    Harmonic::single(l, m, delta).unwrap()
 }
 
 fn mixed(delta: f64) -> Harmonic {
@@ -137,11 +126,7 @@ fn delta_zero_reproduces_the_sphere_packing() {
         r#""harmonic", params: {"l": 3, "m": 1, "delta": 0.0}"#,
     ));
     assert_eq!(spheres.len(), 2);
-    for (a, b) in spheres.iter().zip(&near) {
-        assert_eq!(a.positions, b.positions);
-        assert_eq!(a.phi.to_bits(), b.phi.to_bits());
-        assert!(b.orientations.is_empty());
-    }
+    common::assert_sphere_packings(&spheres, &near);
 }
 
 /// The rattler convention and the isostatic count, recomputed from the
@@ -157,16 +142,11 @@ fn rattlers_and_the_isostatic_count_use_the_real_coordinates() {
         (r#"{"l": 2, "m": 0, "delta": 0.2}"#, 5),
         (r#"{"l": 2, "m": 2, "delta": 0.2}"#, 6),
     ] {
-        let text = format!(
-            r#"(name: "r", dim: 3, family: "harmonic", params: {params}, particles: 64, samples: 1, seed: 2, observables: [Contacts])"#
-        );
-        let packings = common::run_inline(&text);
-        let p = &packings[0];
-        let map = jamkit_registry::params_from_json(&p.params).unwrap();
+        let (p, map) = common::packing_with_params_3d("harmonic", params);
         let shape: HarmonicParams = jamkit_registry::parse_params("harmonic", &map).unwrap();
         let shape = Harmonic::new(&shape).unwrap();
         assert_eq!(Shape::<3>::rot_dof(&shape) + 3, f);
-        common::check_counts_from_file(&shape, p);
+        common::check_counts_from_file(&shape, &p);
     }
 }
 
@@ -176,29 +156,13 @@ fn rattlers_and_the_isostatic_count_use_the_real_coordinates() {
 /// jams every packing into the paper's window 1e-16 < V/N < 2e-16.
 #[test]
 fn quick_experiment_jams() {
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper3d/quick.ron");
-    let e = Experiment::from_file(&file).unwrap();
-    let e = overrides::apply(&e, &["particles=64".into(), "samples=1".into()]).unwrap();
-    e.validate().unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let report = run(
-        &e,
-        &RunOptions {
-            out: dir.path().to_path_buf(),
-            jobs: Some(2),
-            log: jamkit_experiment::Log::Quiet,
-            shard: None,
-        },
-    )
-    .unwrap();
-    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let report = common::run_file(
+        "experiments/paper3d/quick.ron",
+        &["particles=64", "samples=1"],
+        2,
+    );
     assert_eq!(report.packings.len(), 5, "one packing per Δ");
     for p in &report.packings {
-        assert!(
-            p.energy_per_particle > 1e-16 && p.energy_per_particle < 2e-16,
-            "{}: V/N = {}",
-            p.id,
-            p.energy_per_particle
-        );
+        common::assert_in_window(p);
     }
 }

@@ -185,6 +185,44 @@ pub fn run_inline(text: &str) -> Vec<jamkit_format::PackingFile> {
     run_ok(&e, dir.path(), 1).packings
 }
 
+/// A jammed packing: inside the paper's window `10⁻¹⁶ < V/N < 2·10⁻¹⁶`.
+pub fn assert_in_window(p: &jamkit_format::PackingFile) {
+    assert!(
+        p.energy_per_particle > 1e-16 && p.energy_per_particle < 2e-16,
+        "{}: V/N = {}",
+        p.id,
+        p.energy_per_particle
+    );
+}
+
+/// The packings of a family's sphere limit are the sphere family's, bit
+/// for bit (centres and φ), with no orientations stored.
+pub fn assert_sphere_packings(
+    spheres: &[jamkit_format::PackingFile],
+    limit: &[jamkit_format::PackingFile],
+) {
+    for (a, b) in spheres.iter().zip(limit) {
+        assert_eq!(a.positions, b.positions);
+        assert_eq!(a.phi.to_bits(), b.phi.to_bits());
+        assert!(b.orientations.is_empty());
+    }
+}
+
+/// One packing of the 3D family `family` with `params` (a RON map;
+/// N = 64, seed 2, contacts only) and the parameters it stored, for
+/// [`check_counts_from_file`].
+pub fn packing_with_params_3d(
+    family: &str,
+    params: &str,
+) -> (jamkit_format::PackingFile, jamkit_registry::ParamMap) {
+    let text = format!(
+        r#"(name: "r", dim: 3, family: "{family}", params: {params}, particles: 64, samples: 1, seed: 2, observables: [Contacts])"#
+    );
+    let p = run_inline(&text).remove(0);
+    let map = jamkit_registry::params_from_json(&p.params).unwrap();
+    (p, map)
+}
+
 /// The rattler convention and the isostatic count of a 3D quaternion
 /// family, recomputed from one packing file alone: contacts are the pairs
 /// with a negative gap (minimum image), bodies with fewer than d + 1 = 4

@@ -135,6 +135,18 @@ impl Quaternion {
         .renormalized()
     }
 
+    /// The rotation axes `e_p` of the coordinates [`Quaternion::stepped`]
+    /// steps, from the columns of `R(o)`: the world axes, or the body's own
+    /// `R(o) x̂, R(o) ŷ` (and `R(o) ẑ`, unused) for an `axial` body.
+    #[inline(always)]
+    pub fn step_axes(columns: &[Vector<3>; 3], axial: bool) -> [Vector<3>; 3] {
+        if axial {
+            *columns
+        } else {
+            [Vector::<3>::x(), Vector::<3>::y(), Vector::<3>::z()]
+        }
+    }
+
     /// The orientation stored as `[w, x, y, z]` ([`Quaternion::coords`]):
     /// four numbers of norm 1 to 10⁻⁶, renormalised; `None` otherwise.
     pub fn from_coords(coords: &[f64]) -> Option<Self> {

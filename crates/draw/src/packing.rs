@@ -115,22 +115,13 @@ impl Packing2d {
             });
         }
         for (k, row) in file.spheres.iter().enumerate() {
-            match row[..] {
-                [x, y, r, b]
-                    if x.is_finite()
-                        && y.is_finite()
-                        && r > 0.0
-                        && r.is_finite()
-                        && b >= 0.0
-                        && b.fract() == 0.0
-                        && (b as usize) < n =>
-                {
-                    let i = b as usize;
+            match sphere_row::<2>(row, n) {
+                Some(([x, y], r, i)) => {
                     // Rows are written as the wrapped centre plus the offset.
                     let (px, py) = (file.positions[i][0], file.positions[i][1]);
                     bodies[i].spheres.push(([x - px, y - py], r));
                 }
-                _ => {
+                None => {
                     return Err(bad(format!(
                         "spheres[{k}] = {row:?}: must be [x, y, radius > 0, body index < {n}]"
                     )));
@@ -262,6 +253,25 @@ pub(crate) fn configuration<const D: usize>(
         }
     }
     Ok((box_edges, centers))
+}
+
+/// A row `[x_1 … x_D, radius, body]` of a packing file's `spheres`: the
+/// centre, the radius and the body's index; `None` unless the row has
+/// `D + 2` numbers, the centre is finite, the radius positive and finite,
+/// and the index a whole number below `n` (2D here, 3D in
+/// [`crate::scene3d`]).
+pub(crate) fn sphere_row<const D: usize>(row: &[f64], n: usize) -> Option<([f64; D], f64, usize)> {
+    if row.len() != D + 2 {
+        return None;
+    }
+    let (x, r, b) = (&row[..D], row[D], row[D + 1]);
+    let valid = x.iter().all(|v| v.is_finite())
+        && r > 0.0
+        && r.is_finite()
+        && b >= 0.0
+        && b.fract() == 0.0
+        && (b as usize) < n;
+    valid.then(|| (std::array::from_fn(|a| x[a]), r, b as usize))
 }
 
 #[cfg(test)]

@@ -217,17 +217,8 @@ impl Packing3d {
             });
         }
         for (k, row) in file.spheres.iter().enumerate() {
-            match row[..] {
-                [x, y, z, r, b]
-                    if matches!(solid, Solid::Spheres)
-                        && [x, y, z].iter().all(|v| v.is_finite())
-                        && r > 0.0
-                        && r.is_finite()
-                        && b >= 0.0
-                        && b.fract() == 0.0
-                        && (b as usize) < n =>
-                {
-                    let i = b as usize;
+            match crate::packing::sphere_row::<3>(row, n) {
+                Some(([x, y, z], r, i)) if matches!(solid, Solid::Spheres) => {
                     let p = &file.positions[i];
                     bodies[i].spheres.push(Ball {
                         center: [x - p[0], y - p[1], z - p[2]],

@@ -30,7 +30,7 @@
 //! special to it (its gap against a formula written out, its area against
 //! quadrature).
 
-use jamkit_core::{Packing, Potential, Shape, SizeDistribution, Vector};
+use jamkit_core::{Contact, Packing, Potential, Shape, SizeDistribution, Vector};
 use jamkit_engine::check::gradient_error;
 use jamkit_engine::hessian::{Hessian, HessianOptions, finite_difference};
 use jamkit_engine::{Fire, FireParams, JamParams, Objective, Scene, jam};
@@ -549,6 +549,83 @@ pub fn pair_derivatives<const D: usize, S: Shape<D>>(
         fd_grad,
         fd_hess,
     }
+}
+
+/// `h_ij = h_ji` for one pair seen from either body: the contact from
+/// body `i` (sizes `sizes`, orientations `o_i`, `o_j`, at `r_ij`) and the
+/// one from body `j` (sizes and orientations swapped, at `−r_ij`), one
+/// contact each, must have the same gap (to `eps_gap`), `∂h/∂r_j`
+/// reversed and the rotational derivatives swapped (to `eps_grad`). Each
+/// number is compared as `approx::assert_relative_eq!` with that `epsilon`
+/// compares it ([`relative_eq`]). The caller picks the tolerances its
+/// family's gap allows.
+pub fn check_swapped<const D: usize, S: Shape<D>>(
+    shape: &S,
+    sizes: (f64, f64),
+    o_i: &S::Orientation,
+    o_j: &S::Orientation,
+    r_ij: &Vector<D>,
+    eps_gap: f64,
+    eps_grad: f64,
+) {
+    let one = |c: Vec<Contact<D>>| {
+        assert_eq!(c.len(), 1, "{}: one contact per pair", describe(shape));
+        c[0]
+    };
+    let ij = one(shape.pair_contacts(sizes.0, o_i, sizes.1, o_j, r_ij, f64::INFINITY));
+    let ji = one(shape.pair_contacts(sizes.1, o_j, sizes.0, o_i, &-r_ij, f64::INFINITY));
+    assert!(
+        relative_eq(ij.gap, ji.gap, eps_gap),
+        "h_ij = {} but h_ji = {}",
+        ij.gap,
+        ji.gap
+    );
+    for a in 0..D {
+        assert!(
+            relative_eq(ij.grad_r[a], -ji.grad_r[a], eps_grad),
+            "∂h/∂r_j: {} from i, {} from j",
+            ij.grad_r,
+            ji.grad_r
+        );
+    }
+    for p in 0..jamkit_core::MAX_ROT {
+        for (a, b, which) in [
+            (
+                ij.grad_rot_i[p],
+                ji.grad_rot_j[p],
+                "∂h/∂q_i from i, ∂h/∂q_j from j",
+            ),
+            (
+                ij.grad_rot_j[p],
+                ji.grad_rot_i[p],
+                "∂h/∂q_j from i, ∂h/∂q_i from j",
+            ),
+        ] {
+            assert!(
+                relative_eq(a, b, eps_grad),
+                "{which}, coordinate {p}: {a} vs {b}"
+            );
+        }
+    }
+}
+
+/// `a` and `b` equal to `epsilon` absolute, or to machine precision
+/// relative: `approx`'s `relative_eq` with its default `max_relative`
+/// (`f64::EPSILON`), step for step.
+pub fn relative_eq(a: f64, b: f64, epsilon: f64) -> bool {
+    if a == b {
+        return true;
+    }
+    if a.is_infinite() || b.is_infinite() {
+        return false;
+    }
+    let diff = (a - b).abs();
+    if diff <= epsilon {
+        return true;
+    }
+    let (abs_a, abs_b) = (a.abs(), b.abs());
+    let largest = if abs_b > abs_a { abs_b } else { abs_a };
+    diff <= largest * f64::EPSILON
 }
 
 /// The dimensions `family` claims (`Dims::Any`: every compiled one).

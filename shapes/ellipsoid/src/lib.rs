@@ -76,6 +76,7 @@
 //! and `3 + 3 = 6` for a triaxial ellipsoid. Ellipsoids jam hypostatic
 //! (Donev et al., Science 303, 990 (2004)): `z_J < 2f`.
 
+use jamkit_core::Error;
 use jamkit_core::gap3d::{self, ExactGap3, QuadraticSupport, WORLD_AXES};
 use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, ParamSpec, Quaternion, RotVec, Shape,
@@ -131,14 +132,6 @@ pub struct EllipsoidParams {
     pub inertia: Option<f64>,
 }
 
-fn err(
-    field: impl Into<String>,
-    value: impl ToString,
-    allowed: impl Into<String>,
-) -> jamkit_core::Error {
-    jamkit_core::Error::invalid(field, value.to_string(), allowed)
-}
-
 /// The `ellipsoid` family's registration.
 pub struct EllipsoidFamily;
 
@@ -159,7 +152,7 @@ impl Family for EllipsoidFamily {
         match (dim, shape.is_ball()) {
             (3, true) => jamkit_sphere::visit_ball(3, visitor),
             (3, false) => Ok(visitor.visit::<3, _>(shape)),
-            _ => Err(err("dim", dim, "ellipsoids exist in dim 3 only")),
+            _ => Err(Error::invalid("dim", dim, "ellipsoids exist in dim 3 only")),
         }
     }
 }
@@ -185,14 +178,14 @@ impl Ellipsoid {
     pub fn new(p: &EllipsoidParams) -> jamkit_core::Result<Self> {
         let (ratios, ball) = match (p.alpha, p.axes) {
             (Some(_), Some(_)) => {
-                return Err(err(
+                return Err(Error::invalid(
                     "params.alpha",
                     "given together with params.axes",
                     "give either alpha (a spheroid) or axes: [x, y, z] (general ratios), not both",
                 ));
             }
             (None, None) => {
-                return Err(err(
+                return Err(Error::invalid(
                     "params",
                     "neither alpha nor axes",
                     "give alpha (a spheroid of aspect ratio α = a/b, e.g. alpha: 1.5) or axes: [x, y, z] (semi-axis ratios)",
@@ -200,14 +193,14 @@ impl Ellipsoid {
             }
             (Some(alpha), None) => {
                 if !(alpha > 0.0 && alpha.is_finite()) {
-                    return Err(err(
+                    return Err(Error::invalid(
                         "params.alpha",
                         alpha,
                         "must be a finite number > 0 (α = a/b: > 1 prolate, < 1 oblate, 1 a sphere)",
                     ));
                 }
                 if alpha.max(1.0 / alpha) > MAX_RATIO {
-                    return Err(err(
+                    return Err(Error::invalid(
                         "params.alpha",
                         alpha,
                         format!(
@@ -221,7 +214,7 @@ impl Ellipsoid {
             (None, Some(v)) => {
                 for (k, x) in v.iter().enumerate() {
                     if !(*x > 0.0 && x.is_finite()) {
-                        return Err(err(
+                        return Err(Error::invalid(
                             format!("params.axes[{k}]"),
                             x,
                             "must be a finite number > 0 (a semi-axis ratio)",
@@ -230,7 +223,7 @@ impl Ellipsoid {
                 }
                 let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
                 if hi / lo > MAX_RATIO {
-                    return Err(err(
+                    return Err(Error::invalid(
                         "params.axes",
                         format!("[{}, {}, {}]", v[0], v[1], v[2]),
                         format!(
@@ -256,7 +249,7 @@ impl Ellipsoid {
         if let Some(i) = p.inertia
             && !(i > 0.0 && i.is_finite())
         {
-            return Err(err(
+            return Err(Error::invalid(
                 "params.inertia",
                 i,
                 "must be positive and finite, or None for a uniform solid ellipsoid of unit mass",
@@ -275,6 +268,16 @@ impl Ellipsoid {
         Self::new(&EllipsoidParams {
             alpha: Some(alpha),
             axes: None,
+            inertia: None,
+        })
+    }
+
+    /// The ellipsoid with semi-axis ratios `axes` (body `x, y, z`) and the
+    /// default inertia.
+    pub fn triaxial(axes: [f64; 3]) -> jamkit_core::Result<Self> {
+        Self::new(&EllipsoidParams {
+            alpha: None,
+            axes: Some(axes),
             inertia: None,
         })
     }

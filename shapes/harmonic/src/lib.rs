@@ -101,6 +101,7 @@
 
 pub mod solid;
 
+use jamkit_core::Error;
 use jamkit_core::gap_model::GapModel;
 use jamkit_core::gap3d::{self, ExactGap3, RadialSupport};
 use jamkit_core::{
@@ -200,14 +201,6 @@ pub struct HarmonicParams {
     pub gap: GapModel,
 }
 
-fn err(
-    field: impl Into<String>,
-    value: impl ToString,
-    allowed: impl Into<String>,
-) -> jamkit_core::Error {
-    jamkit_core::Error::invalid(field, value.to_string(), allowed)
-}
-
 /// The `harmonic` family's registration.
 pub struct HarmonicFamily;
 
@@ -229,7 +222,11 @@ impl Family for HarmonicFamily {
         match (dim, p.delta == 0.0) {
             (3, true) => jamkit_sphere::visit_ball(3, visitor),
             (3, false) => Ok(visitor.visit::<3, _>(shape)),
-            _ => Err(err("dim", dim, "harmonic bodies exist in dim 3 only")),
+            _ => Err(Error::invalid(
+                "dim",
+                dim,
+                "harmonic bodies exist in dim 3 only",
+            )),
         }
     }
 }
@@ -276,18 +273,22 @@ impl Harmonic {
     /// default `I = Δ` needs `Δ > 0`; at `Δ = 0` it is 1 and unused).
     pub fn new(p: &HarmonicParams) -> jamkit_core::Result<Self> {
         if !(p.delta.is_finite() && p.delta >= 0.0) {
-            return Err(err("params.delta", p.delta, "must be a finite number ≥ 0"));
+            return Err(Error::invalid(
+                "params.delta",
+                p.delta,
+                "must be a finite number ≥ 0",
+            ));
         }
         let modes = match (&p.l, &p.modes) {
             (Some(_), Some(_)) => {
-                return Err(err(
+                return Err(Error::invalid(
                     "params.l",
                     "given together with params.modes",
                     "give either l (and m) for one mode, or modes: [(l, m, c), ...], not both",
                 ));
             }
             (None, None) => {
-                return Err(err(
+                return Err(Error::invalid(
                     "params",
                     "neither l nor modes",
                     "give l (a single mode Ŷ_lm, with m, default 0) or modes: [(l: 2, m: 0, c: 1.0), ...]",
@@ -300,7 +301,7 @@ impl Harmonic {
             }],
             (None, Some(list)) => {
                 if let Some(m) = p.m {
-                    return Err(err(
+                    return Err(Error::invalid(
                         "params.m",
                         m,
                         "belongs with l (a single mode); with modes give m inside each mode",
@@ -310,7 +311,7 @@ impl Harmonic {
             }
         };
         if modes.is_empty() {
-            return Err(err(
+            return Err(Error::invalid(
                 "params.modes",
                 "[]",
                 "must list at least one mode (l, m, c)",
@@ -327,7 +328,7 @@ impl Harmonic {
                 )
             };
             if !(2..=LMAX).contains(&md.l) {
-                return Err(err(
+                return Err(Error::invalid(
                     fl,
                     md.l,
                     format!(
@@ -336,17 +337,21 @@ impl Harmonic {
                 ));
             }
             if md.m.unsigned_abs() > md.l {
-                return Err(err(
+                return Err(Error::invalid(
                     fm,
                     md.m,
                     format!("must be an integer in [−l, l] = [−{0}, {0}]", md.l),
                 ));
             }
             if !md.c.is_finite() {
-                return Err(err(format!("params.modes[{k}].c"), md.c, "must be finite"));
+                return Err(Error::invalid(
+                    format!("params.modes[{k}].c"),
+                    md.c,
+                    "must be finite",
+                ));
             }
             if modes[..k].iter().any(|o| (o.l, o.m) == (md.l, md.m)) {
-                return Err(err(
+                return Err(Error::invalid(
                     format!("params.modes[{k}]"),
                     format!("(l: {}, m: {})", md.l, md.m),
                     "is given twice: list each (l, m) once (add the coefficients)",
@@ -367,7 +372,7 @@ impl Harmonic {
         }
         by_degree.sort_by_key(|(l, _)| *l);
         if p.delta * f_bound >= 1.0 {
-            return Err(err(
+            return Err(Error::invalid(
                 "params.delta",
                 p.delta,
                 format!(
@@ -381,7 +386,7 @@ impl Harmonic {
             .inertia
             .unwrap_or(if p.delta > 0.0 { p.delta } else { 1.0 });
         if !(inertia > 0.0 && inertia.is_finite()) {
-            return Err(err(
+            return Err(Error::invalid(
                 "params.inertia",
                 inertia,
                 "must be positive and finite (the default I = Δ needs Δ > 0)",
@@ -412,20 +417,33 @@ impl Harmonic {
         shape.with_gap(p.gap)
     }
 
+    /// The single mode `Y_l^m` of amplitude `delta`, with the default
+    /// inertia and the first-order gap.
+    pub fn single(l: u32, m: i32, delta: f64) -> jamkit_core::Result<Self> {
+        Self::new(&HarmonicParams {
+            l: Some(l),
+            m: Some(m),
+            modes: None,
+            delta,
+            inertia: None,
+            gap: GapModel::FirstOrder,
+        })
+    }
+
     /// The same body with the gap model `gap`. Refused with the field
     /// named: `SecondOrder` (no second-order gap in 3D), and `Exact` for a
     /// body that is not convex on the [`CONVEXITY_GRID`] sample of
     /// directions ([`Harmonic::is_convex`]).
     pub fn with_gap(mut self, gap: GapModel) -> jamkit_core::Result<Self> {
         if gap == GapModel::SecondOrder {
-            return Err(err(
+            return Err(Error::invalid(
                 "params.gap",
                 "SecondOrder",
                 "\"FirstOrder\" (default) or \"Exact\": harmonic has no second-order gap",
             ));
         }
         if gap == GapModel::Exact && !self.is_convex(CONVEXITY_GRID) {
-            return Err(err(
+            return Err(Error::invalid(
                 "params.gap",
                 "Exact",
                 format!(
@@ -744,11 +762,7 @@ impl Harmonic {
     /// axisymmetric `F`.
     #[inline(always)]
     fn axes(&self, columns: &[Vector<3>; 3]) -> [Vector<3>; 3] {
-        if self.axisymmetric {
-            *columns
-        } else {
-            [Vector::<3>::x(), Vector::<3>::y(), Vector::<3>::z()]
-        }
+        Quaternion::step_axes(columns, self.axisymmetric)
     }
 
     /// The separation, its inverse length (0 at coincident centres) and
@@ -980,15 +994,7 @@ mod tests {
     use approx::assert_relative_eq;
 
     pub(crate) fn single(l: u32, m: i32, delta: f64) -> Harmonic {
-        Harmonic::new(&HarmonicParams {
-            l: Some(l),
-            m: Some(m),
-            modes: None,
-            delta,
-            inertia: None,
-            gap: GapModel::FirstOrder,
-        })
-        .unwrap()
+        Harmonic::single(l, m, delta).unwrap()
     }
 
     /// The drawing surface agrees with the shape: its rotation of the
@@ -1224,14 +1230,7 @@ mod tests {
         for s in shapes() {
             let os = orientations();
             for r in separations(&os[1]) {
-                let ij = s.pair_contacts(0.5, &os[1], 0.7, &os[2], &r, f64::INFINITY)[0];
-                let ji = s.pair_contacts(0.7, &os[2], 0.5, &os[1], &-r, f64::INFINITY)[0];
-                assert_relative_eq!(ij.gap, ji.gap, epsilon = 1e-14);
-                assert_relative_eq!(ij.grad_r, -ji.grad_r, epsilon = 1e-14);
-                for p in 0..3 {
-                    assert_relative_eq!(ij.grad_rot_i[p], ji.grad_rot_j[p], epsilon = 1e-14);
-                    assert_relative_eq!(ij.grad_rot_j[p], ji.grad_rot_i[p], epsilon = 1e-14);
-                }
+                jamkit_kit::check_swapped(&s, (0.5, 0.7), &os[1], &os[2], &r, 1e-14, 1e-14);
             }
         }
     }

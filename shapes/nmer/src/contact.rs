@@ -77,40 +77,62 @@ macro_rules! by_spheres {
     };
 }
 
-/// Visit every sphere pair `(a, b)` with `h ≤ max_gap`, giving `a`, `b`, the
-/// gap, `n` and `|v|`.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn sphere_pairs<const D: usize>(
-    radii: &[f64],
-    size_i: f64,
-    d_i: &[Vector<D>],
-    size_j: f64,
-    d_j: &[Vector<D>],
-    r_ij: &Vector<D>,
-    max_gap: f64,
-    mut f: impl FnMut(usize, usize, f64, Vector<D>, f64),
-) {
-    for (a, (da, ra)) in d_i.iter().zip(radii).enumerate() {
-        let base = r_ij - da;
-        let reach_a = size_i * ra;
-        for (b, (db, rb)) in d_j.iter().zip(radii).enumerate() {
-            let v = base + db;
-            let dist = v.norm();
-            let gap = dist - reach_a - size_j * rb;
-            if gap > max_gap {
-                continue;
+impl<const D: usize> Nmer<D> {
+    /// True when the bounding spheres put the pair farther apart than
+    /// `max_gap` (then no sphere pair is visited).
+    #[inline(always)]
+    fn apart(&self, size_i: f64, size_j: f64, r_ij: &Vector<D>, max_gap: f64) -> bool {
+        r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap
+    }
+
+    /// Visit every sphere pair `(a, b)` with `h ≤ max_gap`, giving `a`, `b`,
+    /// the gap, `n` and `|v|`, from the world offsets `d_i`, `d_j` (the
+    /// first [`Nmer::spheres`] of them).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn sphere_pairs(
+        &self,
+        size_i: f64,
+        d_i: &[Vector<D>],
+        size_j: f64,
+        d_j: &[Vector<D>],
+        r_ij: &Vector<D>,
+        max_gap: f64,
+        mut f: impl FnMut(usize, usize, f64, Vector<D>, f64),
+    ) {
+        let k = self.spheres();
+        let (d_i, d_j, radii) = (&d_i[..k], &d_j[..k], &self.radii);
+        for (a, (da, ra)) in d_i.iter().zip(radii).enumerate() {
+            let base = r_ij - da;
+            let reach_a = size_i * ra;
+            for (b, (db, rb)) in d_j.iter().zip(radii).enumerate() {
+                let v = base + db;
+                let dist = v.norm();
+                let gap = dist - reach_a - size_j * rb;
+                if gap > max_gap {
+                    continue;
+                }
+                // NOTE: coincident sphere centres have no direction; a
+                // fixed unit vector keeps the run deterministic (such a
+                // pair overlaps deeply and any direction pushes it apart).
+                let n = if dist > 0.0 {
+                    v * (1.0 / dist)
+                } else {
+                    Vector::<D>::from_fn(|c, _| if c == 0 { 1.0 } else { 0.0 })
+                };
+                f(a, b, gap, n, dist);
             }
-            // NOTE: coincident sphere centres have no direction; a fixed
-            // unit vector keeps the run deterministic (such a pair overlaps
-            // deeply and any direction pushes it apart).
-            let n = if dist > 0.0 {
-                v * (1.0 / dist)
-            } else {
-                Vector::<D>::from_fn(|c, _| if c == 0 { 1.0 } else { 0.0 })
-            };
-            f(a, b, gap, n, dist);
         }
+    }
+
+    /// The spheres (centre, radius) at the world offsets `d`
+    /// ([`Shape::sphere_decomposition`]).
+    fn spheres_at(&self, size: f64, d: &[Vector<D>]) -> Option<Vec<(Vector<D>, f64)>> {
+        Some(
+            (0..self.spheres())
+                .map(|a| (d[a], self.radii[a] * size))
+                .collect(),
+        )
     }
 }
 
@@ -170,6 +192,18 @@ impl Nmer<2> {
         }
         d
     }
+
+    /// The contact of sphere `a` of body `i` (offset `d_a`) with sphere `b`
+    /// of body `j` (offset `d_b`): gap, `n` and `∂h/∂q = n · t`.
+    #[inline(always)]
+    fn contact(gap: f64, n: Vector<2>, d_a: &Vector<2>, d_b: &Vector<2>) -> Contact<2> {
+        Contact {
+            gap,
+            grad_r: n,
+            grad_rot_i: [-cross2(d_a, &n), 0.0, 0.0],
+            grad_rot_j: [cross2(d_b, &n), 0.0, 0.0],
+        }
+    }
 }
 
 impl Shape<2> for Nmer<2> {
@@ -210,12 +244,7 @@ impl Shape<2> for Nmer<2> {
     }
 
     fn sphere_decomposition(&self, size: f64, o: &Angle) -> Option<Vec<(Vector<2>, f64)>> {
-        let d = self.world::<MAX_SPHERES>(size, o);
-        Some(
-            (0..self.spheres())
-                .map(|a| (d[a], self.radii[a] * size))
-                .collect(),
-        )
+        self.spheres_at(size, &self.world::<MAX_SPHERES>(size, o))
     }
 
     #[inline(always)]
@@ -229,29 +258,14 @@ impl Shape<2> for Nmer<2> {
         max_gap: f64,
         mut visit: F,
     ) {
-        if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
+        if self.apart(size_i, size_j, r_ij, max_gap) {
             return;
         }
         by_spheres!(self, M => {
-            let k = self.spheres();
             let (d_i, d_j) = (self.world::<M>(size_i, o_i), self.world::<M>(size_j, o_j));
-            sphere_pairs(
-                &self.radii,
-                size_i,
-                &d_i[..k],
-                size_j,
-                &d_j[..k],
-                r_ij,
-                max_gap,
-                |a, b, gap, n, _| {
-                    visit(Contact {
-                        gap,
-                        grad_r: n,
-                        grad_rot_i: [-cross2(&d_i[a], &n), 0.0, 0.0],
-                        grad_rot_j: [cross2(&d_j[b], &n), 0.0, 0.0],
-                    })
-                },
-            );
+            self.sphere_pairs(size_i, &d_i, size_j, &d_j, r_ij, max_gap, |a, b, gap, n, _| {
+                visit(Self::contact(gap, n, &d_i[a], &d_j[b]))
+            });
         })
     }
 
@@ -265,30 +279,23 @@ impl Shape<2> for Nmer<2> {
         max_gap: f64,
         mut visit: F,
     ) -> jamkit_core::Result<()> {
-        if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
+        if self.apart(size_i, size_j, r_ij, max_gap) {
             return Ok(());
         }
-        let k = self.spheres();
         let (d_i, d_j) = (
             self.world::<MAX_SPHERES>(size_i, o_i),
             self.world::<MAX_SPHERES>(size_j, o_j),
         );
         let perp = |d: &Vector<2>| Vector::<2>::new(-d[1], d[0]);
-        sphere_pairs(
-            &self.radii,
+        self.sphere_pairs(
             size_i,
-            &d_i[..k],
+            &d_i,
             size_j,
-            &d_j[..k],
+            &d_j,
             r_ij,
             max_gap,
             |a, b, gap, n, dist| {
-                let contact = Contact {
-                    gap,
-                    grad_r: n,
-                    grad_rot_i: [-cross2(&d_i[a], &n), 0.0, 0.0],
-                    grad_rot_j: [cross2(&d_j[b], &n), 0.0, 0.0],
-                };
+                let contact = Self::contact(gap, n, &d_i[a], &d_j[b]);
                 let mut second_i = [[0.0; MAX_ROT]; MAX_ROT];
                 let mut second_j = [[0.0; MAX_ROT]; MAX_ROT];
                 second_i[0][0] = n.dot(&d_i[a]);
@@ -328,11 +335,7 @@ impl Nmer<3> {
     /// linear body.
     #[inline(always)]
     fn axes(&self, columns: &[Vector<3>; 3]) -> [Vector<3>; 3] {
-        if self.linear {
-            *columns
-        } else {
-            [Vector::<3>::x(), Vector::<3>::y(), Vector::<3>::z()]
-        }
+        Quaternion::step_axes(columns, self.linear)
     }
 
     /// `∂h/∂q` from `∂h/∂ω`: the world components of `ω`, or its
@@ -343,6 +346,27 @@ impl Nmer<3> {
             [axes[0].dot(&torque), axes[1].dot(&torque), 0.0]
         } else {
             [torque[0], torque[1], torque[2]]
+        }
+    }
+
+    /// The contact of sphere `a` of body `i` (offset `d_a`, rotation axes
+    /// `e_i`) with sphere `b` of body `j` (`d_b`, `e_j`): gap, `n` and
+    /// `∂h/∂q = n · t`.
+    #[inline(always)]
+    fn contact(
+        &self,
+        e_i: &[Vector<3>; 3],
+        e_j: &[Vector<3>; 3],
+        gap: f64,
+        n: Vector<3>,
+        d_a: &Vector<3>,
+        d_b: &Vector<3>,
+    ) -> Contact<3> {
+        Contact {
+            gap,
+            grad_r: n,
+            grad_rot_i: self.project(e_i, -d_a.cross(&n)),
+            grad_rot_j: self.project(e_j, d_b.cross(&n)),
         }
     }
 }
@@ -394,12 +418,7 @@ impl Shape<3> for Nmer<3> {
     }
 
     fn sphere_decomposition(&self, size: f64, o: &Quaternion) -> Option<Vec<(Vector<3>, f64)>> {
-        let d = self.world::<MAX_SPHERES>(size, o);
-        Some(
-            (0..self.spheres())
-                .map(|a| (d[a], self.radii[a] * size))
-                .collect(),
-        )
+        self.spheres_at(size, &self.world::<MAX_SPHERES>(size, o))
     }
 
     #[inline(always)]
@@ -413,31 +432,16 @@ impl Shape<3> for Nmer<3> {
         max_gap: f64,
         mut visit: F,
     ) {
-        if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
+        if self.apart(size_i, size_j, r_ij, max_gap) {
             return;
         }
         let (c_i, c_j) = (o_i.columns(), o_j.columns());
         let (e_i, e_j) = (self.axes(&c_i), self.axes(&c_j));
         by_spheres!(self, M => {
-            let k = self.spheres();
             let (d_i, d_j) = (self.world_of::<M>(size_i, &c_i), self.world_of::<M>(size_j, &c_j));
-            sphere_pairs(
-                &self.radii,
-                size_i,
-                &d_i[..k],
-                size_j,
-                &d_j[..k],
-                r_ij,
-                max_gap,
-                |a, b, gap, n, _| {
-                    visit(Contact {
-                        gap,
-                        grad_r: n,
-                        grad_rot_i: self.project(&e_i, -d_i[a].cross(&n)),
-                        grad_rot_j: self.project(&e_j, d_j[b].cross(&n)),
-                    })
-                },
-            );
+            self.sphere_pairs(size_i, &d_i, size_j, &d_j, r_ij, max_gap, |a, b, gap, n, _| {
+                visit(self.contact(&e_i, &e_j, gap, n, &d_i[a], &d_j[b]))
+            });
         })
     }
 
@@ -451,10 +455,9 @@ impl Shape<3> for Nmer<3> {
         max_gap: f64,
         mut visit: F,
     ) -> jamkit_core::Result<()> {
-        if r_ij.norm() - (size_i + size_j) * self.unit_reach > max_gap {
+        if self.apart(size_i, size_j, r_ij, max_gap) {
             return Ok(());
         }
-        let k = self.spheres();
         let m = Shape::<3>::rot_dof(self);
         let (d_i, d_j) = (
             self.world::<MAX_SPHERES>(size_i, o_i),
@@ -474,21 +477,15 @@ impl Shape<3> for Nmer<3> {
             }
             out
         };
-        sphere_pairs(
-            &self.radii,
+        self.sphere_pairs(
             size_i,
-            &d_i[..k],
+            &d_i,
             size_j,
-            &d_j[..k],
+            &d_j,
             r_ij,
             max_gap,
             |a, b, gap, n, dist| {
-                let contact = Contact {
-                    gap,
-                    grad_r: n,
-                    grad_rot_i: self.project(&e_i, -d_i[a].cross(&n)),
-                    grad_rot_j: self.project(&e_j, d_j[b].cross(&n)),
-                };
+                let contact = self.contact(&e_i, &e_j, gap, n, &d_i[a], &d_j[b]);
                 let t_i: Vec<Vector<3>> = (0..m).map(|p| -e_i[p].cross(&d_i[a])).collect();
                 let t_j: Vec<Vector<3>> = (0..m).map(|p| e_j[p].cross(&d_j[b])).collect();
                 visit(assemble(

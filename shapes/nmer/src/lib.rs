@@ -63,6 +63,7 @@ pub mod volume;
 
 pub use orientation::{Angle, Quaternion};
 
+use jamkit_core::Error;
 use jamkit_core::{Dims, Family, FamilyInfo, ParamSpec, ShapeVisitor, Vector};
 use serde::Deserialize;
 
@@ -139,14 +140,6 @@ impl NmerParams {
     }
 }
 
-fn err(
-    field: impl Into<String>,
-    value: impl ToString,
-    allowed: impl Into<String>,
-) -> jamkit_core::Error {
-    jamkit_core::Error::invalid(field, value.to_string(), allowed)
-}
-
 /// The `nmer` family's registration.
 pub struct NmerFamily;
 
@@ -166,7 +159,7 @@ impl Family for NmerFamily {
             (_, true) => jamkit_sphere::visit_ball(dim, visitor),
             (2, false) => Ok(visitor.visit::<2, _>(Nmer::<2>::new(p)?)),
             (3, false) => Ok(visitor.visit::<3, _>(Nmer::<3>::new(p)?)),
-            _ => Err(jamkit_core::Error::invalid(
+            _ => Err(Error::invalid(
                 "dim",
                 dim,
                 "nmer bodies exist in dim 2 or 3",
@@ -205,19 +198,19 @@ impl<const D: usize> Nmer<D> {
     /// another; an inertia not positive and finite.
     pub fn new(p: &NmerParams) -> jamkit_core::Result<Self> {
         if !(D == 2 || D == 3) {
-            return Err(err("dim", D, "nmer bodies exist in dim 2 or 3"));
+            return Err(Error::invalid("dim", D, "nmer bodies exist in dim 2 or 3"));
         }
         let axis = if D == 3 { 2 } else { 0 };
         let spheres: Vec<(Vector<D>, f64)> = match (&p.alpha, &p.spheres) {
             (Some(_), Some(_)) => {
-                return Err(err(
+                return Err(Error::invalid(
                     "params.alpha",
                     "given together with params.spheres",
                     "give either alpha (a dimer) or spheres (a general body), not both",
                 ));
             }
             (None, None) => {
-                return Err(err(
+                return Err(Error::invalid(
                     "params",
                     "neither alpha nor spheres",
                     "give alpha (a dimer of aspect ratio α ≥ 1) or spheres: [(offset: [...], radius: ...), ...]",
@@ -226,14 +219,14 @@ impl<const D: usize> Nmer<D> {
             (Some(alpha), None) => {
                 let alpha = *alpha;
                 if !(alpha.is_finite() && alpha >= 1.0) {
-                    return Err(err(
+                    return Err(Error::invalid(
                         "params.alpha",
                         alpha,
                         "must be a finite number ≥ 1 (α = (ℓ + 2r)/(2r))",
                     ));
                 }
                 if alpha == 1.0 {
-                    return Err(err(
+                    return Err(Error::invalid(
                         "params.alpha",
                         alpha,
                         "α = 1 is a single sphere: run the `sphere` family (the registry does so)",
@@ -246,14 +239,14 @@ impl<const D: usize> Nmer<D> {
                 let mut out = Vec::with_capacity(list.len());
                 for (k, s) in list.iter().enumerate() {
                     if s.offset.len() != D || !s.offset.iter().all(|x| x.is_finite()) {
-                        return Err(err(
+                        return Err(Error::invalid(
                             format!("params.spheres[{k}].offset"),
                             format!("{:?}", s.offset),
                             format!("must be {D} finite numbers (dim = {D})"),
                         ));
                     }
                     if !(s.radius > 0.0 && s.radius.is_finite()) {
-                        return Err(err(
+                        return Err(Error::invalid(
                             format!("params.spheres[{k}].radius"),
                             s.radius,
                             "must be positive and finite",
@@ -266,7 +259,7 @@ impl<const D: usize> Nmer<D> {
         };
         let k = spheres.len();
         if !(2..=MAX_SPHERES).contains(&k) {
-            return Err(err(
+            return Err(Error::invalid(
                 "params.spheres",
                 format!("{k} spheres"),
                 format!(
@@ -281,7 +274,7 @@ impl<const D: usize> Nmer<D> {
                     && d + spheres[a].1 <= spheres[b].1
                     && (a > b || d > 0.0 || spheres[a].1 < spheres[b].1)
                 {
-                    return Err(err(
+                    return Err(Error::invalid(
                         format!("params.spheres[{a}]"),
                         format!("{:?} radius {}", spheres[a].0.as_slice(), spheres[a].1),
                         format!(
@@ -294,7 +287,11 @@ impl<const D: usize> Nmer<D> {
         if let Some(i) = p.inertia
             && !(i > 0.0 && i.is_finite())
         {
-            return Err(err("params.inertia", i, "must be positive and finite"));
+            return Err(Error::invalid(
+                "params.inertia",
+                i,
+                "must be positive and finite",
+            ));
         }
 
         // Centre of mass, uniform density, lenses counted twice.
