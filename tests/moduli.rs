@@ -601,3 +601,49 @@ fn protocol_targets_given_as_lists_scan() {
         assert!(e.contains(named), "{bad}: {e}");
     }
 }
+
+/// The shipped 3D experiment (`experiments/elasticity/above_jam_3d.ron`:
+/// spheres and near-spheres l = 2, m = 0 at Δ = 0.01 and 0.1, `AboveJam`)
+/// at N = 32, one seed and one δφ: every packing is δφ above its own φ_J
+/// (1e-12), in 3D, with finite moduli, `B > 0`, the non-affine relaxation
+/// lowering both, no negative mode, three translations, and the Hessian's
+/// rows `f (N − N_r)` (f = 3 for the spheres, 5 for the axisymmetric
+/// near-spheres: two rotational coordinates).
+#[test]
+fn shipped_3d_above_jam_file_gives_finite_moduli() {
+    let report = common::run_file(
+        "experiments/elasticity/above_jam_3d.ron",
+        &["particles=32", "samples=1", "protocol.delta_phi=1e-2"],
+        1,
+    );
+    assert_eq!(report.packings.len(), 3);
+    for f in &report.packings {
+        assert_eq!(f.dim, 3, "{}", f.id);
+        let jam = f.measures.jam_point.as_ref().expect("AboveJam records φ_J");
+        assert!(
+            (f.phi - jam.phi - 1e-2).abs() < 1e-12,
+            "{}: {} {}",
+            f.id,
+            f.phi,
+            jam.phi
+        );
+        let m = &f.measures.moduli.as_ref().expect("moduli measured").moduli;
+        assert_eq!(m.shear_planes.len(), 3, "{}", f.id);
+        assert!(
+            m.shear.is_finite() && m.bulk.is_finite() && m.bulk > 0.0,
+            "{}: {m:?}",
+            f.id
+        );
+        assert!(
+            m.shear < m.shear_affine && m.bulk < m.bulk_affine,
+            "{}: {m:?}",
+            f.id
+        );
+        assert_eq!(m.negative_modes, 0, "{}", f.id);
+        assert_eq!(m.zero_modes.translations, 3, "{}", f.id);
+        let delta = f.params["delta"].as_f64().unwrap();
+        let dof = if delta == 0.0 { 3 } else { 5 };
+        let bodies = f.particles - f.measures.n_rattlers.unwrap();
+        assert_eq!(m.coordinates, dof * bodies, "{}", f.id);
+    }
+}

@@ -5,7 +5,9 @@
 
 Reads `results.csv` of every DIR (one run per pressure, made with
 `--set protocol.pressure=<p>`, or with `--x dphi` one `AboveJam` run per
-delta_phi, read from the DIR's `experiment.ron`), groups the packings by
+delta_phi, read from the DIR's `experiment.ron`, or from the packing ids'
+`_dphi<value>` label when the file scans a list of delta_phi; the same
+packing (id and x) met in two DIRs is counted once), groups the packings by
 family parameters and x (target pressure or delta_phi), and prints per
 group: x, the mean pressure, phi, z_J,
 dz = 2 iso_margin / N_nr (= z - z_iso with the finite-N isostatic count),
@@ -14,7 +16,8 @@ packing's own jamming point (`AboveJam` runs, columns jam_z), how many
 packings have
 G < 0, and the largest number of negative modes and extra zero modes.
 Then weighted least-squares fits (weights 1/(s.e.m./mean)^2, on logs) of
-G ~ x^a, G/B ~ dz^c, dz ~ x^e, p ~ x^b and z - z_J ~ x^f over pmin <= x <= pmax, with the slope's
+G ~ x^a, G/B ~ dz^c, dz ~ x^e, p ~ x^b, G ~ p^a (x = dphi: against each
+point's mean p) and z - z_J ~ x^f over pmin <= x <= pmax, with the slope's
 standard error from the weights and chi^2 per degree of freedom. Only the
 standard library.
 """
@@ -59,6 +62,7 @@ def main():
     ap.add_argument("dirs", nargs="+")
     args = ap.parse_args()
     groups = defaultdict(list)
+    seen = set()
     for d in args.dirs:
         packings = os.path.join(d, "packings")
         failed = [f for f in os.listdir(packings) if f.endswith(".failed.json")] if os.path.isdir(packings) else []
@@ -67,16 +71,24 @@ def main():
         dphi = None
         if args.x == "dphi":
             with open(os.path.join(d, "experiment.ron")) as f:
-                dphi = float(re.search(r"delta_phi: *([0-9.eE+-]+)", f.read()).group(1))
+                one = re.search(r"delta_phi: *([0-9.eE+-]+)", f.read())
+            # a single delta_phi; a list (one file scanning delta_phi) is read
+            # from each packing's id, whose label ends in `_dphi<value>`
+            dphi = float(one.group(1)) if one else None
         with open(os.path.join(d, "results.csv")) as f:
             for r in csv.DictReader(f):
                 key = (r["family"], r["particles"]) + tuple(
                     f"{k}={r[k]}" for k in PARAMS if k in r
                 )
-                if dphi is None:
+                if args.x == "p":
                     target = round(math.log10(float(r["pressure"])), 1)
-                else:
+                elif dphi is not None:
                     target = dphi
+                else:
+                    target = float(re.search(r"_dphi([0-9.eE+-]+)_s[0-9]+$", r["id"]).group(1))
+                if (r["id"], target) in seen:
+                    continue  # the same packing in two runs (a run and its rerun with more samples)
+                seen.add((r["id"], target))
                 groups[key].append((target, r))
     for key, items in sorted(groups.items()):
         by_p = defaultdict(list)
@@ -117,6 +129,8 @@ def main():
         ]
         if args.x == "dphi":
             fits.append(("p ~ dphi^b", lambda t: (t[0], t[4][0], t[4][1])))
+            # G against the points' mean pressure (the x of the Pressure runs)
+            fits.append(("G ~ p^a (mean p of each dphi)", lambda t: (t[4][0], t[1][0], t[1][1])))
             fits.append(("z - z_J ~ dphi^f", lambda t: (t[0], t[5][0], t[5][1])))
         for name, pick in fits:
             xyz = [pick(t) for t in sel]
