@@ -7,6 +7,7 @@ use jamkit_core::{Matrix, Packing, Potential, Shape, SizeDistribution};
 use jamkit_ellipse::{Ellipse, EllipseParams};
 use jamkit_engine::{Fire, Objective, Scene};
 use jamkit_fourier::{FourierParams, NearDisk};
+use jamkit_harmonic::{Harmonic, HarmonicParams};
 use jamkit_nmer::{Nmer, NmerParams};
 use jamkit_observe::hessian::{Hessian, HessianOptions};
 use jamkit_observe::moduli::{
@@ -48,6 +49,20 @@ fn dimer<const D: usize>(alpha: f64) -> Nmer<D> {
 
 /// The strains checked: every simple shear, its transpose (`a > b`), the
 /// isotropic dilation and a generic `E` with every entry set.
+/// The paper's 3D near-sphere: one zonal mode l = 2, m = 0, first-order
+/// gap (`experiments/elasticity/above_jam_3d.ron`).
+fn near_sphere(delta: f64) -> Harmonic {
+    Harmonic::new(&HarmonicParams {
+        l: Some(2),
+        m: Some(0),
+        modes: None,
+        delta,
+        inertia: None,
+        gap: Default::default(),
+    })
+    .unwrap()
+}
+
 fn strains<const D: usize>() -> Vec<Matrix<D>> {
     let mut out = Vec::new();
     for (a, b) in shear_planes::<D>() {
@@ -143,6 +158,7 @@ fn strain_derivatives_match_finite_differences_for_every_family() {
     check_strain_derivatives::<2, _>(ellipse(1.5), 24, 5);
     check_strain_derivatives::<2, _>(dimer::<2>(1.5), 16, 6);
     check_strain_derivatives::<3, _>(dimer::<3>(1.5), 64, 7);
+    check_strain_derivatives::<3, _>(near_sphere(0.1), 64, 9);
     let lobed = jamkit_lobed::lobed(&jamkit_lobed::LobedParams {
         delta: 0.15,
         kappa: 2.0,
@@ -201,6 +217,7 @@ fn stress_tensor_matches_finite_differences_for_every_family() {
     check_stress::<2, _>(ellipse(2.0), 24, 14);
     check_stress::<2, _>(dimer::<2>(1.5), 16, 15);
     check_stress::<3, _>(dimer::<3>(1.5), 64, 16);
+    check_stress::<3, _>(near_sphere(0.1), 64, 17);
 }
 
 /// The isotropic `∂U/∂γ` against the engine's own box: rescaling the
@@ -313,6 +330,19 @@ fn sphere_moduli_agree_with_deformation_3d() {
         1e-6,
     );
     eprintln!("spheres: {lr:?}\n{def:?}");
+}
+
+/// The 3D near-spheres of the 3D runs (l = 2, m = 0, Δ = 0.1, two
+/// rotational coordinates per body).
+#[test]
+fn near_sphere_moduli_agree_with_deformation_3d() {
+    let (lr, def) = check_against_deformation(
+        relaxed::<3, _>(near_sphere(0.1), 64, 6, 0.72),
+        RattlerRule::Count(4),
+        1e-6,
+        1e-6,
+    );
+    eprintln!("near-spheres: {lr:?}\n{def:?}");
 }
 
 #[test]
