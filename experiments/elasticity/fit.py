@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Tables and power-law fits of the moduli runs of docs/elasticity.md.
 
-    python3 experiments/elasticity/fit.py [--x p|dphi] [--pmin X] [--pmax X] DIR...
+    python3 experiments/elasticity/fit.py [--x p|dphi] [--pmin X] [--pmax X] [--same-seeds] DIR...
 
 Reads `results.csv` of every DIR (one run per pressure, made with
 `--set protocol.pressure=<p>`, or with `--x dphi` one `AboveJam` run per
@@ -14,11 +14,18 @@ dz = 2 iso_margin / N_nr (= z - z_iso with the finite-N isostatic count),
 G, B and G/B (mean +- s.e.m. over the packings), z - z_J against the
 packing's own jamming point (`AboveJam` runs, columns jam_z), how many
 packings have
-G < 0, and the largest number of negative modes and extra zero modes.
+G < 0, and the largest number of negative modes and extra zero modes;
+then per group the packings with G or B not finite, with G < 0, the
+smallest B and the largest floppy share, and (--x dphi) per delta_phi the
+packings whose pressure is below half the point's median (a packing that
+rearranged on its way up sits closer to its new jamming point than
+delta_phi says).
 Then weighted least-squares fits (weights 1/(s.e.m./mean)^2, on logs) of
-G ~ x^a, G/B ~ dz^c, dz ~ x^e, p ~ x^b, G ~ p^a (x = dphi: against each
-point's mean p) and z - z_J ~ x^f over pmin <= x <= pmax, with the slope's
-standard error from the weights and chi^2 per degree of freedom. Only the
+G ~ x^a, G/B ~ dz^c, dz ~ x^e, p ~ x^b, z - z_J ~ x^f and (x = dphi) G and
+z - z_J against each point's mean p, over pmin <= x <= pmax, with the slope's
+standard error from the weights and chi^2 per degree of freedom. With
+--same-seeds, each group keeps only the seeds that have a packing at
+every x (samples that failed at one x drop out of all). Only the
 standard library.
 """
 import argparse
@@ -59,6 +66,7 @@ def main():
     ap.add_argument("--x", choices=["p", "dphi"], default="p")
     ap.add_argument("--pmin", type=float, default=0.0)
     ap.add_argument("--pmax", type=float, default=math.inf)
+    ap.add_argument("--same-seeds", action="store_true")
     ap.add_argument("dirs", nargs="+")
     args = ap.parse_args()
     groups = defaultdict(list)
@@ -91,10 +99,18 @@ def main():
                 seen.add((r["id"], target))
                 groups[key].append((target, r))
     for key, items in sorted(groups.items()):
+        if args.same_seeds:
+            # only the seeds with a packing at every x of the group (a sample
+            # that failed at one x leaves the group at all of them)
+            xs = {t for t, _ in items}
+            every = set.intersection(*({r["seed"] for t, r in items if t == x} for x in xs))
+            items = [(t, r) for t, r in items if r["seed"] in every]
         by_p = defaultdict(list)
         for target, r in items:
             by_p[target].append(r)
         print("## " + " ".join(key))
+        if args.same_seeds:
+            print(f"(same seeds: the {len(every)} seeds with a packing at every {args.x})")
         print(f"{args.x} | p | phi | z_J | dz | z - z_J | G | B | G/B | G<0 | packings | neg. modes | extra zero")
         points = []
         for target in sorted(by_p):
@@ -121,6 +137,24 @@ def main():
                 f" | {max(int(r['moduli_zero_extra']) for r in rs)}"
             )
             points.append((x, g, gb, dz, p, zz))
+        rs = [r for _, r in items]
+        finite = [r for r in rs if math.isfinite(float(r["G"])) and math.isfinite(float(r["B"]))]
+        print(
+            f"{len(rs)} packings: {len(rs) - len(finite)} with G or B not finite,"
+            f" {sum(float(r['G']) < 0 for r in finite)} with G < 0,"
+            f" smallest B {min(float(r['B']) for r in finite):.3g},"
+            f" largest floppy share {max(float(r['moduli_floppy_share']) for r in rs):.1e}"
+        )
+        if args.x == "dphi":
+            # a packing that rearranged on the way up into a state jamming
+            # above its phi_J sits closer to its new jamming point than
+            # dphi says: its pressure is low for its dphi
+            low = []
+            for target in sorted(by_p):
+                ps = sorted(float(r["pressure"]) for r in by_p[target])
+                median = ps[len(ps) // 2]
+                low.append(f"{target:g}: {sum(q < 0.5 * median for q in ps)}/{len(ps)}")
+            print("p below half the point's median p (rearranged on the way up): " + ", ".join(low))
         sel = [t for t in points if args.pmin <= t[0] <= args.pmax]
         fits = [
             (f"G ~ {args.x}^a", lambda t: (t[0], t[1][0], t[1][1])),
@@ -132,6 +166,7 @@ def main():
             # G against the points' mean pressure (the x of the Pressure runs)
             fits.append(("G ~ p^a (mean p of each dphi)", lambda t: (t[4][0], t[1][0], t[1][1])))
             fits.append(("z - z_J ~ dphi^f", lambda t: (t[0], t[5][0], t[5][1])))
+            fits.append(("z - z_J ~ p^f (mean p of each dphi)", lambda t: (t[4][0], t[5][0], t[5][1])))
         for name, pick in fits:
             xyz = [pick(t) for t in sel]
             if len(xyz) < 3 or any(not (x > 0 and y > 0 and s > 0) for x, y, s in xyz):
