@@ -7,6 +7,7 @@ use jamkit_core::{Matrix, Packing, Potential, Shape, SizeDistribution};
 use jamkit_ellipse::{Ellipse, EllipseParams};
 use jamkit_engine::{Fire, Objective, Scene};
 use jamkit_fourier::{FourierParams, NearDisk};
+use jamkit_harmonic::{Harmonic, HarmonicParams};
 use jamkit_nmer::{Nmer, NmerParams};
 use jamkit_observe::hessian::{Hessian, HessianOptions};
 use jamkit_observe::moduli::{
@@ -48,6 +49,20 @@ fn dimer<const D: usize>(alpha: f64) -> Nmer<D> {
 
 /// The strains checked: every simple shear, its transpose (`a > b`), the
 /// isotropic dilation and a generic `E` with every entry set.
+/// The paper's 3D near-sphere: one zonal mode l = 2, m = 0, first-order
+/// gap (`experiments/elasticity/above_jam_3d.ron`).
+fn near_sphere(delta: f64) -> Harmonic {
+    Harmonic::new(&HarmonicParams {
+        l: Some(2),
+        m: Some(0),
+        modes: None,
+        delta,
+        inertia: None,
+        gap: Default::default(),
+    })
+    .unwrap()
+}
+
 fn strains<const D: usize>() -> Vec<Matrix<D>> {
     let mut out = Vec::new();
     for (a, b) in shear_planes::<D>() {
@@ -143,6 +158,7 @@ fn strain_derivatives_match_finite_differences_for_every_family() {
     check_strain_derivatives::<2, _>(ellipse(1.5), 24, 5);
     check_strain_derivatives::<2, _>(dimer::<2>(1.5), 16, 6);
     check_strain_derivatives::<3, _>(dimer::<3>(1.5), 64, 7);
+    check_strain_derivatives::<3, _>(near_sphere(0.1), 64, 9);
     let lobed = jamkit_lobed::lobed(&jamkit_lobed::LobedParams {
         delta: 0.15,
         kappa: 2.0,
@@ -201,6 +217,7 @@ fn stress_tensor_matches_finite_differences_for_every_family() {
     check_stress::<2, _>(ellipse(2.0), 24, 14);
     check_stress::<2, _>(dimer::<2>(1.5), 16, 15);
     check_stress::<3, _>(dimer::<3>(1.5), 64, 16);
+    check_stress::<3, _>(near_sphere(0.1), 64, 17);
 }
 
 /// The isotropic `∂U/∂γ` against the engine's own box: rescaling the
@@ -313,6 +330,19 @@ fn sphere_moduli_agree_with_deformation_3d() {
         1e-6,
     );
     eprintln!("spheres: {lr:?}\n{def:?}");
+}
+
+/// The 3D near-spheres of the 3D runs (l = 2, m = 0, Δ = 0.1, two
+/// rotational coordinates per body).
+#[test]
+fn near_sphere_moduli_agree_with_deformation_3d() {
+    let (lr, def) = check_against_deformation(
+        relaxed::<3, _>(near_sphere(0.1), 64, 6, 0.72),
+        RattlerRule::Count(4),
+        1e-6,
+        1e-6,
+    );
+    eprintln!("near-spheres: {lr:?}\n{def:?}");
 }
 
 #[test]
@@ -599,5 +629,51 @@ fn protocol_targets_given_as_lists_scan() {
         .unwrap_err()
         .to_string();
         assert!(e.contains(named), "{bad}: {e}");
+    }
+}
+
+/// The shipped 3D experiment (`experiments/elasticity/above_jam_3d.ron`:
+/// spheres and near-spheres l = 2, m = 0 at Δ = 0.01 and 0.1, `AboveJam`)
+/// at N = 32, one seed and one δφ: every packing is δφ above its own φ_J
+/// (1e-12), in 3D, with finite moduli, `B > 0`, the non-affine relaxation
+/// lowering both, no negative mode, three translations, and the Hessian's
+/// rows `f (N − N_r)` (f = 3 for the spheres, 5 for the axisymmetric
+/// near-spheres: two rotational coordinates).
+#[test]
+fn shipped_3d_above_jam_file_gives_finite_moduli() {
+    let report = common::run_file(
+        "experiments/elasticity/above_jam_3d.ron",
+        &["particles=32", "samples=1", "protocol.delta_phi=1e-2"],
+        1,
+    );
+    assert_eq!(report.packings.len(), 3);
+    for f in &report.packings {
+        assert_eq!(f.dim, 3, "{}", f.id);
+        let jam = f.measures.jam_point.as_ref().expect("AboveJam records φ_J");
+        assert!(
+            (f.phi - jam.phi - 1e-2).abs() < 1e-12,
+            "{}: {} {}",
+            f.id,
+            f.phi,
+            jam.phi
+        );
+        let m = &f.measures.moduli.as_ref().expect("moduli measured").moduli;
+        assert_eq!(m.shear_planes.len(), 3, "{}", f.id);
+        assert!(
+            m.shear.is_finite() && m.bulk.is_finite() && m.bulk > 0.0,
+            "{}: {m:?}",
+            f.id
+        );
+        assert!(
+            m.shear < m.shear_affine && m.bulk < m.bulk_affine,
+            "{}: {m:?}",
+            f.id
+        );
+        assert_eq!(m.negative_modes, 0, "{}", f.id);
+        assert_eq!(m.zero_modes.translations, 3, "{}", f.id);
+        let delta = f.params["delta"].as_f64().unwrap();
+        let dof = if delta == 0.0 { 3 } else { 5 };
+        let bodies = f.particles - f.measures.n_rattlers.unwrap();
+        assert_eq!(m.coordinates, dof * bodies, "{}", f.id);
     }
 }
