@@ -9,7 +9,9 @@ of the same experiment file run with two minimisers. For every grid point
 z_corr for bodies made of spheres, the rattler fraction n_rattlers/N, and,
 for the cost, fire_steps and wall_s) it prints the two means with their
 standard errors, the difference in units of its standard error, and the two-sample Kolmogorov-Smirnov statistic with its
-asymptotic p-value. The packings need not be paired one by one.
+asymptotic p-value. The packings need not be paired one by one. Packings
+with a flag (results.csv column `flag`) are left out of the table and
+counted below it, point by point, with their flags.
 """
 
 import csv
@@ -20,11 +22,13 @@ from collections import defaultdict
 
 def load(directory):
     points = defaultdict(list)
+    flagged = defaultdict(list)
     with open(f"{directory}/results.csv", newline="") as f:
         for row in csv.DictReader(f):
-            if row.get("flag"):
-                continue
             point = row["id"].rsplit("_s", 1)[0]
+            if row.get("flag"):
+                flagged[point].append((row["id"], row["flag"].split(";")[0]))
+                continue
             n = float(row["particles"])
             values = {
                 "phi_j": float(row["phi_j"]),
@@ -38,7 +42,7 @@ def load(directory):
             if row.get("family") == "nmer" and row.get("z_corr"):
                 values["z_corr"] = float(row["z_corr"])
             points[point].append(values)
-    return points
+    return points, flagged
 
 
 def mean_sem(xs):
@@ -79,7 +83,7 @@ def main():
         args = args[:k] + args[k + 2 :]
     if len(args) != 2:
         sys.exit(__doc__)
-    new, old = load(args[0]), load(args[1])
+    (new, new_flagged), (old, old_flagged) = load(args[0]), load(args[1])
     rows = []
     for point in sorted(set(new) & set(old)):
         quantities = ["phi_j", "z_j", "z_corr", "rattler_fraction", "fire_steps", "wall_s"]
@@ -101,6 +105,12 @@ def main():
         fmt = "{:.0f}" if r[1] == "fire_steps" else ("{:.2f}" if r[1] == "wall_s" else "{:.5f}")
         print(f"| {r[0]} | {r[1]} | {fmt.format(r[4])} ± {fmt.format(r[5])} (n = {r[2]}) | "
               f"{fmt.format(r[6])} ± {fmt.format(r[7])} (n = {r[3]}) | {r[8]:+.2f} | {r[9]:.3f} | {r[10]:.3f} |")
+    for point in sorted(set(new_flagged) | set(old_flagged)):
+        for side, flagged in (("new", new_flagged), ("old", old_flagged)):
+            if flagged.get(point):
+                ids = ", ".join(i for i, _ in flagged[point])
+                print(f"\nLeft out, flagged: {point}, {side}: {len(flagged[point])} ({ids}): "
+                      f"{flagged[point][0][1]}")
     if out:
         with open(out, "w", newline="") as f:
             w = csv.writer(f)
