@@ -611,21 +611,9 @@ pub fn check_swapped<const D: usize, S: Shape<D>>(
 
 /// `a` and `b` equal to `epsilon` absolute, or to machine precision
 /// relative: `approx`'s `relative_eq` with its default `max_relative`
-/// (`f64::EPSILON`), step for step.
+/// (`f64::EPSILON`).
 pub fn relative_eq(a: f64, b: f64, epsilon: f64) -> bool {
-    if a == b {
-        return true;
-    }
-    if a.is_infinite() || b.is_infinite() {
-        return false;
-    }
-    let diff = (a - b).abs();
-    if diff <= epsilon {
-        return true;
-    }
-    let (abs_a, abs_b) = (a.abs(), b.abs());
-    let largest = if abs_b > abs_a { abs_b } else { abs_a };
-    diff <= largest * f64::EPSILON
+    approx::relative_eq!(a, b, epsilon = epsilon)
 }
 
 /// The dimensions `family` claims (`Dims::Any`: every compiled one).
