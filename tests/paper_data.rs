@@ -2,7 +2,8 @@
 //! size"): every archived packing loads and is a jammed packing of the
 //! profile, and `jamkit report` regenerates the report from a slice of
 //! them (the n = 2 packings), with φ_J as the files say; the same for the
-//! 3D near-spheres at N = 512 (`data/paper3d-n512`, issue 20).
+//! 3D near-spheres at N = 512 (`data/paper3d-n512`) and their finite-size
+//! set (`data/paper3d-finite-size`, issue 20).
 
 use jamkit_format::PackingFile;
 use std::path::{Path, PathBuf};
@@ -154,4 +155,53 @@ fn the_3d_data_regenerates_its_report() {
         let f = f.unwrap_or_else(|| panic!("no {quantity} fit for l = 2: {:?}", r.fits));
         assert!(f.fit.points >= 3 && f.fit.exponent.is_finite(), "{f:?}");
     }
+}
+
+/// The committed 3D finite-size set (`data/paper3d-finite-size`, l = 2,
+/// N = 64, 128, 256, Δ = 10⁻⁵ … 0.1; issue 20). Every packing is jammed
+/// and has at least one contact more than the translations of its
+/// non-rattlers can take, `N_c ≥ 3 (N_nr − 1) + 1` (the rigidity of a
+/// sphere packing: it holds for any jammed packing whatever Δ). With the
+/// N = 512 set, `jamkit report` draws the finite-size figures and reads
+/// δz_J N_nr at the smallest N_nr² Δ within 0.5 of the paper's limit 2
+/// (one extra contact: 2/N_nr in any dimension, as z_iso = 2d − 2d/N_nr).
+#[test]
+fn the_3d_finite_size_set_collapses_to_one_extra_contact() {
+    let dir = data("paper3d-finite-size");
+    let files = packing_files(&dir);
+    assert!(files.len() >= 30, "{} files", files.len());
+    for path in &files {
+        let f = PackingFile::load_checked(path).unwrap();
+        let f = load_archived(path, ("harmonic", 3, f.particles));
+        assert!([64, 128, 256].contains(&f.particles), "{}", f.id);
+        let m = &f.measures;
+        let (nc, nr) = (m.n_contacts.unwrap(), m.n_rattlers.unwrap());
+        let extra = nc as i64 - 3 * (f.particles - nr - 1) as i64;
+        assert!(extra >= 1, "{}: {extra} contacts beyond 3 (N_nr − 1)", f.id);
+    }
+    let out = tempfile::tempdir().unwrap();
+    let options = jamkit_report::Options {
+        resamples: 50,
+        ..Default::default()
+    };
+    let r = jamkit_report::report(&[data("paper3d-n512"), dir], out.path(), &options).unwrap();
+    for fig in ["fig09a_dz_finite_size", "fig09b_dz_collapse"] {
+        assert!(
+            r.figures.iter().any(|f| f.to_string_lossy().contains(fig)),
+            "{fig}: {:?}",
+            r.figures
+        );
+    }
+    let line = r
+        .markdown
+        .lines()
+        .find(|l| l.starts_with("| δz_J N_nr → 2"))
+        .unwrap_or_else(|| panic!("no finite-size claim:\n{}", r.markdown));
+    let value: f64 = line
+        .split("δz_J N_nr = ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no value in {line}"));
+    assert!((value - 2.0).abs() <= 0.5, "{line}");
 }
