@@ -521,7 +521,8 @@ fn jammed_only_blocks_leave_other_minimisations_to_the_plain_masses() {
 
 /// `masses: Family` (the default) resolves, where the point's shape is
 /// built, to the family's choice: block masses on jammed-only
-/// minimisations for dimers in 3D, the plain masses for every other family
+/// minimisations for dimers in 3D, the plain masses for 2D dimers, every
+/// other family
 /// and for FIRE 2.0; an explicit choice is kept. The packing's settings
 /// record the resolved masses (`Plain` by leaving them out).
 #[test]
@@ -539,6 +540,8 @@ fn the_family_chooses_fires_masses_and_the_settings_record_its_choice() {
     assert_eq!(default.masses, Masses::Family);
     let dimer3 = Nmer::<3>::new(&dimer).unwrap();
     assert_eq!(default.for_family(&dimer3).masses, jammed_only);
+    let dimer2 = Nmer::<2>::new(&dimer).unwrap();
+    assert_eq!(default.for_family(&dimer2).masses, Masses::Plain, "2D");
     assert_eq!(
         default.for_family::<2, _>(&Sphere).masses,
         Masses::Plain,
@@ -586,6 +589,7 @@ fn the_family_chooses_fires_masses_and_the_settings_record_its_choice() {
         recorded(&nmer(3, "")),
         Some(serde_json::to_value(&jammed_only).unwrap())
     );
+    assert_eq!(recorded(&nmer(2, "")), None);
     assert_eq!(recorded(&nmer(3, ", minimizer: (masses: Plain)")), None);
     assert_eq!(
         recorded(r#"(name: "s", family: "sphere", dim: 2, particles: 8, samples: 1, seed: 1)"#),
@@ -599,31 +603,23 @@ fn the_family_chooses_fires_masses_and_the_settings_record_its_choice() {
 /// resumed under an explicit `masses: Plain`.
 #[test]
 fn plain_mass_packings_are_refused_under_the_family_default_and_resume_as_plain() {
-    let dir = tempfile::tempdir().unwrap();
     let experiment = |minimizer: &str| {
         let text = format!(
             r#"(name: "old", family: "nmer", dim: 3, params: {{"alpha": 1.1}}, particles: 32, samples: 1, seed: 1{minimizer})"#
         );
         jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap()
     };
-    let plain = experiment(", minimizer: (masses: Plain)");
-    let made = common::run_ok(&plain, dir.path(), 1);
-    assert_eq!((made.packings.len(), made.reused), (1, 0));
-    let options = common::options(dir.path(), 1);
-    let err = jamkit_experiment::runner::run(&experiment(""), &options)
-        .unwrap_err()
-        .to_string();
-    for part in [
-        "minimizer.masses",
-        "\"Blocks\"",
-        "\"jammed_only\":true",
-        "\"Plain\" (not written",
-        "add `masses: Plain`",
-    ] {
-        assert!(err.contains(part), "{part:?} missing from: {err}");
-    }
-    let again = common::run_ok(&plain, dir.path(), 1);
-    assert_eq!((again.packings.len(), again.reused), (1, 1));
+    common::refused_then_resumed(
+        &experiment(", minimizer: (masses: Plain)"),
+        &experiment(""),
+        &[
+            "minimizer.masses",
+            "\"Blocks\"",
+            "\"jammed_only\":true",
+            "\"Plain\" (not written",
+            "add `masses: Plain`",
+        ],
+    );
 }
 
 /// `bench packing` resolves its default masses as experiment files do:

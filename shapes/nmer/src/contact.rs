@@ -229,6 +229,17 @@ impl Shape<2> for Nmer<2> {
         [self.moment_of_inertia(size); 3]
     }
 
+    /// No (the default): in 2D the jammed-only blocks were not faster
+    /// over the dimers measured. Their ensembles are the plain masses'
+    /// (N = 128, α = 1.1 and 1.5, 30 seeds), and at N = 512 they took 0.73×
+    /// the CPU time at α = 1.1 but 1.05× the FIRE steps at α = 1.5 (seeds
+    /// 1–6; docs/performance.md, "FIRE's masses per family"). An
+    /// experiment at small α may ask for them (`masses: Blocks((jammed_only:
+    /// true))`).
+    fn fire_jammed_block_masses(&self) -> bool {
+        false
+    }
+
     fn rotate(&self, o: &mut Angle, dq: &[f64]) {
         *o = o.turned_exact(dq[0]);
     }
