@@ -116,6 +116,9 @@ pub enum SearchArg {
 /// FIRE's masses in `bench packing`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MassesArg {
+    /// The family's default (`masses: Family`, as in experiment files):
+    /// `blocks-jammed` for dimers in 3D, `plain` otherwise.
+    Family,
     /// The bodies' own masses (the paper).
     Plain,
     /// Each body's own stiffness block (block-preconditioned FIRE).
@@ -181,11 +184,13 @@ pub enum BenchCommand {
         /// FIRE steps before the Newton finish [default: the minimiser's].
         #[arg(long)]
         newton_after: Option<u64>,
-        /// FIRE's masses (`minimizer.masses`): the bodies' own (`plain`, the
-        /// paper) or each body's stiffness block (`blocks`:
-        /// block-preconditioned FIRE).
-        #[arg(long, value_enum, default_value_t = MassesArg::Plain)]
-        masses: MassesArg,
+        /// FIRE's masses (`minimizer.masses`): the family's default
+        /// (`family`), the bodies' own (`plain`, the paper) or each body's
+        /// stiffness block (`blocks`: block-preconditioned FIRE) [default:
+        /// `family`, as in experiment files; `plain` with `--minimizer
+        /// paper`, so that it is the paper's FIRE bit for bit].
+        #[arg(long, value_enum)]
+        masses: Option<MassesArg>,
         /// The block preconditioner's floor `c` [default: 0.25].
         #[arg(long)]
         precon_floor: Option<f64>,
@@ -313,9 +318,11 @@ pub fn run(what: BenchCommand) -> Result<()> {
                 ..d
             };
             fire.masses = match masses {
-                MassesArg::Plain => Masses::Plain,
-                MassesArg::Blocks => Masses::Blocks(blocks),
-                MassesArg::BlocksJammed => Masses::Blocks(PreconParams {
+                None if minimizer == MinimizerArg::Paper => Masses::Plain,
+                None | Some(MassesArg::Family) => Masses::Family,
+                Some(MassesArg::Plain) => Masses::Plain,
+                Some(MassesArg::Blocks) => Masses::Blocks(blocks),
+                Some(MassesArg::BlocksJammed) => Masses::Blocks(PreconParams {
                     jammed_only: true,
                     ..blocks
                 }),

@@ -8,7 +8,7 @@ use jamkit_core::{Potential, Shape};
 use jamkit_engine::{
     Fire, FireParams, JamParams, JamSearch, Objective, Scene, energy_slope, extrapolated_step, jam,
 };
-use jamkit_experiment::{Experiment, grid, runner, sample};
+use jamkit_experiment::{Experiment, grid, sample};
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_sphere::Sphere;
 
@@ -201,28 +201,20 @@ fn extrapolated_is_the_default_and_bisection_is_left_out_of_settings() {
 /// `search: Bisection`.
 #[test]
 fn bisection_packings_are_refused_under_the_default_and_resume_as_bisection() {
-    let dir = tempfile::tempdir().unwrap();
     let experiment = |protocol: &str| {
         let text = format!(
             r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3{protocol})"#
         );
         Experiment::from_ron(&text, "inline").unwrap()
     };
-    let bisection = experiment(", protocol: Jam(search: Bisection)");
-    let made = common::run_ok(&bisection, dir.path(), 1);
-    assert_eq!((made.packings.len(), made.reused), (2, 0));
-    let options = common::options(dir.path(), 1);
-    let err = runner::run(&experiment(""), &options)
-        .unwrap_err()
-        .to_string();
-    for part in [
-        "protocol.Jam.search",
-        "\"Extrapolated\"",
-        "\"Bisection\" (not written",
-        "add `search: Bisection`",
-    ] {
-        assert!(err.contains(part), "{part:?} missing from: {err}");
-    }
-    let again = common::run_ok(&bisection, dir.path(), 1);
-    assert_eq!((again.packings.len(), again.reused), (2, 2));
+    common::refused_then_resumed(
+        &experiment(", protocol: Jam(search: Bisection)"),
+        &experiment(""),
+        &[
+            "protocol.Jam.search",
+            "\"Extrapolated\"",
+            "\"Bisection\" (not written",
+            "add `search: Bisection`",
+        ],
+    );
 }

@@ -518,3 +518,140 @@ fn jammed_only_blocks_leave_other_minimisations_to_the_plain_masses() {
         out.energy_per_particle
     );
 }
+
+/// `masses: Family` (the default) resolves, where the point's shape is
+/// built, to the family's choice: block masses on jammed-only
+/// minimisations for dimers in 3D, the plain masses for 2D dimers, every
+/// other family
+/// and for FIRE 2.0; an explicit choice is kept. The packing's settings
+/// record the resolved masses (`Plain` by leaving them out).
+#[test]
+fn the_family_chooses_fires_masses_and_the_settings_record_its_choice() {
+    let dimer = NmerParams {
+        alpha: Some(1.1),
+        spheres: None,
+        inertia: None,
+    };
+    let jammed_only = Masses::Blocks(PreconParams {
+        jammed_only: true,
+        ..PreconParams::default()
+    });
+    let default = FireParams::default();
+    assert_eq!(default.masses, Masses::Family);
+    let dimer3 = Nmer::<3>::new(&dimer).unwrap();
+    assert_eq!(default.for_family(&dimer3).masses, jammed_only);
+    let dimer2 = Nmer::<2>::new(&dimer).unwrap();
+    assert_eq!(default.for_family(&dimer2).masses, Masses::Plain, "2D");
+    assert_eq!(
+        default.for_family::<2, _>(&Sphere).masses,
+        Masses::Plain,
+        "disks"
+    );
+    assert_eq!(default.for_family::<3, _>(&Sphere).masses, Masses::Plain);
+    let near_disk = NearDisk::fourier(&FourierParams {
+        n: 2,
+        delta: 0.1,
+        inertia: None,
+        gap: Default::default(),
+    })
+    .unwrap();
+    assert_eq!(default.for_family(&near_disk).masses, Masses::Plain);
+    let fire2 = FireParams {
+        variant: FireVariant::Fire2,
+        ..FireParams::default()
+    };
+    assert_eq!(fire2.for_family(&dimer3).masses, Masses::Plain, "FIRE 2.0");
+    for chosen in [Masses::Plain, Masses::Blocks(PreconParams::default())] {
+        let params = FireParams {
+            masses: chosen.clone(),
+            ..FireParams::default()
+        };
+        assert_eq!(params.for_family(&dimer3).masses, chosen);
+    }
+    assert_eq!(
+        FireParams::paper().for_family(&dimer3).masses,
+        Masses::Plain
+    );
+
+    let recorded = |text: &str| {
+        let e = jamkit_experiment::Experiment::from_ron(text, "inline").unwrap();
+        let points = jamkit_experiment::grid::points(&e).unwrap();
+        let jobs = jamkit_experiment::grid::jobs(&e, &points);
+        let settings = jamkit_experiment::sample::settings(&e, &points[0], &jobs[0]);
+        settings["minimizer"].get("masses").cloned()
+    };
+    let nmer = |dim: usize, minimizer: &str| {
+        format!(
+            r#"(name: "m", family: "nmer", dim: {dim}, params: {{"alpha": 1.1}}, particles: 32, samples: 1, seed: 1{minimizer})"#
+        )
+    };
+    assert_eq!(
+        recorded(&nmer(3, "")),
+        Some(serde_json::to_value(&jammed_only).unwrap())
+    );
+    assert_eq!(recorded(&nmer(2, "")), None);
+    assert_eq!(recorded(&nmer(3, ", minimizer: (masses: Plain)")), None);
+    assert_eq!(
+        recorded(r#"(name: "s", family: "sphere", dim: 2, particles: 8, samples: 1, seed: 1)"#),
+        None
+    );
+}
+
+/// A run directory of plain-mass dimer packings (as every run made before
+/// the family's default existed; they record no `masses`) is refused under
+/// the family's default, with the field named and the fix said, and
+/// resumed under an explicit `masses: Plain`.
+#[test]
+fn plain_mass_packings_are_refused_under_the_family_default_and_resume_as_plain() {
+    let experiment = |minimizer: &str| {
+        let text = format!(
+            r#"(name: "old", family: "nmer", dim: 3, params: {{"alpha": 1.1}}, particles: 32, samples: 1, seed: 1{minimizer})"#
+        );
+        jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap()
+    };
+    common::refused_then_resumed(
+        &experiment(", minimizer: (masses: Plain)"),
+        &experiment(""),
+        &[
+            "minimizer.masses",
+            "\"Blocks\"",
+            "\"jammed_only\":true",
+            "\"Plain\" (not written",
+            "add `masses: Plain`",
+        ],
+    );
+}
+
+/// `bench packing` resolves its default masses as experiment files do:
+/// the same packing as `--masses plain` for disks, as `--masses
+/// blocks-jammed` for 3D dimers (which differs from the plain masses' one
+/// here, else the check would be empty).
+#[test]
+fn bench_packing_takes_the_familys_masses() {
+    let hash = |args: &[&str]| {
+        let args = [&["bench", "packing", "--seeds", "1"][..], args].concat();
+        let (code, text, err) = common::jamkit(&args);
+        assert_eq!(code, 0, "{err}");
+        let line = text.lines().nth(1).unwrap().to_string();
+        line.split(',').nth(10).unwrap().to_string()
+    };
+    let disks = ["--particles", "64"];
+    assert_eq!(
+        hash(&disks),
+        hash(&[&disks[..], &["--masses", "plain"]].concat())
+    );
+    let dimers = ["--family", "nmer", "--dim", "3", "--particles", "32"];
+    let family = hash(&dimers);
+    assert_eq!(
+        family,
+        hash(&[&dimers[..], &["--masses", "family"]].concat())
+    );
+    assert_eq!(
+        family,
+        hash(&[&dimers[..], &["--masses", "blocks-jammed"]].concat())
+    );
+    assert_ne!(
+        family,
+        hash(&[&dimers[..], &["--masses", "plain"]].concat())
+    );
+}

@@ -71,6 +71,25 @@ pub fn run_ok(e: &Experiment, dir: &Path, jobs: usize) -> RunReport {
     report
 }
 
+/// A run directory made by `old` (every packing new) is refused by `new`
+/// with an error holding every one of `parts`, and resumed by `old` again
+/// (every packing reused): a setting whose default changed.
+pub fn refused_then_resumed(old: &Experiment, new: &Experiment, parts: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let made = run_ok(old, dir.path(), 1);
+    assert!(!made.packings.is_empty());
+    assert_eq!(made.reused, 0);
+    let err = run(new, &options(dir.path(), 1)).unwrap_err().to_string();
+    for part in parts {
+        assert!(err.contains(part), "{part:?} missing from: {err}");
+    }
+    let again = run_ok(old, dir.path(), 1);
+    assert_eq!(
+        (again.packings.len(), again.reused),
+        (made.packings.len(), made.packings.len())
+    );
+}
+
 /// Run the `jamkit` binary in the workspace root: exit code, stdout, stderr.
 pub fn jamkit(args: &[&str]) -> (i32, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_jamkit"))

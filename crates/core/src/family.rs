@@ -74,10 +74,10 @@ pub trait ShapeVisitor {
 /// A shape family's one registration: everything the registry needs to turn
 /// `(name, dim, params)` into a typed shape.
 ///
-/// Per-family defaults that depend on the parameters (the rotational
-/// inertia, FIRE's largest time step) are methods of the shape
-/// ([`Shape::rot_inertia`], [`Shape::fire_dt_max`]), so that they travel
-/// with it.
+/// Per-family defaults that depend on the parameters or the dimension (the
+/// rotational inertia, FIRE's largest time step and masses) are methods of
+/// the shape ([`Shape::rot_inertia`], [`Shape::fire_dt_max`],
+/// [`Shape::fire_jammed_block_masses`]), so that they travel with it.
 pub trait Family {
     /// Name, description, dimensions and parameters (`jamkit shapes`).
     const INFO: FamilyInfo;

@@ -269,6 +269,18 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         None
     }
 
+    /// Whether FIRE's masses default, for this family, to each body's own
+    /// stiffness block in the jamming search's minimisations that start
+    /// from a decompressed jammed state (`masses: Blocks((jammed_only:
+    /// true))` of `jamkit_engine`), instead of the bodies' own masses
+    /// everywhere. A family says yes where that was measured faster with
+    /// the same ensembles (docs/performance.md, "FIRE's masses per
+    /// family"); an experiment's `minimizer.masses` overrides it.
+    /// Default: no (the bodies' own masses, the paper's).
+    fn fire_jammed_block_masses(&self) -> bool {
+        false
+    }
+
     /// Inertia of each rotational coordinate (the mass FIRE gives it).
     fn rot_inertia(&self, _size: f64) -> RotVec {
         [1.0; 3]

@@ -171,11 +171,12 @@ pub struct FireParams {
     /// without convergence, Newton iterations with the analytic Hessian.
     /// `None`: FIRE all the way, as in the paper.
     pub newton: Option<NewtonParams>,
-    /// The masses FIRE integrates with: the bodies' own (`Plain`, the
-    /// paper; the default) or each body's own block of the stiffness matrix
-    /// (`Blocks`, [`crate::precon`]; FIRE only). Left out of the recorded
-    /// settings when `Plain`, so that packings made before it existed still
-    /// resume.
+    /// The masses FIRE integrates with: the family's choice (`Family`, the
+    /// default, resolved by [`FireParams::for_family`]), the bodies' own
+    /// (`Plain`, the paper) or each body's own block of the stiffness
+    /// matrix (`Blocks`, [`crate::precon`]; FIRE only). Left out of the
+    /// recorded settings when `Plain`, so that packings made before it
+    /// existed still resume.
     #[serde(skip_serializing_if = "Masses::is_plain")]
     pub masses: Masses,
 }
@@ -183,9 +184,14 @@ pub struct FireParams {
 /// Which masses FIRE integrates with.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub enum Masses {
+    /// The family's choice ([`jamkit_core::Shape::fire_jammed_block_masses`]):
+    /// `Blocks((jammed_only: true))` where the family says so and the
+    /// variant is FIRE, else `Plain`; resolved by [`FireParams::for_family`]
+    /// (FIRE integrates an unresolved `Family` with the plain masses).
+    #[default]
+    Family,
     /// The bodies' own masses: 1 per translation, the family's moments of
     /// inertia per rotation (the paper).
-    #[default]
     Plain,
     /// Block preconditioning: each body's own block of the stiffness
     /// matrix as its mass ([`crate::precon`]).
@@ -217,7 +223,7 @@ impl Default for FireParams {
             force_criterion: ForceCriterion::Sum,
             max_steps: 20_000_000,
             newton: Some(NewtonParams::default()),
-            masses: Masses::Plain,
+            masses: Masses::Family,
         }
     }
 }
@@ -282,16 +288,31 @@ impl FireParams {
         converged.then_some(StopReason::Force)
     }
 
-    /// These parameters with `dt_max` set: their own, else the family's
-    /// ([`jamkit_core::Shape::fire_dt_max`]), else 0.5, so that the settings
-    /// a packing records hold the time step it was made with.
+    /// These parameters with `dt_max` and the masses set: their own, else
+    /// the family's ([`jamkit_core::Shape::fire_dt_max`], 0.5 where the
+    /// family has none; [`jamkit_core::Shape::fire_jammed_block_masses`]
+    /// with FIRE, the plain masses with FIRE 2.0), so that the settings a
+    /// packing records hold the time step and the masses it was made with.
     pub fn for_family<const D: usize, S: jamkit_core::Shape<D>>(&self, shape: &S) -> Self {
+        let masses = match &self.masses {
+            Masses::Family
+                if self.variant == FireVariant::Fire && shape.fire_jammed_block_masses() =>
+            {
+                Masses::Blocks(PreconParams {
+                    jammed_only: true,
+                    ..PreconParams::default()
+                })
+            }
+            Masses::Family => Masses::Plain,
+            chosen => chosen.clone(),
+        };
         Self {
             dt_max: Some(
                 self.dt_max
                     .or(shape.fire_dt_max())
                     .unwrap_or(DEFAULT_DT_MAX),
             ),
+            masses,
             ..self.clone()
         }
     }

@@ -238,11 +238,10 @@ fn refuse_other_settings(
         };
         let wanted = settings(experiment, &points[job.point], job);
         if let Some((key, here, mut there)) = lock::first_difference(&wanted, &old.settings) {
-            if key == "protocol.Jam.search" && there == "(not set)" {
-                // Bisection packings record no search (`protocol_settings`).
-                there = "\"Bisection\" (not written; the default before \"Extrapolated\": \
-                         add `search: Bisection` to the protocol to resume them)"
-                    .to_string();
+            if there == "(not set)"
+                && let Some(unwritten) = unwritten_setting(&key)
+            {
+                there = unwritten.to_string();
             }
             return Err(ExperimentError::SettingsDiffer {
                 file: path.display().to_string(),
@@ -253,6 +252,25 @@ fn refuse_other_settings(
         }
     }
     Ok(())
+}
+
+/// What a setting that a packing does not record stood for, where the
+/// settings leave a value out so that packings made before it existed
+/// resume (`sample::settings`), with how to resume them.
+fn unwritten_setting(key: &str) -> Option<&'static str> {
+    match key {
+        // Bisection packings record no search (`protocol_settings`).
+        "protocol.Jam.search" => Some(
+            "\"Bisection\" (not written; the default before \"Extrapolated\": \
+             add `search: Bisection` to the protocol to resume them)",
+        ),
+        // Plain-mass packings record no masses (`Masses::is_plain`).
+        "minimizer.masses" => Some(
+            "\"Plain\" (not written; the default before the family's: \
+             add `masses: Plain` to the minimizer to resume them)",
+        ),
+        _ => None,
+    }
 }
 
 /// `packings/<id>.xyz` beside `packings/<id>.json`.
