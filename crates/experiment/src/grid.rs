@@ -572,6 +572,10 @@ mod tests {
                 "as many as every other list",
             ),
             (r#"[{"minimizer.force_tol": []}]"#, "at least one value"),
+            (
+                r#"[{"minimizer.force_tol": [1e-20, 1e-22, 1e-20]}]"#,
+                "minimizer.force_tol = 1e-20: is listed twice",
+            ),
             (r#"[{}]"#, "an axis names at least one field"),
             (
                 r#"[{"minimizer.force_tol": [1e-20]}, {"protocol.force_tol": [1e-20]}]"#,

@@ -600,6 +600,21 @@ impl Experiment {
                 }
                 len = Some(values.len());
             }
+            // Two equal settings would be two points with one label.
+            for i in 0..len.unwrap_or(0) {
+                let same = |j: usize| axis.values().all(|v| v[i] == v[j]);
+                if (0..i).any(same) {
+                    let setting: Vec<(String, ron::Value)> = axis
+                        .iter()
+                        .map(|(k, v)| (k.clone(), v[i].clone()))
+                        .collect();
+                    return Err(ExperimentError::invalid(
+                        format!("scan[{k}]"),
+                        scan_text(&setting),
+                        "is listed twice; list each setting once",
+                    ));
+                }
+            }
             let Some(len) = len else {
                 return Err(ExperimentError::invalid(
                     format!("scan[{k}]"),
