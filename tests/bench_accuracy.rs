@@ -402,3 +402,34 @@ fn the_files_make_the_documented_packings() {
         }
     }
 }
+
+#[test]
+fn bad_accuracy_reports_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let empty = dir.path().join("empty");
+    std::fs::create_dir_all(empty.join("packings")).unwrap();
+    for (study, run, names) in [
+        (
+            "nonsense",
+            &empty,
+            "--accuracy nonsense: must be gap-models",
+        ),
+        ("tolerances", &empty, "no packing files"),
+        ("gap-models", &dir.path().join("absent"), "absent"),
+    ] {
+        let (code, _, err) = jamkit(&[
+            "report",
+            "--accuracy",
+            study,
+            run.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 1, "{study}: {err}");
+        assert!(
+            err.starts_with("error: ") && !err.contains("panicked") && err.contains(names),
+            "{study}: {err}"
+        );
+    }
+}

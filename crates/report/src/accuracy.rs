@@ -748,3 +748,116 @@ pub fn report(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ok(seed: u64, phi: f64, n_c: usize) -> PackRow {
+        PackRow {
+            seed,
+            result: Ok(PackResult {
+                wall_s: 1.0,
+                steps: 10,
+                phi,
+                z: 4.0,
+                n_c,
+                rattlers: 0,
+            }),
+        }
+    }
+
+    fn failed(seed: u64) -> PackRow {
+        PackRow {
+            seed,
+            result: Err("FIRE did not converge".into()),
+        }
+    }
+
+    /// A ladder where seed 1 fails at the tightest tolerance: its reference
+    /// is the next one that converged, and no setting is everyone's
+    /// reference then.
+    #[test]
+    fn tolerance_reference_is_the_tightest_converged_per_seed() {
+        let (w, loose) = ((1e-16, 2e-16), (1e-14, 2e-14));
+        let t = Tolerances {
+            runs: vec![
+                ((w, 1e-20), vec![ok(1, 0.84, 30), ok(2, 0.85, 31)]),
+                ((w, 1e-26), vec![ok(1, 0.841, 32), ok(2, 0.851, 31)]),
+                ((w, 1e-28), vec![failed(1), ok(2, 0.852, 33)]),
+                ((loose, 1e-28), vec![ok(1, 0.9, 32), ok(2, 0.9, 33)]),
+            ],
+            seeds: vec![1, 2],
+            particles: 12,
+            max_steps: "1000".into(),
+            params: ("FirstOrder".into(), "2".into(), "0.1".into()),
+        };
+        let refs: Vec<(u64, f64)> = t.reference().iter().map(|(r, ft)| (r.seed, *ft)).collect();
+        assert_eq!(refs, vec![(1, 1e-26), (2, 1e-28)]);
+        let refs = t.reference();
+        assert!(!t.is_reference(&refs, (w, 1e-28)));
+        let csv = t.csv();
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 1 + 8);
+        // Seed 1 at 1e-20 against its reference 1e-26: Δφ = 0.84 − 0.841.
+        let d: f64 = lines[1].split(',').nth(11).unwrap().parse().unwrap();
+        assert_eq!(d, 0.84 - 0.841);
+        assert_eq!(lines[1].split(',').nth(13), Some("-2"));
+        // The failed packing: no numbers, no differences, its error.
+        assert!(
+            lines[5].starts_with("1e-16,2e-16,1e-28,12,1,,,,,,,,,,,\"FIRE"),
+            "{}",
+            lines[5]
+        );
+        let md = t.table("tolerances.ron");
+        assert!(md.contains("seed 1: 1e-26, seed 2: 1e-28"), "{md}");
+        assert!(md.contains("| 1e-16…2e-16 | 1e-28 | 1/2 |"), "{md}");
+        assert!(md.contains("seed 1: failed: FIRE did not converge"), "{md}");
+    }
+
+    #[test]
+    fn the_most_accurate_model_of_a_delta_is_its_reference() {
+        let g = GapModels {
+            runs: vec![
+                (
+                    "0.1".into(),
+                    "2".into(),
+                    "Exact".into(),
+                    vec![ok(1, 0.8, 20)],
+                ),
+                (
+                    "0.1".into(),
+                    "2".into(),
+                    "FirstOrder".into(),
+                    vec![ok(1, 0.81, 21)],
+                ),
+                (
+                    "0.2".into(),
+                    "2".into(),
+                    "FirstOrder".into(),
+                    vec![ok(1, 0.7, 20)],
+                ),
+                (
+                    "0.2".into(),
+                    "2".into(),
+                    "SecondOrder".into(),
+                    vec![ok(1, 0.72, 20)],
+                ),
+            ],
+            seeds: vec![1],
+            particles: 10,
+            force_tol: 1e-25,
+            window: (1e-16, 2e-16),
+        };
+        assert_eq!(g.reference_model("0.1"), "Exact");
+        assert_eq!(g.reference_model("0.2"), "SecondOrder");
+        let csv = g.csv();
+        let row = csv.lines().nth(3).unwrap();
+        assert!(
+            row.starts_with("FirstOrder,2,0.2,10,SecondOrder,1,"),
+            "{row}"
+        );
+        let d: f64 = row.split(',').nth(12).unwrap().parse().unwrap();
+        assert_eq!(d, 0.7 - 0.72);
+    }
+}
