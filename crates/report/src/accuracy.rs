@@ -155,6 +155,9 @@ fn names(dirs: &[impl AsRef<Path>]) -> String {
         .join(", ")
 }
 
+/// Packings by comparison group: `(key, one row per seed)`.
+type Groups<K> = Vec<(K, Vec<PackRow>)>;
+
 /// Group `records` by `key` (in the order `cmp` sorts the keys), one row
 /// per seed that any group holds (`Err("no packing file")` where a group
 /// lacks it: a failure that left no state), seeds ascending.
@@ -162,7 +165,7 @@ fn group<K: Clone + PartialEq>(
     records: &[Record],
     key: impl Fn(&Record) -> Result<K, ReportError>,
     cmp: impl Fn(&K, &K) -> std::cmp::Ordering,
-) -> Result<(Vec<(K, Vec<PackRow>)>, Vec<u64>), ReportError> {
+) -> Result<(Groups<K>, Vec<u64>), ReportError> {
     let mut seeds: Vec<u64> = records.iter().map(|r| r.file.seed).collect();
     seeds.sort_unstable();
     seeds.dedup();
@@ -817,33 +820,17 @@ mod tests {
 
     #[test]
     fn the_most_accurate_model_of_a_delta_is_its_reference() {
+        let runs = [
+            ("0.1", "Exact", 0.8, 20),
+            ("0.1", "FirstOrder", 0.81, 21),
+            ("0.2", "FirstOrder", 0.7, 20),
+            ("0.2", "SecondOrder", 0.72, 20),
+        ];
         let g = GapModels {
-            runs: vec![
-                (
-                    "0.1".into(),
-                    "2".into(),
-                    "Exact".into(),
-                    vec![ok(1, 0.8, 20)],
-                ),
-                (
-                    "0.1".into(),
-                    "2".into(),
-                    "FirstOrder".into(),
-                    vec![ok(1, 0.81, 21)],
-                ),
-                (
-                    "0.2".into(),
-                    "2".into(),
-                    "FirstOrder".into(),
-                    vec![ok(1, 0.7, 20)],
-                ),
-                (
-                    "0.2".into(),
-                    "2".into(),
-                    "SecondOrder".into(),
-                    vec![ok(1, 0.72, 20)],
-                ),
-            ],
+            runs: runs
+                .iter()
+                .map(|&(d, m, phi, n_c)| (d.into(), "2".into(), m.into(), vec![ok(1, phi, n_c)]))
+                .collect(),
             seeds: vec![1],
             particles: 10,
             force_tol: 1e-25,
