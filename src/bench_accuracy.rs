@@ -10,15 +10,16 @@
 //! 2. **Packings**: the experiment file `experiments/accuracy/gap_models.ron`
 //!    (whole jammed packings per gap model and `Δ`, `n = 2`, the same seeds,
 //!    hence the same random starts, at every point), run by the runner into
-//!    `RUNS/gap_models` (resumable, `results.csv`, `summary.csv`); each
-//!    packing is compared with the packing of the most accurate model of the
-//!    run (`Exact`) of the same `Δ` and seed: `φ_J`, `z_J`, `N_c`, rattlers.
-//! 3. **Tolerances**: the experiment file `experiments/accuracy/tolerances.ron`
-//!    run by the runner once per setting of the ladder (FIRE's force
-//!    tolerance × the jamming window, as `--set` overrides) into
-//!    `RUNS/tolerances/<setting>`; differences of `φ_J` and `N_c` from the
-//!    tightest force tolerance that converged in the paper's window on the
-//!    same seed.
+//!    `RUNS/gap_models` (resumable, `results.csv`, `summary.csv`), then
+//!    compared by `jamkit_report::accuracy` (`jamkit report --accuracy
+//!    gap-models`).
+//! 3. **Tolerances**: the experiment file `experiments/accuracy/tolerances.ron`,
+//!    whose `scan` is the ladder (FIRE's force tolerance × the jamming
+//!    window), run by the runner into `RUNS/tolerances`, then compared by
+//!    `jamkit_report::accuracy` (`jamkit report --accuracy tolerances`).
+//!
+//! Parts 2 and 3 are thus a run and a report each, which this command
+//! chains; only part 1, a micro-benchmark of one function, is measured here.
 //!
 //! The two files are compiled in, so the command runs from any directory;
 //! `--set-gap-models` / `--set-tolerances` edit them as `jamkit run --set`
@@ -33,9 +34,9 @@ use jamkit_experiment::grid::{self, value_text};
 use jamkit_experiment::runner::{self, RunOptions};
 use jamkit_experiment::schema::{Observable, Protocol};
 use jamkit_experiment::{Experiment, ExperimentError, Log, overrides};
-use jamkit_format::PackingFile;
 use jamkit_fourier::{Angle, FourierParams, NearDisk};
 use jamkit_planar::gap2d::GapModel;
+use jamkit_report::accuracy::{self, Study, sci};
 use jamkit_report::plot::{Figure, Guide, Series};
 use plotters::prelude::SeriesLabelPosition;
 use rand::{RngExt, SeedableRng};
@@ -80,22 +81,6 @@ const FIT_MAX_DELTA: f64 = 0.1;
 const SIZES: (f64, f64) = (0.5, 0.7);
 /// Where `Exact` is drawn on the log axis of the speed–error figure.
 const EXACT_FLOOR: f64 = 1e-16;
-
-/// Where an unchanged φ_J is drawn on the log axis of the tolerance figure.
-const ZERO_FLOOR: f64 = 1e-12;
-
-/// FIRE force tolerances of part 3 (`minimizer.force_tol`); the tightest
-/// that converges on a seed (in the paper's window) is that seed's
-/// reference. The file's `minimizer.max_steps` bounds each minimisation: a
-/// tolerance below the round-off floor of the forces is never met.
-const FORCE_TOLS: [f64; 6] = [1e-20, 1e-22, 1e-24, 1e-25, 1e-26, 1e-28];
-
-/// Jamming windows `(E_low, E_high)` of part 3 (`protocol.energy_low`,
-/// `protocol.energy_high`): the paper's, and one 100× looser (FIRE's
-/// `energy_tol = 1e-16` stays below both; a tighter window would have to
-/// move it too).
-const WINDOWS: [(f64, f64); 2] = [(1e-16, 2e-16), (1e-14, 2e-14)];
-
 /// What `jamkit bench accuracy` was asked for.
 pub struct Options {
     /// Output directory of the tables and figures.
@@ -118,10 +103,8 @@ struct Plan {
     min_secs: f64,
     /// Part 2, overrides applied.
     gap_models: Experiment,
-    /// Part 3 (one setting; the ladder overrides it).
+    /// Part 3 (its `scan` is the ladder).
     tolerances: Experiment,
-    /// Its one grid point.
-    tolerance_point: grid::Point,
 }
 
 impl Plan {
@@ -183,20 +166,26 @@ impl Plan {
             }
             keys.push(key);
         }
-        let mut points = grid::points(&tolerances).context("--set-tolerances")?;
-        if points.len() != 1 {
-            bail!(
-                "--set-tolerances: {} grid points: the ladder is the scan; give one value of \
-                 dim, particles and every parameter",
-                points.len()
-            );
+        // The comparison groups packings by the ladder's setting: the scan
+        // of the file, and nothing else.
+        let mut settings = Vec::new();
+        for p in grid::points(&tolerances).context("--set-tolerances")? {
+            let (lo, hi) = window(&p.protocol);
+            let key = (lo, hi, p.minimizer.force_tol);
+            if settings.contains(&key) {
+                bail!(
+                    "--set-tolerances: the comparison groups packings by protocol.energy_low, \
+                     protocol.energy_high and minimizer.force_tol (the file's scan); scan \
+                     nothing else (dim, particles, parameters)"
+                );
+            }
+            settings.push(key);
         }
         let plan = Plan {
             pairs: if q { 512 } else { 4096 },
             min_secs: if q { 0.002 } else { 0.05 },
             gap_models,
             tolerances,
-            tolerance_point: points.remove(0),
         };
         Ok(plan)
     }
@@ -401,46 +390,9 @@ fn slopes(rows: &[PairRow]) -> Vec<(GapModel, u32, f64, usize)> {
     out
 }
 
-/// One packing of parts 2 and 3.
-/// One packing of parts 2 and 3, as the runner recorded it.
-#[derive(Clone)]
-struct PackRow {
-    seed: u64,
-    /// `Err`: the protocol failed (message).
-    result: std::result::Result<PackResult, String>,
-}
-
-#[derive(Clone, Copy)]
-struct PackResult {
-    wall_s: f64,
-    steps: u64,
-    phi: f64,
-    z: f64,
-    n_c: usize,
-    rattlers: usize,
-}
-
-impl PackRow {
-    fn of(f: &PackingFile) -> Self {
-        let m = &f.measures;
-        PackRow {
-            seed: f.seed,
-            result: Ok(PackResult {
-                wall_s: m.wall_s,
-                steps: m.fire_steps,
-                phi: m.phi,
-                z: m.z_j.unwrap_or(f64::NAN),
-                n_c: m.n_contacts.unwrap_or(0),
-                rattlers: m.n_rattlers.unwrap_or(0),
-            }),
-        }
-    }
-}
-
-/// Run `e` into `out` by the runner (resuming what is there) and return
-/// every job's packing, in grid order, with its point: the recorded
-/// measures, or the error of a sample that failed.
-fn run_rows(e: &Experiment, out: &Path, jobs: usize) -> Result<Vec<(grid::Point, PackRow)>> {
+/// Run `e` into `out` by the runner (resuming what is there); a sample
+/// that failed is data for the report, any other error ends the command.
+fn run_into(e: &Experiment, out: &Path, jobs: usize) -> Result<()> {
     let report = runner::run(
         e,
         &RunOptions {
@@ -459,180 +411,20 @@ fn run_rows(e: &Experiment, out: &Path, jobs: usize) -> Result<Vec<(grid::Point,
             report.elsewhere[0]
         );
     }
-    let points = grid::points(e)?;
-    let mut rows = Vec::new();
-    for job in grid::jobs(e, &points) {
-        let row = if let Some(f) = report.packings.iter().find(|f| f.id == job.id) {
-            PackRow::of(f)
-        } else {
-            let error = report.failures.iter().find_map(|err| match err {
-                ExperimentError::Sample { sample, .. } if *sample == job.id => {
-                    Some(err.to_string())
-                }
-                _ => None,
-            });
-            match error {
-                Some(error) => PackRow {
-                    seed: job.seed,
-                    result: Err(error),
-                },
-                // Not a failed sample: an error of the run itself.
-                None => match report.failures.first() {
-                    Some(err) => bail!("{}: {err}", out.display()),
-                    None => bail!("{}: the run made no packing {}", out.display(), job.id),
-                },
-            }
-        };
-        rows.push((points[job.point].clone(), row));
-    }
-    Ok(rows)
-}
-
-/// Part 2 per `Δ` and model, in the file's order: `(Δ, n, model, rows)`.
-type ModelRuns = Vec<(String, String, String, Vec<PackRow>)>;
-
-fn run_gap_models(plan: &Plan, o: &Options) -> Result<ModelRuns> {
-    let mut runs: ModelRuns = Vec::new();
-    for (point, row) in run_rows(&plan.gap_models, &o.runs.join("gap_models"), o.jobs)? {
-        let p = |name| param(&point.params, name).unwrap_or_default();
-        let (delta, n, model) = (p("delta"), p("n"), p("gap"));
-        match runs.iter_mut().find(|r| r.0 == delta && r.2 == model) {
-            Some(run) => run.3.push(row),
-            None => runs.push((delta, n, model, vec![row])),
-        }
-    }
-    Ok(runs)
-}
-
-/// How close a gap model is to the exact gap (the most accurate one of a
-/// `Δ` is the reference of its packings).
-fn accuracy_rank(model: &str) -> usize {
-    ["FirstOrder", "SecondOrder", "Exact"]
+    if let Some(err) = report
+        .failures
         .iter()
-        .position(|m| *m == model)
-        .unwrap_or(0)
-}
-
-/// The model whose packings are the reference at `delta`: `Exact` when
-/// the run has it.
-fn reference_model(runs: &ModelRuns, delta: &str) -> String {
-    runs.iter()
-        .filter(|r| r.0 == delta)
-        .max_by_key(|r| accuracy_rank(&r.2))
-        .map(|r| r.2.clone())
-        .unwrap_or_default()
-}
-
-fn reference_rows<'a>(runs: &'a ModelRuns, delta: &str) -> &'a [PackRow] {
-    let model = reference_model(runs, delta);
-    runs.iter()
-        .find(|r| r.0 == delta && r.2 == model)
-        .map(|r| r.3.as_slice())
-        .unwrap_or(&[])
-}
-
-/// Part 3: `((window, force_tol), rows)`.
-type TolRuns = Vec<(((f64, f64), f64), Vec<PackRow>)>;
-
-/// Per seed, the packing of the tightest force tolerance that converged in
-/// the paper's window, with that tolerance.
-fn tol_reference(runs: &TolRuns) -> Vec<(PackRow, f64)> {
-    let mut refs: Vec<(PackRow, f64)> = Vec::new();
-    for ((w, ft), rows) in runs.iter().rev() {
-        if *w != WINDOWS[0] {
-            continue;
-        }
-        for r in rows {
-            if r.result.is_ok() && !refs.iter().any(|(e, _)| e.seed == r.seed) {
-                refs.push((r.clone(), *ft));
-            }
-        }
+        .find(|err| !matches!(err, ExperimentError::Sample { .. }))
+    {
+        bail!("{}: {err}", out.display());
     }
-    refs.sort_by_key(|(r, _)| r.seed);
-    refs
+    Ok(())
 }
 
-/// True when `setting` is the reference of every seed.
-fn is_reference(refs: &[(PackRow, f64)], setting: ((f64, f64), f64)) -> bool {
-    setting.0 == WINDOWS[0] && !refs.is_empty() && refs.iter().all(|(_, ft)| *ft == setting.1)
-}
-
-/// The directory of one setting of the ladder under `RUNS/tolerances`.
-fn setting_dir(runs: &Path, (lo, hi): (f64, f64), force_tol: f64) -> PathBuf {
-    runs.join("tolerances")
-        .join(format!("window{lo:e}-{hi:e}_force_tol{force_tol:e}"))
-}
-
-fn run_tolerances(plan: &Plan, o: &Options) -> Result<TolRuns> {
-    let mut runs = Vec::new();
-    for &window in &WINDOWS {
-        for &force_tol in &FORCE_TOLS {
-            let sets = [
-                format!("minimizer.force_tol={force_tol:e}"),
-                format!("protocol.energy_low={:e}", window.0),
-                format!("protocol.energy_high={:e}", window.1),
-            ];
-            let e = overrides::apply(&plan.tolerances, &sets)?;
-            e.validate()?;
-            let dir = setting_dir(&o.runs, window, force_tol);
-            eprintln!("{}", dir.display());
-            let rows = run_rows(&e, &dir, o.jobs)?;
-            runs.push((
-                (window, force_tol),
-                rows.into_iter().map(|(_, r)| r).collect(),
-            ));
-        }
-    }
-    Ok(runs)
-}
-
-use jamkit_core::stats::{mean, std_dev};
+use jamkit_core::stats::mean;
 
 fn opt(x: Option<f64>, fmt: impl Fn(f64) -> String) -> String {
     x.map(fmt).unwrap_or_default()
-}
-
-/// `x` with `digits` decimals, "–" when undefined (no packing converged).
-fn fixed(x: f64, digits: usize) -> String {
-    if x.is_finite() {
-        format!("{x:.digits$}")
-    } else {
-        "–".into()
-    }
-}
-
-fn sci(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:.2e}")
-    } else {
-        "–".into()
-    }
-}
-
-/// `(Δφ_J, Δz_J, ΔN_c, Δrattlers)` of one packing from its reference.
-type Diff = (f64, f64, i64, i64);
-
-/// The differences `(Δφ_J, Δz_J, ΔN_c, Δrattlers)` of `rows` from `reference`,
-/// seed by seed (both converged).
-fn differences(rows: &[PackRow], reference: &[PackRow]) -> Vec<Diff> {
-    rows.iter()
-        .filter_map(|r| {
-            let e = reference.iter().find(|e| e.seed == r.seed)?;
-            let (a, b) = (r.result.as_ref().ok()?, e.result.as_ref().ok()?);
-            Some((
-                a.phi - b.phi,
-                a.z - b.z,
-                a.n_c as i64 - b.n_c as i64,
-                a.rattlers as i64 - b.rattlers as i64,
-            ))
-        })
-        .collect()
-}
-
-fn ok_results(rows: &[PackRow]) -> Vec<PackResult> {
-    rows.iter()
-        .filter_map(|r| r.result.as_ref().ok().copied())
-        .collect()
 }
 
 /// Where and when: date, commit, machine, load.
@@ -674,8 +466,8 @@ fn load() -> String {
         .unwrap_or_else(|| "unknown".into())
 }
 
-/// Run the whole benchmark.
-/// Run the whole benchmark.
+/// Run the whole benchmark: part 1 here, parts 2 and 3 by the runner and
+/// `jamkit_report::accuracy`.
 pub fn run(o: &Options) -> Result<()> {
     let plan = Plan::of(o)?;
     std::fs::create_dir_all(&o.out).with_context(|| format!("creating {}", o.out.display()))?;
@@ -686,15 +478,33 @@ pub fn run(o: &Options) -> Result<()> {
     eprintln!("part 1: pair evaluations");
     let pairs = bench_pairs(&plan)?;
     let fitted = slopes(&pairs);
-    eprintln!("part 2: packings ({})", GAP_MODELS_FILE.0);
-    let packs = run_gap_models(&plan, o)?;
-    eprintln!("part 3: tolerances ({})", TOLERANCES_FILE.0);
-    let tols = run_tolerances(&plan, o)?;
+    let studies = [
+        (
+            GAP_MODELS_FILE.0,
+            &plan.gap_models,
+            "gap_models",
+            Study::GapModels,
+        ),
+        (
+            TOLERANCES_FILE.0,
+            &plan.tolerances,
+            "tolerances",
+            Study::Tolerances,
+        ),
+    ];
+    for (k, (file, e, dir, _)) in studies.iter().enumerate() {
+        eprintln!("part {}: {file}", k + 2);
+        run_into(e, &o.runs.join(dir), o.jobs)?;
+    }
     let total = t0.elapsed().as_secs_f64();
     let load_end = load();
 
-    write_csvs(&o.out, &pairs, &fitted, &packs, &tols, &plan)?;
-    figures(&o.out, &pairs, &tols, &plan)?;
+    write_csvs(&o.out, &pairs, &fitted)?;
+    figures(&o.out, &pairs)?;
+    let mut sections = String::new();
+    for (file, _, dir, study) in studies {
+        sections.push_str(&accuracy::report(study, &[o.runs.join(dir)], &o.out, file)?);
+    }
 
     let mut md = String::new();
     let mut args = String::new();
@@ -720,8 +530,7 @@ pub fn run(o: &Options) -> Result<()> {
     );
     md.push('\n');
     md.push_str(&pair_tables(&plan, &pairs, &fitted));
-    md.push_str(&packing_table(&plan, &packs));
-    md.push_str(&tolerance_table(&plan, &tols));
+    md.push_str(&sections);
     out!("{md}");
     for (m, n, b, k) in &fitted {
         out!(
@@ -797,14 +606,7 @@ fn splice(text: &str, body: &str) -> std::result::Result<String, String> {
     }
 }
 
-fn write_csvs(
-    dir: &Path,
-    pairs: &[PairRow],
-    fitted: &[(GapModel, u32, f64, usize)],
-    packs: &ModelRuns,
-    tols: &TolRuns,
-    plan: &Plan,
-) -> Result<()> {
+fn write_csvs(dir: &Path, pairs: &[PairRow], fitted: &[(GapModel, u32, f64, usize)]) -> Result<()> {
     let mut s = String::from("model,n,delta,convex,ns_per_pair,max_err,rms_err,note\n");
     for r in pairs {
         let note = match (r.model, r.convex) {
@@ -833,54 +635,6 @@ fn write_csvs(
     }
     write(&dir.join("slopes.csv"), &s)?;
 
-    // One line per packing, with its differences from the reference packing
-    // of its seed (empty when either failed; exactly 0 on the reference's
-    // own line).
-    let header = "seed,wall_s,fire_steps,phi_j,z_j,n_c,rattlers,\
-                  d_phi_j,d_z_j,d_n_c,d_rattlers,error\n";
-    let line = |s: &mut String, prefix: String, r: &PackRow, reference: &[PackRow]| {
-        let d = differences(std::slice::from_ref(r), reference);
-        let d = match d.first() {
-            Some((dp, dz, dn, dr)) => format!("{dp:e},{dz:e},{dn},{dr}"),
-            None => ",,,".into(),
-        };
-        let _ = match &r.result {
-            Ok(p) => writeln!(
-                s,
-                "{prefix},{},{:.3},{},{:.9},{:.5},{},{},{d},",
-                r.seed, p.wall_s, p.steps, p.phi, p.z, p.n_c, p.rattlers
-            ),
-            Err(e) => writeln!(
-                s,
-                "{prefix},{},,,,,,,{d},\"{}\"",
-                r.seed,
-                e.replace(['"', ','], ";")
-            ),
-        };
-    };
-    let particles = |e: &Experiment| e.particles.first().unwrap_or_default();
-    let mut s = format!("model,n,delta,particles,reference,{header}");
-    for (delta, n, model, rows) in packs {
-        let reference = reference_model(packs, delta);
-        for r in rows {
-            let prefix = format!(
-                "{model},{n},{delta},{},{reference}",
-                particles(&plan.gap_models)
-            );
-            line(&mut s, prefix, r, reference_rows(packs, delta));
-        }
-    }
-    write(&dir.join("packings.csv"), &s)?;
-
-    let reference: Vec<PackRow> = tol_reference(tols).into_iter().map(|(r, _)| r).collect();
-    let mut s = format!("energy_low,energy_high,force_tol,particles,{header}");
-    for (((lo, hi), ft), rows) in tols {
-        for r in rows {
-            let prefix = format!("{lo:e},{hi:e},{ft:e},{}", particles(&plan.tolerances));
-            line(&mut s, prefix, r, &reference);
-        }
-    }
-    write(&dir.join("tolerances.csv"), &s)?;
     Ok(())
 }
 
@@ -978,198 +732,19 @@ fn pair_tables(plan: &Plan, rows: &[PairRow], fitted: &[(GapModel, u32, f64, usi
     md
 }
 
-/// The seeds of `e`'s packings, `seed, seed + 1, …`, as a list.
-fn seed_list(e: &Experiment) -> String {
-    (0..e.samples as u64)
-        .map(|k| e.seed.wrapping_add(k).to_string())
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
 /// The jamming window of a `Jam` protocol, `(E_low, E_high)`.
-fn window(e: &Experiment) -> (f64, f64) {
-    match e.protocol {
+fn window(protocol: &Protocol) -> (f64, f64) {
+    match protocol {
         Protocol::Jam {
             energy_low,
             energy_high,
             ..
-        } => (energy_low, energy_high),
+        } => (*energy_low, *energy_high),
         _ => (f64::NAN, f64::NAN),
     }
 }
 
-fn packing_table(plan: &Plan, runs: &ModelRuns) -> String {
-    let e = &plan.gap_models;
-    let mut md = String::new();
-    let particles = e.particles.first().unwrap_or_default();
-    let (lo, hi) = window(e);
-    let _ = writeln!(
-        md,
-        "## Packings\n\n\
-         `{}`: near-disks, N = {particles}{}, the paper's protocol (FIRE force tolerance \
-         {:e}, window {lo:e} < V/N < {hi:e}, bisection), seeds {}: one packing per seed \
-         and model, each seed the same random start for every model (the runner seeds a \
-         start by its seed alone). Means over seeds; \"vs ref.\": the largest difference \
-         over seeds from the packing of the same seed with the most accurate model of the \
-         run (the \"ref.\" row: Exact), signed mean in brackets; \"sd\": the standard \
-         deviation of φ_J across seeds, the statistical error one pays anyway. The run: \
-         `RUNS/gap_models` (`results.csv`, `summary.csv`).\n",
-        GAP_MODELS_FILE.0,
-        if particles < 256 {
-            " (not more: Exact packings take minutes each at N = 256; the N = 256 \
-             comparison is the Fig. 5 gap-model run of docs/reproduction.md)"
-        } else {
-            ""
-        },
-        e.minimizer.force_tol,
-        seed_list(e),
-    );
-    md.push_str(
-        "| Δ | model | ok | wall s | FIRE steps | φ_J | sd φ_J | z_J | N_c | rattlers \
-         | max \\|Δφ_J\\| (mean Δφ_J) | max \\|Δz_J\\| | max \\|ΔN_c\\| | max \\|Δrattlers\\| |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-    );
-    for (delta, _, model, rows) in runs {
-        let ok = ok_results(rows);
-        let col = |f: fn(&PackResult) -> f64, digits: usize| {
-            fixed(mean(&ok.iter().map(f).collect::<Vec<_>>()), digits)
-        };
-        let phis: Vec<f64> = ok.iter().map(|r| r.phi).collect();
-        let diffs = if *model == reference_model(runs, delta) {
-            None
-        } else {
-            Some(differences(rows, reference_rows(runs, delta)))
-        };
-        let dcol = |f: &dyn Fn(&Diff) -> f64, digits: usize| match &diffs {
-            Some(d) if !d.is_empty() => {
-                format!("{:.*}", digits, d.iter().map(f).fold(0.0f64, f64::max))
-            }
-            Some(_) => "–".into(),
-            None => "ref.".into(),
-        };
-        let dphi = match &diffs {
-            Some(d) if !d.is_empty() => format!(
-                "{} ({:+.1e})",
-                sci(d.iter().map(|x| x.0.abs()).fold(0.0f64, f64::max)),
-                mean(&d.iter().map(|x| x.0).collect::<Vec<_>>())
-            ),
-            Some(_) => "–".into(),
-            None => "ref.".into(),
-        };
-        let _ = writeln!(
-            md,
-            "| {delta} | {model} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {dphi} | {} | {} | {} |",
-            ok.len(),
-            rows.len(),
-            col(|r| r.wall_s, 2),
-            col(|r| r.steps as f64, 0),
-            col(|r| r.phi, 6),
-            sci(std_dev(&phis)),
-            col(|r| r.z, 4),
-            col(|r| r.n_c as f64, 1),
-            col(|r| r.rattlers as f64, 1),
-            dcol(&|x| x.1.abs(), 4),
-            dcol(&|x| x.2.abs() as f64, 0),
-            dcol(&|x| x.3.abs() as f64, 0),
-        );
-    }
-    for (delta, _, model, rows) in runs {
-        for r in rows {
-            if let Err(e) = &r.result {
-                let _ = writeln!(md, "\nΔ = {delta}, {model}, seed {}: failed: {e}", r.seed);
-            }
-        }
-    }
-    md.push_str("\nPer packing: [packings.csv](packings.csv).\n\n");
-    md
-}
-
-fn tolerance_table(plan: &Plan, runs: &TolRuns) -> String {
-    let e = &plan.tolerances;
-    let mut md = String::new();
-    let refs = tol_reference(runs);
-    let reference: Vec<PackRow> = refs.iter().map(|(r, _)| r.clone()).collect();
-    let ref_text: Vec<String> = refs
-        .iter()
-        .map(|(r, ft)| format!("seed {}: {ft:.0e}", r.seed))
-        .collect();
-    let p = |name| param(&plan.tolerance_point.params, name).unwrap_or_default();
-    let _ = writeln!(
-        md,
-        "## Tolerances\n\n\
-         `{}`: {} near-disks n = {}, Δ = {}, N = {}, seeds {}, run once per setting \
-         (`RUNS/tolerances/<setting>`): FIRE's force \
-         tolerance (stop when Σ(∂V/∂q)² falls below it; the default is 1e-25) and \
-         the jamming window (the paper's 1e-16 < V/N < 2e-16, and one 100× looser, \
-         the shortcut a user would try; a tighter one would need FIRE's \
-         energy_tol = 1e-16 moved as well, mixing two changes). At most {} \
-         FIRE steps per minimisation: a tolerance FIRE cannot reach fails. Differences \
-         are from the tightest force tolerance that converged in the paper's window on \
-         the same seed ({}), largest over seeds; \"sd φ_J\" is the spread across seeds \
-         at that setting.\n",
-        TOLERANCES_FILE.0,
-        p("gap"),
-        p("n"),
-        p("delta"),
-        e.particles.first().unwrap_or_default(),
-        seed_list(e),
-        e.minimizer.max_steps,
-        ref_text.join(", ")
-    );
-    md.push_str(
-        "| window V/N | force tol | ok | wall s | FIRE steps | max \\|Δφ_J\\| | max \\|ΔN_c\\| \
-         | max \\|Δrattlers\\| | sd φ_J |\n|---|---|---|---|---|---|---|---|---|\n",
-    );
-    for (((lo, hi), ft), rows) in runs {
-        let ok = ok_results(rows);
-        let d = differences(rows, &reference);
-        let is_ref = is_reference(&refs, ((*lo, *hi), *ft));
-        let dmax = |f: &dyn Fn(&Diff) -> f64, fmt: &dyn Fn(f64) -> String| {
-            if is_ref {
-                "ref.".to_string()
-            } else if d.is_empty() {
-                "–".into()
-            } else {
-                fmt(d.iter().map(f).fold(0.0f64, f64::max))
-            }
-        };
-        let phis: Vec<f64> = ok.iter().map(|r| r.phi).collect();
-        let _ = writeln!(
-            md,
-            "| {lo:.0e}…{hi:.0e} | {ft:.0e} | {}/{} | {} | {} | {} | {} | {} | {} |",
-            ok.len(),
-            rows.len(),
-            fixed(mean(&ok.iter().map(|r| r.wall_s).collect::<Vec<_>>()), 2),
-            fixed(
-                mean(&ok.iter().map(|r| r.steps as f64).collect::<Vec<_>>()),
-                0
-            ),
-            dmax(&|x| x.0.abs(), &sci),
-            dmax(&|x| x.2.abs() as f64, &|v| format!("{v:.0}")),
-            dmax(&|x| x.3.abs() as f64, &|v| format!("{v:.0}")),
-            sci(std_dev(&phis)),
-        );
-    }
-    for (((lo, _), ft), rows) in runs {
-        for r in rows {
-            if let Err(e) = &r.result {
-                let _ = writeln!(
-                    md,
-                    "\nwindow from {lo:e}, force tolerance {ft:e}, seed {}: failed: {e}",
-                    r.seed
-                );
-            }
-        }
-    }
-    md.push_str(
-        "\nPer packing: [tolerances.csv](tolerances.csv). Figure: [time per packing \
-         against the change of φ_J](tolerances.png) ([SVG](tolerances.svg)).\n",
-    );
-    md
-}
-
-fn figures(dir: &Path, pairs: &[PairRow], tols: &TolRuns, plan: &Plan) -> Result<()> {
-    let p = |name| param(&plan.tolerance_point.params, name).unwrap_or_default();
+fn figures(dir: &Path, pairs: &[PairRow]) -> Result<()> {
     let mut series = Vec::new();
     for model in [GapModel::FirstOrder, GapModel::SecondOrder] {
         for &n in &NS {
@@ -1247,60 +822,6 @@ fn figures(dir: &Path, pairs: &[PairRow], tols: &TolRuns, plan: &Plan) -> Result
     .write(&dir.join("speed_vs_error"))
     .map_err(|e| anyhow::anyhow!("{e}"))?;
 
-    let refs = tol_reference(tols);
-    let reference: Vec<PackRow> = refs.iter().map(|(r, _)| r.clone()).collect();
-    // (window, time, largest |Δφ_J|) per setting but the reference.
-    let points: Vec<((f64, f64), f64, f64)> = tols
-        .iter()
-        .filter(|(setting, _)| !is_reference(&refs, *setting))
-        .filter_map(|((w, _), rows)| {
-            let ok = ok_results(rows);
-            let d = differences(rows, &reference);
-            if ok.is_empty() || d.is_empty() {
-                return None;
-            }
-            let t = mean(&ok.iter().map(|r| r.wall_s).collect::<Vec<_>>());
-            Some((*w, t, d.iter().map(|x| x.0.abs()).fold(0.0f64, f64::max)))
-        })
-        .collect();
-    let mut series: Vec<Series> = WINDOWS
-        .iter()
-        .map(|&w| Series {
-            label: format!("window {:.0e} < V/N < {:.0e}", w.0, w.1),
-            points: points
-                .iter()
-                .filter(|p| p.0 == w && p.2 > 0.0)
-                .map(|p| (p.1, p.2, 0.0))
-                .collect(),
-            line: false,
-        })
-        .collect();
-    series.push(Series {
-        label: format!("φ_J unchanged (drawn at {ZERO_FLOOR:.0e})"),
-        points: points
-            .iter()
-            .filter(|p| p.2 == 0.0)
-            .map(|p| (p.1, ZERO_FLOOR, 0.0))
-            .collect(),
-        line: false,
-    });
-    Figure {
-        title: format!(
-            "FIRE tolerance: time against change of φ_J ({}, n = {}, Δ = {})",
-            p("gap"),
-            p("n"),
-            p("delta")
-        ),
-        x_label: "wall time per packing (s)".into(),
-        y_label: "max |φ_J − φ_J(tightest converged)|".into(),
-        log_x: true,
-        log_y: true,
-        series,
-        guides: Vec::new(),
-        legend: SeriesLabelPosition::UpperRight,
-    }
-    .write(&dir.join("tolerances"))
-    .map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(())
 }
 

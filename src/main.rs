@@ -138,6 +138,13 @@ enum Command {
         /// Bootstrap resamples per fitted exponent.
         #[arg(long, default_value_t = 500)]
         resamples: usize,
+        /// Instead of the paper's figures, the accuracy comparison of
+        /// docs/speed-vs-error.md: `gap-models` (each packing against the
+        /// most accurate gap model's of the same Δ and seed) or `tolerances`
+        /// (against the tightest force tolerance that converged on the same
+        /// seed); writes its CSV, figure and OUT/accuracy.md.
+        #[arg(long, value_name = "STUDY")]
+        accuracy: Option<String>,
     },
     /// Measure a sphere packing made by another code (extended XYZ, or
     /// plain `x y (z) r` lines) as our own: contacts, rattlers, z, iso
@@ -432,7 +439,22 @@ fn real_main() -> Result<()> {
             out,
             gamma,
             resamples,
+            accuracy,
         } => {
+            if let Some(study) = accuracy {
+                let study = jamkit_report::accuracy::Study::parse(&study)?;
+                let name = dirs
+                    .iter()
+                    .map(|d| d.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join("`, `");
+                let md = jamkit_report::accuracy::report(study, &dirs, &out, &name)?;
+                let path = out.join("accuracy.md");
+                jamkit_format::write_atomic(&path, md.as_bytes())?;
+                out!("{md}");
+                out!("written: {}", path.display());
+                return Ok(());
+            }
             if !(gamma > 0.0 && gamma < 1.0) {
                 bail!("--gamma = {gamma}: must lie in (0, 1)");
             }

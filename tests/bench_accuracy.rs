@@ -143,7 +143,7 @@ fn quick_accuracy_bench_writes_tables_figures_and_the_orders_of_the_models() {
     }
 
     // Tolerances: 2 windows × 6 force tolerances × 2 seeds, all converged,
-    // each setting a run of its own; the tables name the reference setting.
+    // one run whose scan is the ladder; the tables name the reference setting.
     let (head, tols) = table(&out.join("tolerances.csv"));
     assert_eq!(tols.len(), 2 * 6 * 2);
     assert!(
@@ -154,8 +154,30 @@ fn quick_accuracy_bench_writes_tables_figures_and_the_orders_of_the_models() {
         assert_eq!(cell(&head, r, "d_phi_j"), "0e0", "the reference: {r:?}");
         assert_eq!(cell(&head, r, "d_n_c"), "0", "the reference: {r:?}");
     }
-    let settings = std::fs::read_dir(runs.join("tolerances")).unwrap().count();
-    assert_eq!(settings, 12);
+    let (rhead, results) = table(&runs.join("tolerances/results.csv"));
+    assert_eq!(results.len(), 2 * 6 * 2);
+    assert!(
+        results
+            .iter()
+            .any(|r| cell(&rhead, r, "id").contains("_energy_low1e-14_force_tol1e-22_s2")),
+        "{results:?}"
+    );
+    // `jamkit report --accuracy` of the same run: the same comparison.
+    let again = dir.path().join("again");
+    let (code, _, err) = jamkit(&[
+        "report",
+        "--accuracy",
+        "tolerances",
+        runs.join("tolerances").to_str().unwrap(),
+        "-o",
+        again.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        std::fs::read_to_string(again.join("tolerances.csv")).unwrap(),
+        std::fs::read_to_string(out.join("tolerances.csv")).unwrap()
+    );
+    assert!(again.join("tolerances.svg").exists() && again.join("accuracy.md").exists());
     let md = std::fs::read_to_string(out.join("tables.md")).unwrap();
     assert!(md.contains("## Pair evaluations") && md.contains("## Tolerances"));
     assert!(
@@ -286,8 +308,18 @@ fn bad_accuracy_options_are_errors() {
             "--set-tolerances",
         ),
         (
-            vec!["--set-tolerances", "protocol=Phi(phi: 0.5)"],
+            vec![
+                "--set-tolerances",
+                "scan=[]",
+                "--set-tolerances",
+                "protocol=Phi(phi: 0.5)",
+            ],
             "protocol = phi",
+        ),
+        // The file's scan reaches the window of `Jam` only.
+        (
+            vec!["--set-tolerances", "protocol=Phi(phi: 0.5)"],
+            "energy_low",
         ),
         (vec!["--jobs", "0"], "--jobs 0"),
     ] {
@@ -332,7 +364,7 @@ fn the_files_make_the_documented_packings() {
         ),
         (
             "tolerances",
-            vec!["samples=1", "minimizer.force_tol=1e-20"],
+            vec!["samples=1", "scan=[]", "minimizer.force_tol=1e-20"],
             &thead,
             documented(
                 &thead,
@@ -368,5 +400,36 @@ fn the_files_make_the_documented_packings() {
                 "{file}: {ours}"
             );
         }
+    }
+}
+
+#[test]
+fn bad_accuracy_reports_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let empty = dir.path().join("empty");
+    std::fs::create_dir_all(empty.join("packings")).unwrap();
+    for (study, run, names) in [
+        (
+            "nonsense",
+            &empty,
+            "--accuracy nonsense: must be gap-models",
+        ),
+        ("tolerances", &empty, "no packing files"),
+        ("gap-models", &dir.path().join("absent"), "absent"),
+    ] {
+        let (code, _, err) = jamkit(&[
+            "report",
+            "--accuracy",
+            study,
+            run.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 1, "{study}: {err}");
+        assert!(
+            err.starts_with("error: ") && !err.contains("panicked") && err.contains(names),
+            "{study}: {err}"
+        );
     }
 }

@@ -6,11 +6,14 @@
 //! parameters in the order the family declares them (the first declared
 //! varies slowest), then the protocol's target (`Phi`'s φ, `Pressure`'s
 //! pressure, `AboveJam`'s δφ) when the file gives a list of them.
+//! The axes of `scan` (settings of the minimiser and the protocol, e.g. a
+//! ladder of force tolerances) come between the parameters and the target,
+//! the first axis varying slowest.
 //! Each point runs `samples` packings with seeds `seed, seed + 1, …`: the
 //! same seeds at every point, so points differ only by their parameters.
 
 use crate::error::ExperimentError;
-use crate::schema::{Experiment, Protocol};
+use crate::schema::{Experiment, Protocol, ScanSetting, scan_value_text};
 use jamkit_core::FamilyInfo;
 use jamkit_engine::FireParams;
 use jamkit_registry::{self as registry, ParamMap};
@@ -36,6 +39,9 @@ pub struct Point {
     /// The target's name in the label when the file scans it (`phi`, `p`,
     /// `dphi`), else `None` (labels as before targets could scan).
     pub target_label: Option<&'static str>,
+    /// This point's values of the file's `scan` axes (empty when nothing
+    /// scans), already written into `minimizer` and `protocol`.
+    pub scan: ScanSetting,
 }
 
 impl Point {
@@ -51,6 +57,12 @@ impl Point {
             s.push('_');
             s.push_str(k);
             s.push_str(&short(&sanitize(&value_text(v))));
+        }
+        // A scanned setting by its last path part: `_force_tol1e-22`.
+        for (k, v) in &self.scan {
+            s.push('_');
+            s.push_str(k.rsplit('.').next().unwrap_or(k));
+            s.push_str(&short(&sanitize(&scan_value_text(v))));
         }
         if let Some(name) = self.target_label {
             let value = match &self.protocol {
@@ -158,34 +170,38 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
             })
             .collect();
     }
+    let scanned = experiment.scanned()?;
     let mut out = Vec::new();
     for dim in experiment.dim.values() {
         for particles in experiment.particles.values() {
             for params in &combos {
-                // The spectrum and the moduli both need the Hessian.
-                let hessian = if experiment.spectrum().is_some() {
-                    Some("Spectrum")
-                } else if experiment.moduli().is_some() {
-                    Some("Moduli")
-                } else {
-                    None
-                };
-                let check = CheckOnly {
-                    hessian,
-                    minimizer: &experiment.minimizer,
-                };
-                let minimizer = registry::dispatch(&experiment.family, dim, params, check)??;
-                let (protocols, target_label) = experiment.protocol.targets();
-                for protocol in protocols {
-                    out.push(Point {
-                        index: out.len(),
-                        dim,
-                        particles,
-                        params: params.clone(),
-                        minimizer: minimizer.clone(),
-                        protocol,
-                        target_label,
-                    });
+                for (scan, e) in &scanned {
+                    // The spectrum and the moduli both need the Hessian.
+                    let hessian = if e.spectrum().is_some() {
+                        Some("Spectrum")
+                    } else if e.moduli().is_some() {
+                        Some("Moduli")
+                    } else {
+                        None
+                    };
+                    let check = CheckOnly {
+                        hessian,
+                        minimizer: &e.minimizer,
+                    };
+                    let minimizer = registry::dispatch(&e.family, dim, params, check)??;
+                    let (protocols, target_label) = e.protocol.targets();
+                    for protocol in protocols {
+                        out.push(Point {
+                            index: out.len(),
+                            dim,
+                            particles,
+                            params: params.clone(),
+                            minimizer: minimizer.clone(),
+                            protocol,
+                            target_label,
+                            scan: scan.clone(),
+                        });
+                    }
                 }
             }
         }
@@ -469,5 +485,119 @@ mod tests {
             err.contains("dim = []") && err.contains("at least one dimension"),
             "{err}"
         );
+    }
+
+    const LADDER: &str = r#"(name: "g", family: "sphere", particles: 8, samples: 2,
+        protocol: Jam(energy_low: 1e-16, energy_high: 2e-16),
+        scan: [
+            {"protocol.energy_low": [1e-16, 1e-14], "protocol.energy_high": [2e-16, 2e-14]},
+            {"minimizer.force_tol": [1e-20, 1e-25, 1e-28]},
+        ])"#;
+
+    #[test]
+    fn scan_axes_cross_move_together_and_match_the_same_set() {
+        let e = Experiment::from_ron(LADDER, "g").unwrap();
+        e.validate().unwrap();
+        let pts = points(&e).unwrap();
+        // 2 windows × 3 tolerances, the first axis slowest.
+        let got: Vec<(f64, f64, f64)> = pts
+            .iter()
+            .map(|p| match p.protocol {
+                Protocol::Jam {
+                    energy_low,
+                    energy_high,
+                    ..
+                } => (energy_low, energy_high, p.minimizer.force_tol),
+                _ => panic!("not Jam"),
+            })
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                (1e-16, 2e-16, 1e-20),
+                (1e-16, 2e-16, 1e-25),
+                (1e-16, 2e-16, 1e-28),
+                (1e-14, 2e-14, 1e-20),
+                (1e-14, 2e-14, 1e-25),
+                (1e-14, 2e-14, 1e-28),
+            ]
+        );
+        assert_eq!(
+            pts[4].label("sphere"),
+            "sphere_d2_N8_energy_high2e-14_energy_low1e-14_force_tol1e-25"
+        );
+        // Each point is the file with the same `--set`s, scan removed.
+        let mut plain = e.clone();
+        plain.scan.clear();
+        let set = crate::overrides::apply(
+            &plain,
+            &[
+                "protocol.energy_low=1e-14".into(),
+                "protocol.energy_high=2e-14".into(),
+                "minimizer.force_tol=1e-25".into(),
+            ],
+        )
+        .unwrap();
+        let one = &points(&set).unwrap()[0];
+        assert_eq!(
+            (&one.minimizer, &one.protocol),
+            (&pts[4].minimizer, &pts[4].protocol)
+        );
+        let ids: Vec<String> = jobs(&e, &pts).into_iter().map(|j| j.id).collect();
+        let mut unique = ids.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), 12, "{ids:?}");
+        // Without a scan nothing changes: no scan in the label or the file.
+        assert!(points(&plain).unwrap()[0].scan.is_empty());
+        assert!(
+            !crate::overrides::apply(&plain, &[])
+                .unwrap()
+                .scan
+                .iter()
+                .any(|_| true)
+        );
+    }
+
+    #[test]
+    fn bad_scans_are_named_with_what_is_allowed() {
+        for (scan, names) in [
+            (r#"[{"params.delta": [0.1]}]"#, "scan[0].params.delta"),
+            (
+                r#"[{"engine.skin": [0.5]}]"#,
+                "field of `minimizer` or `protocol`",
+            ),
+            (
+                r#"[{"protocol.energy_low": [1e-16, 1e-14], "protocol.energy_high": [2e-16]}]"#,
+                "as many as every other list",
+            ),
+            (r#"[{"minimizer.force_tol": []}]"#, "at least one value"),
+            (
+                r#"[{"minimizer.force_tol": [1e-20, 1e-22, 1e-20]}]"#,
+                "minimizer.force_tol = 1e-20: is listed twice",
+            ),
+            (r#"[{}]"#, "an axis names at least one field"),
+            (
+                r#"[{"minimizer.force_tol": [1e-20]}, {"protocol.force_tol": [1e-20]}]"#,
+                "second scanned field named `force_tol`",
+            ),
+            // Each setting is checked like the file: FIRE's energy_tol
+            // (1e-16 by default) must stay below the window.
+            (
+                r#"[{"protocol.energy_low": [1e-18]}]"#,
+                "protocol.energy_low = 1e-18",
+            ),
+            (
+                r#"[{"minimizer.force_tol": [-1.0]}]"#,
+                "minimizer.force_tol",
+            ),
+            (r#"[{"minimizer.no_such": [1.0]}]"#, "no_such"),
+        ] {
+            let text = format!(r#"(name: "g", family: "sphere", particles: 8, scan: {scan})"#);
+            let e = Experiment::from_ron(&text, "g").unwrap();
+            let err = e.validate().unwrap_err().to_string();
+            assert!(err.contains(names), "{scan}: {err}");
+            assert!(points(&e).is_err(), "{scan}");
+        }
     }
 }

@@ -15,6 +15,41 @@ use serde_json::Value;
 
 /// Apply `KEY=VALUE` overrides in order.
 pub fn apply(experiment: &Experiment, sets: &[String]) -> Result<Experiment, ExperimentError> {
+    let values = sets
+        .iter()
+        .map(|set| {
+            let (key, value) = set
+                .split_once('=')
+                .ok_or_else(|| ExperimentError::Override {
+                    key: set.clone(),
+                    message: "expected KEY=VALUE".into(),
+                })?;
+            Ok((key.trim().to_string(), parse_value(value.trim())))
+        })
+        .collect::<Result<Vec<_>, ExperimentError>>()?;
+    edit(experiment, &values, || sets.join(" "))
+}
+
+/// Set each `KEY` (a dotted path, as in [`apply`]) to its value (in serde's
+/// JSON form), in order, and read the result back through the schema.
+pub fn apply_values(
+    experiment: &Experiment,
+    sets: &[(String, Value)],
+) -> Result<Experiment, ExperimentError> {
+    edit(experiment, sets, || {
+        sets.iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    })
+}
+
+/// [`apply_values`], `text` naming the overrides in an error.
+fn edit(
+    experiment: &Experiment,
+    sets: &[(String, Value)],
+    text: impl Fn() -> String,
+) -> Result<Experiment, ExperimentError> {
     if sets.is_empty() {
         return Ok(experiment.clone());
     }
@@ -22,18 +57,11 @@ pub fn apply(experiment: &Experiment, sets: &[String]) -> Result<Experiment, Exp
         key: String::new(),
         message: e.to_string(),
     })?;
-    for set in sets {
-        let (key, value) = set
-            .split_once('=')
-            .ok_or_else(|| ExperimentError::Override {
-                key: set.clone(),
-                message: "expected KEY=VALUE".into(),
-            })?;
-        let value = parse_value(value.trim());
-        assign(&mut tree, key.trim(), value)?;
+    for (key, value) in sets {
+        assign(&mut tree, key, value.clone())?;
     }
     serde_json::from_value(tree).map_err(|e| ExperimentError::Override {
-        key: sets.join(" "),
+        key: text(),
         message: format!("the result is not a valid experiment: {e}"),
     })
 }

@@ -91,6 +91,13 @@ pub struct Experiment {
     /// FIRE's parameters and stopping criteria.
     #[serde(default)]
     pub minimizer: FireParams,
+    /// Scanned settings of the protocol and the minimiser, e.g. a ladder of
+    /// `minimizer.force_tol`: each entry is one axis of the grid, a map from
+    /// a `--set` path (`minimizer.…` or `protocol.…`) to its values; the
+    /// lists of one axis have one length and move together (a jamming
+    /// window's `energy_low` with its `energy_high`). See [`Experiment::scanned`].
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub scan: Vec<BTreeMap<String, Vec<ron::Value>>>,
     /// Contact potential `v(h)`.
     #[serde(default)]
     pub potential: Potential,
@@ -524,11 +531,130 @@ impl Default for OutputParams {
     }
 }
 
+/// A scan setting as text, `minimizer.force_tol = 1e-22, …`.
+pub fn scan_text(setting: &[(String, ron::Value)]) -> String {
+    setting
+        .iter()
+        .map(|(k, v)| format!("{k} = {}", scan_value_text(v)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A scanned value as text: a float in exponent form (`1e-22`), anything
+/// else as compact RON.
+pub fn scan_value_text(v: &ron::Value) -> String {
+    match v {
+        ron::Value::Number(n @ (ron::Number::F32(_) | ron::Number::F64(_))) => {
+            format!("{:e}", n.into_f64())
+        }
+        other => ron::to_string(other).unwrap_or_else(|_| format!("{other:?}")),
+    }
+}
+
 /// The largest `N` accepted (memory and time guard; the neighbour list is
 /// `O(N)` but a run of a million bodies is not what a file typo should start).
 pub const MAX_PARTICLES: usize = 10_000_000;
 
+/// One grid point's scanned settings: `(path, value)` per scanned field.
+pub type ScanSetting = Vec<(String, ron::Value)>;
+
 impl Experiment {
+    /// The settings of the `scan` axes, in grid order (the first axis
+    /// varies slowest), each with this experiment as it runs there: the
+    /// values written in by the same path as `--set` (so checked like the
+    /// file), `scan` emptied, and the whole checked by [`Self::validate`].
+    /// One empty setting (this experiment) when nothing scans.
+    pub fn scanned(&self) -> Result<Vec<(ScanSetting, Experiment)>, ExperimentError> {
+        if self.scan.is_empty() {
+            return Ok(vec![(Vec::new(), self.clone())]);
+        }
+        let mut last_parts: Vec<&str> = Vec::new();
+        let mut combos: Vec<ScanSetting> = vec![Vec::new()];
+        for (k, axis) in self.scan.iter().enumerate() {
+            let field = |key: &str| format!("scan[{k}].{key}");
+            let mut len = None;
+            for (key, values) in axis {
+                if !(key.starts_with("minimizer.") || key.starts_with("protocol.")) {
+                    return Err(ExperimentError::invalid(
+                        field(key),
+                        "(given)",
+                        "scans a field of `minimizer` or `protocol` (e.g. \"minimizer.force_tol\"); \
+                         params, dim and particles scan as lists in place",
+                    ));
+                }
+                let last = key.rsplit('.').next().unwrap_or(key);
+                if last_parts.contains(&last) {
+                    return Err(ExperimentError::invalid(
+                        field(key),
+                        "(given)",
+                        format!("a second scanned field named `{last}`: packing ids would clash"),
+                    ));
+                }
+                last_parts.push(last);
+                if values.is_empty() || len.is_some_and(|n| n != values.len()) {
+                    return Err(ExperimentError::invalid(
+                        field(key),
+                        format!("{} values", values.len()),
+                        "at least one value, and as many as every other list of its axis",
+                    ));
+                }
+                len = Some(values.len());
+            }
+            // Two equal settings would be two points with one label.
+            for i in 0..len.unwrap_or(0) {
+                let same = |j: usize| axis.values().all(|v| v[i] == v[j]);
+                if (0..i).any(same) {
+                    let setting: Vec<(String, ron::Value)> = axis
+                        .iter()
+                        .map(|(k, v)| (k.clone(), v[i].clone()))
+                        .collect();
+                    return Err(ExperimentError::invalid(
+                        format!("scan[{k}]"),
+                        scan_text(&setting),
+                        "is listed twice; list each setting once",
+                    ));
+                }
+            }
+            let Some(len) = len else {
+                return Err(ExperimentError::invalid(
+                    format!("scan[{k}]"),
+                    "{}",
+                    "an axis names at least one field",
+                ));
+            };
+            combos = combos
+                .into_iter()
+                .flat_map(|c| {
+                    (0..len).map(move |i| {
+                        let mut c = c.clone();
+                        c.extend(axis.iter().map(|(key, v)| (key.clone(), v[i].clone())));
+                        c
+                    })
+                })
+                .collect();
+        }
+        let mut base = self.clone();
+        base.scan.clear();
+        combos
+            .into_iter()
+            .map(|setting| {
+                let text = scan_text(&setting);
+                let values: Vec<(String, serde_json::Value)> = setting
+                    .iter()
+                    .map(|(key, v)| {
+                        serde_json::to_value(v)
+                            .map(|v| (key.clone(), v))
+                            .map_err(|e| ExperimentError::invalid("scan", &text, e.to_string()))
+                    })
+                    .collect::<Result<_, _>>()?;
+                let e = crate::overrides::apply_values(&base, &values)
+                    .and_then(|e| e.validate().map(|()| e))
+                    .map_err(|e| ExperimentError::invalid("scan", &text, e.to_string()))?;
+                Ok((setting, e))
+            })
+            .collect()
+    }
+
     /// Parse RON text; `file` names the source in errors.
     pub fn from_ron(text: &str, file: &str) -> Result<Self, ExperimentError> {
         // Optional fields take a bare value (`dt_max: 0.3`) as well as
@@ -597,6 +723,7 @@ impl Experiment {
         self.sizes.validate()?;
         self.minimizer.validate("minimizer")?;
         self.validate_protocol()?;
+        self.scanned()?;
         self.validate_observables()?;
         if !(self.engine.skin > 0.0 && self.engine.skin <= 2.0) {
             return Err(ExperimentError::invalid(

@@ -10,6 +10,9 @@
 //! * [`plot`]: figures with error bars and guide lines, SVG and PNG;
 //! * [`runplot`]: `jamkit plot`, figures of any run (every family): each
 //!   scanned parameter against φ_J, z_J, rattlers and pressure, D(ω), Z(h);
+//! * [`accuracy`]: the comparisons of docs/speed-vs-error.md, each packing
+//!   against a reference packing of the same seed (gap models against
+//!   `Exact`, FIRE tolerances against the tightest that converged);
 //! * [`figures`]: the paper's Figs. 7–13 and the markdown summary with the
 //!   table "paper's claim | our measurement | agrees?"; Fig. 5 (ellipses
 //!   against `n = 2` near-disks at equal asphericity) when the runs hold
@@ -18,6 +21,7 @@
 //! A figure whose data are absent (no spectrum measured, one system size
 //! only, …) is skipped and the summary says so.
 
+pub mod accuracy;
 pub mod data;
 mod ellipses;
 pub mod figures;
@@ -56,6 +60,9 @@ pub enum ReportError {
     /// A figure had nothing to draw.
     #[error("figure `{0}` has no finite point to draw")]
     Empty(String),
+    /// The runs do not fit an accuracy comparison.
+    #[error("{0}")]
+    Accuracy(String),
     /// The plotting library failed.
     #[error("drawing failed: {0}")]
     Plot(String),
