@@ -257,11 +257,11 @@ pub struct Moduli {
     pub floppy_share: f64,
     /// For the plane of the smallest `G_ab`, the share of its non-affine
     /// term `Ξᵀ H⁺ Ξ` carried by the softest mode above the zero modes
-    /// (`λ_1`, the smallest `λ > omega_zero²`): near 1 when one soft mode,
-    /// strongly loaded by that shear, makes `G_ab` small or negative (a
-    /// packing close to a shear instability). `None` in packing files
-    /// written before it was measured, and with no mode above the zero
-    /// modes.
+    /// (`λ_1`, the smallest `λ > omega_zero²`). `G_ab` without that mode
+    /// is `G_ab + soft_share · (non-affine term)/V`: even a small share can
+    /// be what makes a small `G_ab` negative (docs/elasticity.md,
+    /// "Negative G"). `None` in packing files written before it was
+    /// measured, and with no mode above the zero modes.
     #[serde(default)]
     pub soft_share: Option<f64>,
 }
