@@ -16,7 +16,8 @@ packing's own jamming point (`AboveJam` runs, columns jam_z), how many
 packings have
 G < 0, and the largest number of negative modes and extra zero modes;
 then per group the packings with G or B not finite, with G < 0, the
-smallest B and the largest floppy share, and (--x dphi) per delta_phi the
+smallest B and the largest floppy share (and, where the run has the
+column, the packings with G_min < 0), and (--x dphi) per delta_phi the
 packings whose pressure is below half the point's median (a packing that
 rearranged on its way up sits closer to its new jamming point than
 delta_phi says).
@@ -145,6 +146,12 @@ def main():
             f" smallest B {min(float(r['B']) for r in finite):.3g},"
             f" largest floppy share {max(float(r['moduli_floppy_share']) for r in rs):.1e}"
         )
+        # runs made since G_min was measured: packings unstable to the shear
+        # of one plane (also where the mean G is positive)
+        mins = [r for r in finite if r.get("G_min")]
+        if mins:
+            neg = sum(float(r["G_min"]) < 0 for r in mins)
+            print(f"G_min < 0 on {neg} of {len(mins)} packings")
         if args.x == "dphi":
             # a packing that rearranged on the way up into a state jamming
             # above its phi_J sits closer to its new jamming point than

@@ -191,8 +191,9 @@ const SPECTRUM_COLUMNS: [&str; 9] = [
 ];
 
 /// The columns of `Moduli` (docs/formats.md).
-const MODULI_COLUMNS: [&str; 9] = [
+const MODULI_COLUMNS: [&str; 11] = [
     "G",
+    "G_min",
     "B",
     "G_affine",
     "B_affine",
@@ -200,6 +201,7 @@ const MODULI_COLUMNS: [&str; 9] = [
     "moduli_zero_extra",
     "moduli_negative_modes",
     "moduli_floppy_share",
+    "moduli_soft_share",
     "moduli_s",
 ];
 
@@ -210,6 +212,7 @@ fn moduli_cells(m: Option<&ModuliMeasures>) -> Vec<String> {
     let v = &m.moduli;
     vec![
         format!("{:e}", v.shear),
+        format!("{:e}", v.shear_min()),
         format!("{:e}", v.bulk),
         format!("{:e}", v.shear_affine),
         format!("{:e}", v.bulk_affine),
@@ -217,6 +220,7 @@ fn moduli_cells(m: Option<&ModuliMeasures>) -> Vec<String> {
         v.zero_modes.extra.to_string(),
         v.negative_modes.to_string(),
         format!("{:e}", v.floppy_share),
+        v.soft_share.map(|x| format!("{x:e}")).unwrap_or_default(),
         format!("{:.3}", m.wall_s),
     ]
 }

@@ -255,6 +255,26 @@ pub struct Moduli {
     /// than translations: a strain that such a floppy mode accommodates
     /// meets no resistance there, which `H⁺` leaves out.
     pub floppy_share: f64,
+    /// For the plane of the smallest `G_ab`, the share of its non-affine
+    /// term `Ξᵀ H⁺ Ξ` carried by the softest mode above the zero modes
+    /// (`λ_1`, the smallest `λ > omega_zero²`). `G_ab` without that mode
+    /// is `G_ab + soft_share · (non-affine term)/V`: even a small share can
+    /// be what makes a small `G_ab` negative (docs/elasticity.md,
+    /// "Negative G"). `None` in packing files written before it was
+    /// measured, and with no mode above the zero modes.
+    #[serde(default)]
+    pub soft_share: Option<f64>,
+}
+
+impl Moduli {
+    /// The smallest plane modulus `G_ab` (`G` in 2D): negative when the
+    /// packing, stable at fixed box, is unstable to the shear of that plane.
+    pub fn shear_min(&self) -> f64 {
+        self.shear_planes
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+    }
 }
 
 /// The linear-response moduli of a relaxed scene; `rattler` marks the
@@ -283,36 +303,48 @@ pub fn measure<const D: usize, S: Shape<D>>(
         let values: Vec<f64> = (0..n).map(|m| evd.S()[m]).collect();
         (values, evd.U().to_owned())
     };
-    // `U_min'' = A − Σ_{λ > λ0} (u·Ξ)²/λ`, and the share of `|Ξ|²` on the
-    // zero modes; translations carry none (Ξ sums to zero over bodies).
-    let relaxed = |d: &StrainDerivatives| -> (f64, f64) {
+    // The softest mode above the zero modes (eigenvalues ascend).
+    let softest = values.iter().position(|&l| l > lambda_zero);
+    // `U_min'' = A − Σ_{λ > λ0} (u·Ξ)²/λ`, the share of `|Ξ|²` on the
+    // zero modes (translations carry none: Ξ sums to zero over bodies) and
+    // the share of the non-affine term on the softest mode.
+    let relaxed = |d: &StrainDerivatives| -> (f64, f64, Option<f64>) {
         let mut non_affine = 0.0;
         let (mut on_zero, mut total) = (0.0, 0.0);
+        let mut on_softest = 0.0;
         for m in 0..n {
             let c: f64 = (0..n).map(|r| vectors[(r, m)] * d.xi[r]).sum();
             total += c * c;
             if values[m] > lambda_zero {
                 non_affine += c * c / values[m];
+                if Some(m) == softest {
+                    on_softest = c * c / values[m];
+                }
             } else {
                 on_zero += c * c;
             }
         }
         let share = if total > 0.0 { on_zero / total } else { 0.0 };
-        (d.affine - non_affine, share)
+        let soft = (softest.is_some() && non_affine > 0.0).then(|| on_softest / non_affine);
+        (d.affine - non_affine, share, soft)
     };
     let mut floppy_share: f64 = 0.0;
     let planes = shear_planes::<D>();
     let mut per_plane = Vec::new();
     let mut shear_affine = 0.0;
+    let mut soft_share = None;
     for &(a, b) in &planes {
         let d = strain_derivatives(scene, rattler, &hessian, &simple_shear::<D>(a, b))?;
-        let (c, share) = relaxed(&d);
+        let (c, share, soft) = relaxed(&d);
         floppy_share = floppy_share.max(share);
+        if per_plane.iter().all(|&g| c / volume < g) {
+            soft_share = soft;
+        }
         per_plane.push(c / volume);
         shear_affine += d.affine / volume / planes.len() as f64;
     }
     let d = strain_derivatives(scene, rattler, &hessian, &Matrix::<D>::identity())?;
-    let (c, share) = relaxed(&d);
+    let (c, share, _) = relaxed(&d);
     floppy_share = floppy_share.max(share);
     let dd = (D * D) as f64;
     // `U_γ = Σ v' g·r = −D V p` for `E = I`.
@@ -336,6 +368,7 @@ pub fn measure<const D: usize, S: Shape<D>>(
         },
         negative_modes: values.iter().filter(|&&l| l < -lambda_zero).count() as u64,
         floppy_share,
+        soft_share,
     })
 }
 
