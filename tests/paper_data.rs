@@ -22,6 +22,17 @@ fn packing_files(dir: &Path) -> Vec<PathBuf> {
     paths
 }
 
+/// `jamkit report` on `dirs` into a scratch directory, with 50 bootstrap
+/// resamples (enough for the fits to exist; the committed report uses 500).
+fn report(dirs: &[PathBuf]) -> jamkit_report::Report {
+    let out = tempfile::tempdir().unwrap();
+    let options = jamkit_report::Options {
+        resamples: 50,
+        ..Default::default()
+    };
+    jamkit_report::report(dirs, out.path(), &options).unwrap()
+}
+
 /// An archived packing of the profile: it loads, holds no configuration, is
 /// of the given `(family, dim, particles)` and ended in the paper's window
 /// 1e-16 < V/N < 2e-16.
@@ -90,12 +101,7 @@ fn the_report_regenerates_from_a_slice_of_the_data() {
         .collect();
     let mean = at_largest.iter().sum::<f64>() / at_largest.len() as f64;
 
-    let out = tempfile::tempdir().unwrap();
-    let options = jamkit_report::Options {
-        resamples: 50,
-        ..Default::default()
-    };
-    let r = jamkit_report::report(&[slice.path().to_path_buf()], out.path(), &options).unwrap();
+    let r = report(&[slice.path().to_path_buf()]);
     assert!(r.figures.len() >= 6, "{:?}", r.figures);
     let dz = r.fits.iter().find(|f| f.quantity == "δz_J" && f.n == 2);
     let dz = dz.unwrap_or_else(|| panic!("no δz_J fit: {:?}", r.fits));
@@ -136,12 +142,7 @@ fn the_3d_data_regenerates_its_report() {
             .unwrap_or_else(|| panic!("{}: no spectrum", f.id));
         assert_eq!(s.dos.omega_star_below, 1.0, "{}", f.id);
     }
-    let out = tempfile::tempdir().unwrap();
-    let options = jamkit_report::Options {
-        resamples: 50,
-        ..Default::default()
-    };
-    let r = jamkit_report::report(&[dir], out.path(), &options).unwrap();
+    let r = report(&[dir]);
     assert!(
         r.markdown.contains("| l | N | Δ values |"),
         "{}",
@@ -179,12 +180,7 @@ fn the_3d_finite_size_set_collapses_to_one_extra_contact() {
         let extra = nc as i64 - 3 * (f.particles - nr - 1) as i64;
         assert!(extra >= 1, "{}: {extra} contacts beyond 3 (N_nr − 1)", f.id);
     }
-    let out = tempfile::tempdir().unwrap();
-    let options = jamkit_report::Options {
-        resamples: 50,
-        ..Default::default()
-    };
-    let r = jamkit_report::report(&[data("paper3d-n512"), dir], out.path(), &options).unwrap();
+    let r = report(&[data("paper3d-n512"), dir]);
     for fig in ["fig09a_dz_finite_size", "fig09b_dz_collapse"] {
         assert!(
             r.figures.iter().any(|f| f.to_string_lossy().contains(fig)),
