@@ -4,6 +4,7 @@
 //! (`harmonic`, mode number `l`).
 
 use crate::ReportError;
+use jamkit_core::gap_model::GapModel;
 use jamkit_format::PackingFile;
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::spectrum::{DosHistogram, DosParams};
@@ -56,6 +57,9 @@ pub struct Point {
     pub mode: &'static str,
     /// Amplitude Δ.
     pub delta: f64,
+    /// The gap model of the packings (the family parameter `gap`; absent
+    /// is the paper's first order).
+    pub gap: GapModel,
     /// Bodies.
     pub particles: usize,
     /// Its packings.
@@ -111,6 +115,10 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
             skipped += 1;
             continue;
         };
+        let Some(gap) = gap_model(file) else {
+            skipped += 1;
+            continue;
+        };
         let m = &file.measures;
         let sample = Sample {
             phi: m.phi,
@@ -129,6 +137,7 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
                 && p.mode == mode
                 && p.n == n as u32
                 && p.delta == delta
+                && p.gap == gap
                 && p.particles == file.particles
         };
         match points.iter_mut().find(|p| key(p)) {
@@ -139,14 +148,15 @@ pub fn load(dirs: &[impl AsRef<Path>]) -> Result<(Vec<Point>, usize), ReportErro
                 n: n as u32,
                 mode,
                 delta,
+                gap,
                 particles: file.particles,
                 samples: vec![sample],
             }),
         }
     }
     points.sort_by(|a, b| {
-        (a.n, a.particles)
-            .cmp(&(b.n, b.particles))
+        (a.n, a.particles, a.gap as u8)
+            .cmp(&(b.n, b.particles, b.gap as u8))
             .then(a.delta.total_cmp(&b.delta))
     });
     Ok((points, skipped))
@@ -161,6 +171,16 @@ fn mode_number(file: &PackingFile) -> Option<(&'static str, f64)> {
         Some(n) => Some(("n", n)),
         None if file.family == "harmonic" => param("l").map(|l| ("l", l)),
         None => None,
+    }
+}
+
+/// The gap model of a packing: its `gap` parameter, absent or `null` for
+/// the paper's first order; `None` for a name no family writes.
+fn gap_model(file: &PackingFile) -> Option<GapModel> {
+    match file.params.get("gap") {
+        None | Some(serde_json::Value::Null) => Some(GapModel::FirstOrder),
+        Some(serde_json::Value::String(name)) => name.parse().ok(),
+        Some(_) => None,
     }
 }
 

@@ -9,6 +9,7 @@
 use crate::ReportError;
 use crate::data::{Point, mean_sem, packing_paths};
 use crate::plot::{Figure, Series};
+use jamkit_core::gap_model::GapModel;
 use jamkit_format::PackingFile;
 use plotters::prelude::SeriesLabelPosition;
 use std::fmt::Write as _;
@@ -124,13 +125,47 @@ pub(crate) struct Fig05 {
     pub figures: Vec<PathBuf>,
     pub markdown: String,
     pub files: usize,
+    /// Packings of `other_gaps` drawn (near-disks at the ellipses' size).
+    pub other_gap_packings: usize,
+}
+
+/// The `n = 2` near-disk rows of `points` at `size` with gap model `gap`.
+fn near_disk_rows(points: &[Point], size: usize, gap: GapModel) -> Vec<Row> {
+    points
+        .iter()
+        .filter(|p| p.family == "fourier" && p.n == 2 && p.dim == 2 && p.particles == size)
+        .filter(|p| p.gap == gap)
+        .filter_map(|p| {
+            Some(Row {
+                a_minus_1: near_disk_asphericity(p.delta)? - 1.0,
+                parameter: p.delta,
+                packings: p.samples.len(),
+                phi: mean_sem(&p.samples, |s| Some(s.phi)),
+                z_j: mean_sem(&p.samples, |s| s.z_j),
+                rattlers: mean_sem(&p.samples, |s| s.rattler_fraction),
+            })
+        })
+        .filter(|r| r.a_minus_1 > 0.0)
+        .collect()
+}
+
+/// The series label of a gap model.
+fn gap_label(gap: GapModel) -> &'static str {
+    match gap {
+        GapModel::FirstOrder => "first order",
+        GapModel::SecondOrder => "second order",
+        GapModel::Exact => "exact gap",
+    }
 }
 
 /// Fig. 5 from the ellipse packings under `dirs` and the near-disk
-/// `points`, or `None` when there are no ellipse packings.
+/// `points` (the paper's first-order gap), with the near-disks of
+/// `other_gaps` (second-order and exact gaps) as more series; `None` when
+/// there are no ellipse packings.
 pub(crate) fn fig05(
     dirs: &[PathBuf],
     points: &[Point],
+    other_gaps: &[Point],
     out: &Path,
 ) -> Result<Option<Fig05>, ReportError> {
     let (ellipses, files) = load(dirs);
@@ -154,21 +189,16 @@ pub(crate) fn fig05(
         })
         .filter(|r| r.a_minus_1 > 0.0)
         .collect();
-    let disks: Vec<Row> = points
-        .iter()
-        .filter(|p| p.family == "fourier" && p.n == 2 && p.dim == 2 && p.particles == size)
-        .filter_map(|p| {
-            Some(Row {
-                a_minus_1: near_disk_asphericity(p.delta)? - 1.0,
-                parameter: p.delta,
-                packings: p.samples.len(),
-                phi: mean_sem(&p.samples, |s| Some(s.phi)),
-                z_j: mean_sem(&p.samples, |s| s.z_j),
-                rattlers: mean_sem(&p.samples, |s| s.rattler_fraction),
-            })
-        })
-        .filter(|r| r.a_minus_1 > 0.0)
+    let disks = near_disk_rows(points, size, GapModel::FirstOrder);
+    let more: Vec<(GapModel, Vec<Row>)> = [GapModel::SecondOrder, GapModel::Exact]
+        .into_iter()
+        .map(|g| (g, near_disk_rows(other_gaps, size, g)))
+        .filter(|(_, rows)| !rows.is_empty())
         .collect();
+    let other_gap_packings = more
+        .iter()
+        .flat_map(|(_, rows)| rows.iter().map(|r| r.packings))
+        .sum();
     let series = |rows: &[Row], f: fn(&Row) -> (f64, f64), label: String| Series {
         label,
         points: rows
@@ -195,7 +225,7 @@ pub(crate) fn fig05(
             SeriesLabelPosition::UpperLeft,
         ),
     ] {
-        let s = vec![
+        let mut s = vec![
             series(&ell, f, format!("ellipses, exact gap (N = {size})")),
             series(
                 &disks,
@@ -203,6 +233,10 @@ pub(crate) fn fig05(
                 format!("n = 2 near-disks, first order (N = {size})"),
             ),
         ];
+        for (gap, rows) in &more {
+            let label = format!("n = 2 near-disks, {} (N = {size})", gap_label(*gap));
+            s.push(series(rows, f, label));
+        }
         if s.iter().all(|s| s.points.is_empty()) {
             continue;
         }
@@ -220,23 +254,21 @@ pub(crate) fn fig05(
         .write(&stem)?;
         figures.push(stem);
     }
+    let mut markdown = table(&ell, &disks, size);
+    if !more.is_empty() {
+        markdown += &gap_table(&ell, &disks, &more, size);
+    }
     Ok(Some(Fig05 {
         figures,
-        markdown: table(&ell, &disks, size),
+        markdown,
         files,
+        other_gap_packings,
     }))
 }
 
 /// The markdown table: rows of equal `A` (relative difference below 1e-6)
 /// side by side, the others on their own.
 fn table(ell: &[Row], disks: &[Row], size: usize) -> String {
-    let pm = |v: (f64, f64), digits: usize| {
-        if v.0.is_finite() {
-            format!("{:.*} ± {:.*}", digits, v.0, digits, v.1)
-        } else {
-            "—".into()
-        }
-    };
     let pct = |v: (f64, f64)| {
         if v.0.is_finite() {
             format!("{:.1} % ± {:.1}", 100.0 * v.0, 100.0 * v.1)
@@ -286,6 +318,75 @@ fn table(ell: &[Row], disks: &[Row], size: usize) -> String {
     m
 }
 
+/// `mean ± s.e.m.` with `digits` decimals, `—` when there is none.
+fn pm(v: (f64, f64), digits: usize) -> String {
+    if v.0.is_finite() {
+        format!("{:.*} ± {:.*}", digits, v.0, digits, v.1)
+    } else {
+        "—".into()
+    }
+}
+
+/// The markdown table of the gap models: at each `Δ` measured with another
+/// gap model, φ_J and `z_J` of the near-disks with every gap model beside
+/// the ellipse of equal `A`.
+fn gap_table(ell: &[Row], disks: &[Row], more: &[(GapModel, Vec<Row>)], size: usize) -> String {
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.abs().max(b.abs());
+    let mut columns: Vec<(String, &[Row])> = vec![("first order".into(), disks)];
+    for (gap, rows) in more {
+        columns.push((gap_label(*gap).into(), rows));
+    }
+    columns.push(("ellipse".into(), ell));
+    let names: Vec<&str> = columns.iter().map(|(n, _)| n.as_str()).collect();
+    let head = |q: &str| -> String { names.iter().map(|n| format!(" {q} {n} |")).collect() };
+    let mut m = format!(
+        "\n### Fig. 5: the gap models of the near-disks (N = {size})\n\n\
+         The same seeds with the paper's first-order gap, its second-order \
+         correction and the exact gap, beside the ellipse of equal A.\n\n\
+         | Δ | A − 1 |{}{} packings |\n|---|---|{}---|\n",
+        head("φ_J"),
+        head("z_J"),
+        "---|".repeat(2 * names.len())
+    );
+    let mut deltas: Vec<(f64, f64)> = more
+        .iter()
+        .flat_map(|(_, rows)| rows.iter().map(|r| (r.parameter, r.a_minus_1)))
+        .collect();
+    deltas.sort_by(|a, b| a.0.total_cmp(&b.0));
+    deltas.dedup_by(|a, b| a.0 == b.0);
+    for (delta, a) in deltas {
+        let cells: Vec<Option<&Row>> = columns
+            .iter()
+            .enumerate()
+            .map(|(k, (_, rows))| {
+                rows.iter().find(|r| {
+                    // Near-disks by Δ, the ellipse by its asphericity.
+                    if k + 1 == columns.len() {
+                        same(r.a_minus_1, a)
+                    } else {
+                        r.parameter == delta
+                    }
+                })
+            })
+            .collect();
+        let nan = (f64::NAN, f64::NAN);
+        let phi: String = cells
+            .iter()
+            .map(|c| format!(" {} |", pm(c.map_or(nan, |r| r.phi), 4)))
+            .collect();
+        let z: String = cells
+            .iter()
+            .map(|c| format!(" {} |", pm(c.map_or(nan, |r| r.z_j), 3)))
+            .collect();
+        let counts: Vec<String> = cells
+            .iter()
+            .map(|c| c.map_or(0, |r| r.packings).to_string())
+            .collect();
+        let _ = writeln!(m, "| {delta} | {a:.3e} |{phi}{z} {} |", counts.join(" / "));
+    }
+    m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -329,6 +430,42 @@ mod tests {
             lines[2]
         );
         assert!(t.contains("N = 128"));
+    }
+
+    /// The gap-model table has one line per Δ measured with another gap
+    /// model, its cells in the order first order, the other models, the
+    /// ellipse of equal A, and a dash where a model has no packing there.
+    #[test]
+    fn gap_table_lines_up_the_models_by_delta() {
+        let disks = [row(3.7e-3, 0.1, 0.85), row(1e-4, 0.02, 0.84)];
+        let second = [row(3.7e-3, 0.1, 0.851)];
+        let exact = [row(3.7e-3, 0.1, 0.852), row(2e-2, 0.2, 0.86)];
+        let ell = [row(3.7e-3 * (1.0 + 1e-9), 1.105, 0.853)];
+        let more = vec![
+            (GapModel::SecondOrder, second.to_vec()),
+            (GapModel::Exact, exact.to_vec()),
+        ];
+        let t = gap_table(&ell, &disks, &more, 512);
+        let lines: Vec<&str> = t
+            .lines()
+            .filter(|l| l.starts_with("| ") && !l.starts_with("| Δ"))
+            .collect();
+        assert_eq!(lines.len(), 2, "{t}");
+        assert!(
+            lines[0].starts_with(
+                "| 0.1 | 3.700e-3 | 0.8500 ± 0.0010 | 0.8510 ± 0.0010 | 0.8520 ± 0.0010 | 0.8530 ± 0.0010 |"
+            ),
+            "{}",
+            lines[0]
+        );
+        assert!(lines[0].ends_with(" 3 / 3 / 3 / 3 |"), "{}", lines[0]);
+        assert!(
+            lines[1].starts_with("| 0.2 | 2.000e-2 | — | — | 0.8600 ± 0.0010 | — |"),
+            "{}",
+            lines[1]
+        );
+        assert!(lines[1].ends_with(" 0 / 0 / 3 / 0 |"), "{}", lines[1]);
+        assert!(t.contains("| φ_J second order |") && t.contains("N = 512"));
     }
 
     /// The near-disk and ellipse asphericities of the Fig. 5 grid agree

@@ -20,6 +20,7 @@ use crate::ReportError;
 use crate::data::{Point, Sample, load, mean_sem};
 use crate::fit::{PowerLaw, line, power_law_of, power_law_within};
 use crate::plot::{Figure, Guide, Series};
+use jamkit_core::gap_model::GapModel;
 use jamkit_observe::gaps::GapCounts;
 use jamkit_observe::spectrum::DosHistogram;
 use plotters::prelude::SeriesLabelPosition;
@@ -118,7 +119,11 @@ pub struct Report {
 
 /// Read the runs in `dirs`, write figures and `report.md` into `out`.
 pub fn report(dirs: &[PathBuf], out: &Path, options: &Options) -> Result<Report, ReportError> {
-    let (points, skipped) = load(dirs)?;
+    let (all, skipped) = load(dirs)?;
+    // The paper's figures are those of its first-order gap; packings with
+    // another gap model enter Fig. 5 only (as more near-disk series).
+    let (points, other_gaps): (Vec<Point>, Vec<Point>) =
+        all.into_iter().partition(|p| p.gap == GapModel::FirstOrder);
     if points.is_empty() {
         let list: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
         return Err(ReportError::NoData(list.join(", ")));
@@ -147,11 +152,19 @@ pub fn report(dirs: &[PathBuf], out: &Path, options: &Options) -> Result<Report,
     };
     // Fig. 5 (ellipses) is drawn only when the runs hold ellipse packings;
     // those are not near-disk packings, but are not "left out" either.
-    let fig05 = crate::ellipses::fig05(dirs, &r.points, out)?;
+    let fig05 = crate::ellipses::fig05(dirs, &r.points, &other_gaps, out)?;
     let skipped = skipped - fig05.as_ref().map_or(0, |f| f.files).min(skipped);
     if skipped > 0 {
         r.notes
             .push(format!("{skipped} packing files were not near-disk packings with n and Δ, or unreadable, and were left out."));
+    }
+    let used = fig05.as_ref().map_or(0, |f| f.other_gap_packings);
+    let unused: usize = other_gaps.iter().map(|p| p.samples.len()).sum::<usize>() - used;
+    if unused > 0 {
+        r.notes.push(format!(
+            "{unused} packings with a gap model other than the paper's first order \
+             were left out of the figures (only Fig. 5 shows other gap models)."
+        ));
     }
     r.phi_and_rattlers()?;
     r.finite_size()?;
