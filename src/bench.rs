@@ -5,7 +5,10 @@
 //!   with `--gap first-order|second-order|exact`);
 //! * `eval`: time per energy-and-gradient evaluation against N;
 //! * `accuracy`: speed against error of the gap models and tolerances
-//!   (`bench_accuracy.rs`);
+//!   (`bench_accuracy.rs`, which chains `pair`, two experiment files and
+//!   their report);
+//! * `pair`: time and error of one pair evaluation per gap model
+//!   (`bench_pair.rs`);
 //! * `spectrum`: Hessian assembly and eigensolvers (`bench_spectrum.rs`).
 //!
 //! Each packing line ends with a hash of the final state (box, centres,
@@ -248,6 +251,17 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 1)]
         jobs: usize,
     },
+    /// Time and error of one pair evaluation (gap and gradient) of the
+    /// near-disk gap models: pairs.csv, slopes.csv, figures and pairs.md
+    /// (part 1 of `bench accuracy`, on its own).
+    Pair {
+        /// Output directory.
+        #[arg(short, long, value_name = "DIR", default_value = crate::bench_pair::DEFAULT_OUT)]
+        out: std::path::PathBuf,
+        /// Fewer pairs and shorter timings, for a smoke test (seconds).
+        #[arg(long)]
+        quick: bool,
+    },
     /// Time Hessian assembly and eigenvalues of near-disks (n = 2, Δ = 0.1).
     Spectrum {
         /// Particle numbers (3 coordinates each).
@@ -276,6 +290,9 @@ pub fn run(what: BenchCommand) -> Result<()> {
             set_tolerances,
             jobs,
         }),
+        BenchCommand::Pair { out, quick } => {
+            crate::bench_pair::run(&crate::bench_pair::Options { out, quick })
+        }
         BenchCommand::Spectrum {
             particles,
             nalgebra,

@@ -3,7 +3,7 @@
 //! * `jamkit run FILE… [--out DIR] [--jobs N] [--set KEY=VALUE …]`
 //! * `jamkit validate FILE [--set KEY=VALUE …]`
 //! * `jamkit shapes`
-//! * `jamkit bench [packing|eval|spectrum|accuracy]`
+//! * `jamkit bench [packing|eval|spectrum|accuracy|pair]`
 //! * `jamkit spectrum PACKING.json [--stiffness-only] [--remove-rattlers] [--modes] -o FILE.csv`
 //! * `jamkit report DIR… -o OUT`
 //! * `jamkit draw PACKING.json -o FILE.svg|FILE.png [--size PIXELS]`
@@ -20,6 +20,7 @@ macro_rules! out {
 
 mod bench;
 mod bench_accuracy;
+mod bench_pair;
 mod bench_spectrum;
 mod spectrum;
 

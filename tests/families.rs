@@ -1,6 +1,6 @@
 //! Every registered family is known to the documentation and draws.
 //!
-//! The registry (`crates/experiment/src/registry.rs`) is the one list of
+//! The registry (`crates/registry/src/lib.rs`) is the one list of
 //! families; the docs keep lists of their own for readers. These tests fail
 //! when a family is added to the registry and a list is not updated (the
 //! lists in docs/formats.md and docs/drawing.md once went stale unnoticed),

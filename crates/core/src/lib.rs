@@ -16,9 +16,8 @@
 //! * [`orientation`]: [`BodyOrientation`], what every orientation type does
 //!   by itself (reference, random draw, file numbers), so families don't;
 //! * [`quaternion`]: [`Quaternion`], the 3D orientation of the rigid 3D
-//!   families (`nmer`, `harmonic`, `ellipsoid`);
-//! * [`gap3d`]: the exact gap of two convex 3D bodies from their support
-//!   functions, with its first and second derivatives (`ellipsoid`);
+//!   families (`nmer`, `harmonic`, `ellipsoid`; the exact gap of convex 3D
+//!   bodies lives in `jamkit-gap3d`);
 //! * [`potential`]: scalar contact potentials `v(h)` (harmonic, Hertzian);
 //! * [`sizes`]: size distributions (binary, monodisperse, uniform);
 //! * [`packing`]: a configuration of bodies in a box, in flat generalised
@@ -30,7 +29,6 @@
 
 pub mod error;
 pub mod family;
-pub mod gap3d;
 pub mod gap_model;
 pub mod math;
 pub mod orientation;

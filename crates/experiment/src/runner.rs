@@ -101,7 +101,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         let rows: Vec<PackingFile> = done.values().cloned().collect();
         format::write_atomic(
             &options.out.join("results.csv"),
-            format::results_csv(&rows).as_bytes(),
+            format::results_csv(&rows, &experiment.scan_paths()).as_bytes(),
         )?;
         Ok(())
     };
@@ -372,7 +372,16 @@ pub fn tables_of_runs(
         .collect();
     let spectrum = runs.iter().any(|(e, _)| e.spectrum().is_some());
     let gaps = runs.iter().any(|(e, _)| e.gaps().is_some());
-    write_table_files(&packings, &groups, (spectrum, gaps), out)?;
+    // Every file's scanned settings, each path once, in the files' order.
+    let mut scanned: Vec<String> = Vec::new();
+    for (experiment, _) in runs {
+        for path in experiment.scan_paths() {
+            if !scanned.contains(&path) {
+                scanned.push(path);
+            }
+        }
+    }
+    write_table_files(&packings, &groups, (spectrum, gaps), &scanned, out)?;
     Ok(packings.len())
 }
 
@@ -386,19 +395,21 @@ fn write_tables(
     out: &Path,
 ) -> Result<(), ExperimentError> {
     let measured = (experiment.spectrum().is_some(), experiment.gaps().is_some());
-    write_table_files(packings, groups, measured, out)
+    write_table_files(packings, groups, measured, &experiment.scan_paths(), out)
 }
 
-/// [`write_tables`] with what was measured given as `(spectrum, gaps)`.
+/// [`write_tables`] with what was measured given as `(spectrum, gaps)`
+/// and the scanned setting paths as `scanned`.
 fn write_table_files(
     packings: &[PackingFile],
     groups: &[(String, Vec<&PackingFile>)],
     (spectrum, gaps): (bool, bool),
+    scanned: &[String],
     out: &Path,
 ) -> Result<(), ExperimentError> {
     format::write_atomic(
         &out.join("results.csv"),
-        format::results_csv(packings).as_bytes(),
+        format::results_csv(packings, scanned).as_bytes(),
     )?;
     format::write_atomic(
         &out.join("summary.csv"),

@@ -559,6 +559,17 @@ pub const MAX_PARTICLES: usize = 10_000_000;
 pub type ScanSetting = Vec<(String, ron::Value)>;
 
 impl Experiment {
+    /// The setting paths of the `scan` axes (`minimizer.force_tol`, …), in
+    /// the order of the packing ids: axis by axis, each axis's paths in
+    /// name order. Empty when nothing scans. `results.csv` gives each a
+    /// column.
+    pub fn scan_paths(&self) -> Vec<String> {
+        self.scan
+            .iter()
+            .flat_map(|axis| axis.keys().cloned())
+            .collect()
+    }
+
     /// The settings of the `scan` axes, in grid order (the first axis
     /// varies slowest), each with this experiment as it runs there: the
     /// values written in by the same path as `--set` (so checked like the

@@ -66,14 +66,45 @@ fn param_cells(f: &PackingFile, names: &[String]) -> Vec<String> {
         .collect()
 }
 
-/// `results.csv`: one row per packing.
-pub fn results_csv(files: &[PackingFile]) -> String {
+/// The value at a setting path (`minimizer.force_tol`,
+/// `protocol.energy_low`) of a packing's `settings`, as a cell: a float in
+/// exponent form (`1e-22`, as in the packing ids), an integer as its
+/// digits, a text as its plain text, anything else as compact JSON; empty
+/// where the packing records no such setting.
+fn setting_cell(settings: &serde_json::Value, path: &str) -> String {
+    let mut v = settings;
+    for part in path.split('.') {
+        let next = v.get(part).or_else(|| {
+            // An enum in its tagged form (`"protocol": {"Jam": {…}}`): the
+            // field of its one variant.
+            let o = v.as_object().filter(|o| o.len() == 1)?;
+            o.values().next()?.get(part)
+        });
+        match next {
+            Some(n) => v = n,
+            None => return String::new(),
+        }
+    }
+    match v {
+        serde_json::Value::Null => String::new(),
+        serde_json::Value::String(s) => s.clone(),
+        serde_json::Value::Number(n) if n.is_f64() => num(n.as_f64().unwrap_or(f64::NAN), true),
+        other => other.to_string(),
+    }
+}
+
+/// `results.csv`: one row per packing. `scanned` are the setting paths of
+/// the experiment's `scan` (empty when it has none): one column each,
+/// named by the path, after the family parameters, with the value the
+/// packing's `settings` record.
+pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
     let names = param_names(files);
     let mut head = vec!["id", "family", "dim", "particles", "seed"]
         .into_iter()
         .map(String::from)
         .collect::<Vec<_>>();
     head.extend(names.iter().cloned());
+    head.extend(scanned.iter().cloned());
     head.extend(
         [
             "protocol",
@@ -126,6 +157,7 @@ pub fn results_csv(files: &[PackingFile]) -> String {
             f.seed.to_string(),
         ];
         row.extend(param_cells(f, &names));
+        row.extend(scanned.iter().map(|path| setting_cell(&f.settings, path)));
         row.extend([
             f.protocol.clone(),
             format!("{}", m.phi),
@@ -525,6 +557,30 @@ mod tests {
         assert_eq!(mean_sem(&[7.0]), (7.0, 0.0));
     }
 
+    /// Scanned settings are read from a packing's `settings`: through the
+    /// tagged protocol, floats as in the ids, integers and texts plain; a
+    /// path the packing does not record is an empty cell.
+    #[test]
+    fn setting_cells_follow_the_path_through_the_tagged_protocol() {
+        let settings = serde_json::json!({
+            "protocol": {"Jam": {"energy_low": 1e-14, "search": "Extrapolated"}},
+            "minimizer": {"force_tol": 1e-22, "max_steps": 1000000, "dt_max": null,
+                          "masses": {"Blocks": {"jammed_only": true}}},
+        });
+        for (path, cell) in [
+            ("protocol.energy_low", "1e-14"),
+            ("protocol.search", "Extrapolated"),
+            ("minimizer.force_tol", "1e-22"),
+            ("minimizer.max_steps", "1000000"),
+            ("minimizer.dt_max", ""),
+            ("minimizer.masses", r#"{"Blocks":{"jammed_only":true}}"#),
+            ("minimizer.absent", ""),
+            ("protocol.absent", ""),
+        ] {
+            assert_eq!(setting_cell(&settings, path), cell, "{path}");
+        }
+    }
+
     /// A 2D dimer packing of 10 bodies, 2 rattlers, written before the
     /// rotational rattlers were recorded: it loads, with no `z_corr`. With
     /// them (3 rotational rattlers, 3 free rotations, margin 1): `z_corr =
@@ -550,7 +606,7 @@ mod tests {
         assert_eq!(file.measures.n_rot_rattlers, None);
         assert_eq!(file.z_corr(), None);
         assert_eq!(file.rot_rattler_fraction(), None);
-        assert!(!results_csv(std::slice::from_ref(&file)).contains("NaN"));
+        assert!(!results_csv(std::slice::from_ref(&file), &[]).contains("NaN"));
         file.measures.n_rot_rattlers = Some(3);
         file.measures.free_rotations = Some(3);
         let z_corr = file.z_corr().unwrap();
@@ -565,7 +621,7 @@ mod tests {
         assert!(!json.contains("free_rotations"), "{json}");
         // results.csv: n_rot_rattlers after n_rattlers, z_corr after z_j.
         file.measures.free_rotations = Some(3);
-        let csv = results_csv(&[file]);
+        let csv = results_csv(&[file], &[]);
         let mut lines = csv.lines();
         let head: Vec<&str> = lines.next().unwrap().split(',').collect();
         let row: Vec<&str> = lines.next().unwrap().split(',').collect();

@@ -30,7 +30,7 @@
 //! ∇∇s = M/s − (M u)(M u)ᵀ/s³          (its radii of curvature),
 //! ```
 //!
-//! ([`jamkit_core::gap3d::QuadraticSupport`]). Two bodies interact through
+//! ([`jamkit_gap3d::QuadraticSupport`]). Two bodies interact through
 //! the **exact** gap, the signed distance along the common normal,
 //!
 //! ```text
@@ -43,7 +43,7 @@
 //! envelope theorem (`∂h/∂r_j = n`, the torques `n × p` of the support
 //! points) and its second derivatives in positions and rotations by
 //! implicit differentiation of the optimal normal: all in
-//! [`jamkit_core::gap3d`], which any convex 3D body with a known support
+//! [`jamkit_gap3d`], which any convex 3D body with a known support
 //! function can reuse. There is no expansion in `α − 1`: the gap is exact
 //! for every aspect ratio, to round-off. Since `h ≥ g(r̂)` at the line of
 //! centres, a pair with `g(r̂) > max_gap` is skipped after one evaluation
@@ -77,11 +77,11 @@
 //! (Donev et al., Science 303, 990 (2004)): `z_J < 2f`.
 
 use jamkit_core::Error;
-use jamkit_core::gap3d::{self, ExactGap3, QuadraticSupport, WORLD_AXES};
 use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, ParamSpec, Quaternion, RotVec, Shape,
     ShapeVisitor, Vector,
 };
+use jamkit_gap3d::{self as gap3d, ExactGap3, QuadraticSupport, WORLD_AXES};
 use serde::Deserialize;
 use std::f64::consts::PI;
 

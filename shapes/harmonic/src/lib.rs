@@ -59,10 +59,10 @@
 //! above, bit for bit). The signed distance of two convex bodies along
 //! their common normal, `h = max_u [u·r_ij − s_i(u) − s_j(−u)]`, with its
 //! gradient and Hessian in positions and rotations by
-//! [`jamkit_core::gap3d::exact`], from each body's support function: the
+//! [`jamkit_gap3d::exact`], from each body's support function: the
 //! body-frame surface `x(y) = ρ(y) y`, `ρ = R⁰(1 + ΔF)`, has its support
 //! point in the direction `u` where its normal is `u`, found by Newton's
-//! method on the sphere ([`jamkit_core::gap3d::radial_support`], whose
+//! method on the sphere ([`jamkit_gap3d::radial_support`], whose
 //! documentation derives `s`, `∇s = ρ(y*) y*` and
 //! `∇∇s = B A⁺ Bᵀ`, the inverse Weingarten map), each search started where
 //! the body's previous one in the same gap ended ([`Harmonic::support`]
@@ -103,11 +103,11 @@ pub mod solid;
 
 use jamkit_core::Error;
 use jamkit_core::gap_model::GapModel;
-use jamkit_core::gap3d::{self, ExactGap3, RadialSupport};
 use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, Matrix, ParamSpec, Quaternion, RotVec,
     Shape, ShapeVisitor, Vector,
 };
+use jamkit_gap3d::{self as gap3d, ExactGap3, RadialSupport};
 use serde::Deserialize;
 use solid::{LMAX, Poly};
 use std::cell::Cell;

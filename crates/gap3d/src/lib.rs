@@ -149,8 +149,7 @@
 //! `s(x) = √(xᵀ M x)`, the body the `ellipsoid` family is made of and the
 //! one the tests here use.
 
-use crate::math::{MAX_ROT, Matrix, RotVec, Vector};
-use crate::shape::{Contact, GapHessian};
+use jamkit_core::{Contact, GapHessian, MAX_ROT, Matrix, RotVec, Vector};
 
 /// A support function at one direction `u` (world frame) with its first
 /// two derivatives.
@@ -574,8 +573,8 @@ pub const WORLD_AXES: [Vector<3>; 3] = [
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Quaternion;
     use approx::assert_relative_eq;
+    use jamkit_core::Quaternion;
 
     fn ellipsoid(q: &Quaternion, semi: [f64; 3]) -> QuadraticSupport {
         QuadraticSupport::new(&q.columns(), semi)
