@@ -418,6 +418,15 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         None
     }
 
+    /// The semi-axes of an ellipse or ellipsoid body along its body axes,
+    /// per unit size `R⁰` (an optional ability: `None` where the body is not
+    /// one, or is a ball). Exporters write them where a viewer draws
+    /// ellipsoids (extended XYZ's `aspherical_shape`, OVITO); a planar body
+    /// gives its third axis as the second.
+    fn ellipsoid_axes(&self) -> Option<[f64; 3]> {
+        None
+    }
+
     /// Whether the random start must be free of overlaps. Non-convex
     /// bodies (bodies made of spheres) can interpenetrate into a *locked*
     /// pair at a random start (two dimers crossed at their centres feel no

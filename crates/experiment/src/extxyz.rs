@@ -12,7 +12,7 @@
 //! | `radius` | the size `R⁰` (the sphere's radius for a rigid body's sphere) |
 //! | `orientation` | the rotation as a unit quaternion in OVITO's order `(x, y, z, w)`: a planar angle θ is `(0, 0, sin θ/2, cos θ/2)` |
 //! | `angle` | planar families: θ itself (radians), for colouring |
-//! | `aspherical_shape` | ellipses: the semi-axes `(a, b, b)`, `a = R⁰√α`, `b = R⁰/√α`; ellipsoids: the semi-axes `R⁰ (ξ_x, ξ_y, ξ_z)` along the body axes |
+//! | `aspherical_shape` | families whose shape gives [`Shape::ellipsoid_axes`]: ellipses the semi-axes `(a, b, b)`, `a = R⁰√α`, `b = R⁰/√α`; ellipsoids `R⁰ (ξ_x, ξ_y, ξ_z)` along the body axes |
 //! | `body` | rigid bodies: the body a sphere belongs to |
 //! | `contacts` | the body's contacts (`h < 0`), each contact counted at both bodies |
 //! | `rattler` | 1 for a rattler, 0 otherwise (only when contacts were measured) |
@@ -22,7 +22,7 @@
 
 use crate::error::ExperimentError;
 use crate::reload::{PackingVisitor, reload};
-use jamkit_core::Shape;
+use jamkit_core::{Shape, ShapeVisitor as SceneVisitor};
 use jamkit_engine::Scene;
 use jamkit_format::PackingFile;
 use std::fmt::Write;
@@ -44,6 +44,26 @@ fn contacts_per_body(file: &PackingFile) -> Result<Vec<usize>, ExperimentError> 
         }
     }
     reload(file, Count)
+}
+
+/// The registry's visitor that asks a shape for its ellipsoid semi-axes.
+struct AxesOf;
+
+impl SceneVisitor for AxesOf {
+    type Output = Option<[f64; 3]>;
+
+    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Option<[f64; 3]> {
+        shape.ellipsoid_axes()
+    }
+}
+
+/// The semi-axes per unit size of the packing's bodies, if its family's
+/// shape is an ellipse or ellipsoid ([`Shape::ellipsoid_axes`]).
+fn ellipsoid_axes(file: &PackingFile) -> Option<[f64; 3]> {
+    let params = jamkit_registry::params_from_json(&file.params).ok()?;
+    jamkit_registry::dispatch(&file.family, file.dim, &params, AxesOf)
+        .ok()
+        .flatten()
 }
 
 /// One frame of extended XYZ for `file`.
@@ -68,22 +88,9 @@ pub fn frame(file: &PackingFile) -> Result<String, ExperimentError> {
     let planar = dim == 2 && file.orientations.first().is_some_and(|o| o.len() == 1);
     let quaternion = dim == 3 && file.orientations.first().is_some_and(|o| o.len() == 4);
     let rigid = !file.spheres.is_empty();
-    // Semi-axes per unit size along the body axes: ellipses (a, b, b),
-    // ellipsoids their ratios ξ (unit product).
-    let semi_axes: Option<[f64; 3]> = match file.family.as_str() {
-        "ellipse" => file
-            .params
-            .get("aspect")
-            .and_then(|a| a.as_f64())
-            .map(|alpha| [alpha.sqrt(), 1.0 / alpha.sqrt(), 1.0 / alpha.sqrt()]),
-        "ellipsoid" => jamkit_registry::params_from_json(&file.params)
-            .and_then(|map| jamkit_registry::parse_params("ellipsoid", &map))
-            .and_then(|p| jamkit_ellipsoid::Ellipsoid::new(&p))
-            .ok()
-            .filter(|e| !e.is_ball())
-            .map(|e| e.ratios()),
-        _ => None,
-    };
+    // Semi-axes per unit size along the body axes, from the shape's
+    // optional ability (ellipses (a, b, b), ellipsoids their ratios ξ).
+    let semi_axes = ellipsoid_axes(file);
     let rattlers = file.rattler.len() == file.particles;
 
     let mut props = String::from("species:S:1:pos:R:3:radius:R:1");

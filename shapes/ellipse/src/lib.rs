@@ -477,6 +477,12 @@ impl Shape<2> for Ellipse {
         Some(std::sync::Arc::new(self.clone()))
     }
 
+    /// `(√α, 1/√α, 1/√α)`: the semi-axes per unit size, the third (out of
+    /// the plane) taken as the short one.
+    fn ellipsoid_axes(&self) -> Option<[f64; 3]> {
+        Some([self.root, 1.0 / self.root, 1.0 / self.root])
+    }
+
     fn rot_inertia(&self, size: f64) -> RotVec {
         let i = self.inertia.unwrap_or_else(|| {
             let (a, b) = self.semi_axes(size);

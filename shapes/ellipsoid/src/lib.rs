@@ -461,6 +461,11 @@ impl Shape<3> for Ellipsoid {
         Some(std::sync::Arc::new(EllipsoidSurface(self.clone())))
     }
 
+    /// The ratios `ξ` along the body axes; `None` for the ball.
+    fn ellipsoid_axes(&self) -> Option<[f64; 3]> {
+        (!self.ball).then_some(self.ratios)
+    }
+
     /// `d + 1 = 4`, the paper's convention carried to 3D.
     fn rattler_threshold(&self) -> usize {
         4
