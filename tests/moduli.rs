@@ -450,14 +450,10 @@ fn moduli_observable_options_are_checked() {
     );
 }
 
-/// The packing of the runner test's first sample, remade through the
-/// engine: disks, N = 32, p = 10⁻³. Its linear-response `G` is negative
-/// (with no negative mode of `H`): the packing is stable at fixed box but
-/// its shear stress falls under shear, as Dagois-Bohy et al. (PRL 109,
-/// 095703, 2012) found for a fraction of small packings near jamming.
-/// The deformation check confirms the sign and the value (1e-6 relative).
-#[test]
-fn negative_shear_modulus_is_confirmed_by_deformation() {
+/// The packing of the runner test's first sample (disks, N = 32, seed 1,
+/// `Pressure` p = 10⁻³ to 1 %), made through the engine: `G < 0` in its
+/// fixed box.
+fn negative_g_disks() -> Scene<2, Sphere> {
     use jamkit_engine::{FireParams, PressureParams, compress_to_pressure};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     let sizes = SizeDistribution::default().sample(32, &mut rng);
@@ -470,6 +466,18 @@ fn negative_shear_modulus_is_confirmed_by_deformation() {
     };
     let mut fire = Fire::new(FireParams::default().for_family::<2, _>(&Sphere));
     compress_to_pressure(&mut scene, &mut fire, &params).unwrap();
+    scene
+}
+
+/// The packing of the runner test's first sample, remade through the
+/// engine: disks, N = 32, p = 10⁻³. Its linear-response `G` is negative
+/// (with no negative mode of `H`): the packing is stable at fixed box but
+/// its shear stress falls under shear, as Dagois-Bohy et al. (PRL 109,
+/// 095703, 2012) found for a fraction of small packings near jamming.
+/// The deformation check confirms the sign and the value (1e-6 relative).
+#[test]
+fn negative_shear_modulus_is_confirmed_by_deformation() {
+    let mut scene = negative_g_disks();
     let summary = summarize_with(&mut scene, RattlerRule::Count(3));
     let lr = moduli::measure(&mut scene, &summary.rattler, &ModuliParams::default()).unwrap();
     let def = by_deformation(&scene, 1e-6, 0.05, &deformation_minimizer()).unwrap();
@@ -740,4 +748,59 @@ fn ellipsoid_and_dimer_moduli_agree_with_deformation_3d() {
         1e-6,
     );
     eprintln!("3D dimers: {lr:?}\n{def:?}");
+}
+
+/// Shear stabilisation (Dagois-Bohy et al. 2012) of the fixed-box packing
+/// with `G < 0` above: the cell's shape relaxes over both deviatoric
+/// strains with the coordinates. After it the deviatoric stress is below
+/// the tolerance (10⁻⁶ p), the energy has not risen (10⁻¹² relative:
+/// round-off of the relaxations), the volume is the box's (`det F = 1` to
+/// 10⁻¹²), the Hessian has no negative mode, and `G ≥ 0` (every plane):
+/// at a minimum over all volume-preserving deformations the relaxed
+/// energy cannot fall along a simple shear. The stabilised cell's
+/// linear-response moduli agree with its own deformation check (γ = 10⁻⁶,
+/// 10⁻⁶ relative as for the fixed box, `check_against_deformation`).
+#[test]
+fn shear_stabilisation_makes_the_negative_g_packing_stable() {
+    let mut scene = negative_g_disks();
+    let summary = summarize_with(&mut scene, RattlerRule::Count(3));
+    let fixed = moduli::measure(&mut scene, &summary.rattler, &ModuliParams::default()).unwrap();
+    assert!(fixed.shear < 0.0, "{fixed:?}");
+    let params = moduli::StabiliseParams::default();
+    let mut s = moduli::stabilise(&scene, 3, &params, &deformation_minimizer()).unwrap();
+    let f = s.deformation;
+    eprintln!(
+        "stabilised in {} steps: F = {f:?}, residual {:e} (before {:e}), E {:e} -> {:e}, p {:e} -> {:e}, C_min {:e}",
+        s.iterations,
+        s.residual,
+        s.residual_before,
+        s.energy_before,
+        s.energy_after,
+        s.pressure_before,
+        s.pressure_after,
+        s.stiffness_min
+    );
+    assert!(s.residual < params.tol, "{}", s.residual);
+    assert!(s.residual_before > params.tol, "{}", s.residual_before);
+    assert!(s.energy_after <= s.energy_before * (1.0 + 1e-12));
+    assert!((f.determinant() - 1.0).abs() < 1e-12, "{f:?}");
+    assert!((s.cell.volume() / scene.packing().bbox.volume() - 1.0).abs() < 1e-12);
+    assert!(s.stiffness_min >= 0.0);
+    let lr = moduli::measure_strained(&mut s.cell, &s.rattler, &ModuliParams::default()).unwrap();
+    eprintln!("fixed box: {fixed:?}\nstabilised: {lr:?}");
+    assert_eq!(lr.negative_modes, 0, "{lr:?}");
+    assert!(lr.shear_min() >= 0.0, "{lr:?}");
+    assert!((lr.pressure - s.pressure_after).abs() < 1e-9 * lr.pressure);
+    let def = moduli::by_deformation_strained(&s.cell, 1e-6, &deformation_minimizer()).unwrap();
+    eprintln!("{def:?}");
+    for (l, d) in lr.shear_planes.iter().zip(&def.shear_planes) {
+        assert!(
+            (l - d).abs() < 1e-6 * l.abs().max(1e-3 * lr.bulk),
+            "{lr:?} {def:?}"
+        );
+    }
+    assert!(
+        (lr.bulk - def.bulk).abs() < 1e-6 * lr.bulk,
+        "{lr:?} {def:?}"
+    );
 }
