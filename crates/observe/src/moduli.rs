@@ -1141,6 +1141,16 @@ impl StabiliseParams {
     }
 }
 
+/// What [`stabilise`] holds fixed besides the particles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Ensemble {
+    /// The volume: the energy is minimised over the deviatoric strains.
+    Volume,
+    /// The pressure `p*`: the enthalpy `U + p* V` is minimised over every
+    /// strain (the deviatoric ones and the dilation).
+    Pressure(f64),
+}
+
 /// A shear-stabilised packing ([`stabilise`]).
 #[derive(Clone, Debug)]
 pub struct Stabilised<const D: usize, S: Shape<D>> {
@@ -1153,6 +1163,11 @@ pub struct Stabilised<const D: usize, S: Shape<D>> {
     pub residual: f64,
     /// The same in the fixed box, relaxed in the cell before any strain.
     pub residual_before: f64,
+    /// What was minimised (`U`, or `U + p* V` at fixed pressure) in the
+    /// fixed box and at the end.
+    pub objective_before: f64,
+    /// See `objective_before`.
+    pub objective_after: f64,
     /// Energy in the fixed box (relaxed in the cell) and at the end.
     pub energy_before: f64,
     /// See `energy_before`.
@@ -1169,33 +1184,29 @@ pub struct Stabilised<const D: usize, S: Shape<D>> {
     pub rattler: Vec<bool>,
 }
 
-/// `σ : E_k` for each deviatoric strain of [`deviatoric_basis`].
-fn deviatoric_stress<const D: usize, S: Shape<D>>(cell: &Strained<D, S>) -> Vec<f64> {
-    let sigma = cell.stress();
-    (deviatoric_basis::<D>().iter())
-        .map(|e| sigma.component_mul(e).sum())
-        .collect()
-}
-
-/// The deviatoric stiffness of a relaxed cell: the second derivative per
-/// volume of its relaxed energy along the volume-preserving deformations
-/// `F = (I + Σ δ_k E_k) / det(…)^{1/D}`,
-/// `C_kl = (A_kl − Ξ_kᵀ H⁺ Ξ_l) / V − p δ_kl` (`A_kl` by polarisation of
-/// the affine terms; `−p δ_kl` from the volume normalisation, whose
-/// second-order isotropic strain `|δ|²/(2D)` meets `U_γ(I) = −D V p`).
+/// The stiffness of a relaxed cell along the strains `basis`: the second
+/// derivative per volume of its relaxed energy plus `P V` along
+/// `F = I + Σ δ_k E_k`,
+/// `C_kl = (A_kl − Ξ_kᵀ H⁺ Ξ_l) / V + P (tr E_k tr E_l − tr E_k E_l)`
+/// (`A_kl` by polarisation of the affine terms). At fixed volume (the
+/// deviatoric basis, `F` normalised to `det F = 1`) `P` is the cell's own
+/// pressure `p` and the last term is `−p δ_kl`: the normalisation's
+/// second-order isotropic strain `|δ|²/(2D)` meets `U_γ(I) = −D V p`. At
+/// fixed pressure `P = p*`, the enthalpy's `p* V`.
 fn deviatoric_stiffness<const D: usize, S: Shape<D>>(
     cell: &mut Strained<D, S>,
     rattler: &[bool],
     omega_zero: f64,
+    basis: &[Matrix<D>],
+    volume_pressure: f64,
 ) -> Result<Vec<Vec<f64>>> {
     let hessian = cell.full_hessian(rattler)?;
     let (values, vectors) = modes(&hessian)?;
     let n = hessian.size;
     let lambda_zero = omega_zero * omega_zero;
-    let basis = deviatoric_basis::<D>();
     let kk = basis.len();
     let mut single = Vec::new();
-    for e in &basis {
+    for e in basis {
         single.push(strain_derivatives_of(cell, rattler, &hessian, e)?);
     }
     let coefficients = |xi: &[f64]| -> Vec<f64> {
@@ -1205,7 +1216,6 @@ fn deviatoric_stiffness<const D: usize, S: Shape<D>>(
     };
     let c: Vec<Vec<f64>> = single.iter().map(|d| coefficients(&d.xi)).collect();
     let volume = cell.volume();
-    let pressure = cell.pressure();
     let mut out = vec![vec![0.0; kk]; kk];
     for k in 0..kk {
         for l in k..kk {
@@ -1219,7 +1229,10 @@ fn deviatoric_stiffness<const D: usize, S: Shape<D>>(
                 .filter(|&m| values[m] > lambda_zero)
                 .map(|m| c[k][m] * c[l][m] / values[m])
                 .sum();
-            let v = (affine - non_affine) / volume - if k == l { pressure } else { 0.0 };
+            // `P ∂²det(I + Σ δ E)/∂δ_k∂δ_l = P (tr E_k tr E_l − tr E_k E_l)`.
+            let volume_term = volume_pressure
+                * (basis[k].trace() * basis[l].trace() - (basis[k] * basis[l]).trace());
+            let v = (affine - non_affine) / volume + volume_term;
             out[k][l] = v;
             out[l][k] = v;
         }
@@ -1242,47 +1255,82 @@ fn symmetric_eigen(m: &[Vec<f64>]) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
     Ok((values, vectors))
 }
 
-/// Relax a cell at fixed deformation and check its pair list.
+/// Relax a cell at fixed deformation; while some body moved by more than
+/// half the pair margin (a pair may be missing from the list), list the
+/// pairs again and relax again (at most 20 times).
 fn relax_cell<const D: usize, S: Shape<D>>(
     cell: &mut Strained<D, S>,
     fire: &FireParams,
 ) -> Result<()> {
-    Fire::new(fire.clone()).minimize(cell)?;
+    for _ in 0..20 {
+        Fire::new(fire.clone()).minimize(cell)?;
+        if cell.check_pairs().is_ok() {
+            return Ok(());
+        }
+        cell.relist()?;
+    }
     cell.check_pairs()
 }
 
+/// `V/N` at or below which a stabilised cell counts as unjammed (the
+/// jamming window's upper edge, `protocol.energy_high`'s default).
+const UNJAMMED: f64 = 2e-16;
+
 /// Shear-stabilise a relaxed packing (Dagois-Bohy, Tighe, Simon, Henkes &
 /// van Hecke, PRL 109, 095703, 2012): minimise its energy over the
-/// coordinates **and** the cell's shape at fixed volume, so that the
-/// deviatoric stress vanishes and the packing is stable to every small
-/// deformation; then every shear modulus is `≥ 0`.
+/// coordinates **and** the cell's shape, at fixed volume (or its enthalpy
+/// `U + p* V` at fixed pressure, the cell's volume free too), so that the
+/// deviatoric stress vanishes (and `p = p*`) and the packing is stable to
+/// every small deformation; then every shear modulus is `≥ 0`.
 ///
 /// The cell is a [`Strained`] one (the engine's box is orthorhombic and
 /// cannot be sheared); its deformation ranges over all `D(D+1)/2 − 1`
-/// deviatoric strains ([`deviatoric_basis`]). Alternating: relax the
-/// coordinates at fixed cell; list the pairs again; from the deviatoric
-/// stress `s_k = σ : E_k` and the stiffness `C` ([`deviatoric_stiffness`]
-/// in the docs of the module) take the step `δ = −Σ_m w_m (w_m·s)/μ_m` over
-/// the eigenpairs `(μ_m, w_m)` of `C` with `μ_m > 0`, and `max_step` down
-/// the slope along those with `μ_m ≤ 0`; cap `|δ|` at `max_step`; deform
-/// the cell by `F = (I + Σ δ_k E_k)/det(…)^{1/D}`, relax, and keep the
-/// step if the energy did not rise (by more than 10⁻¹² relative round-off),
-/// else halve it (up to 20 times). Stops when every `|s_k| < tol · p` and
-/// `C` has no negative eigenvalue. `threshold`: the rattler count rule.
+/// deviatoric strains ([`deviatoric_basis`]), and at fixed pressure also
+/// over the dilation `E_0 = I/√D`. Alternating: relax the coordinates at
+/// fixed cell; list the pairs again; from the generalised stress
+/// `s_k = σ : E_k + p* tr E_k` and the stiffness `C` (`deviatoric_stiffness`)
+/// take the step `δ = −Σ_m w_m (w_m·s)/μ_m` over the eigenpairs `(μ_m, w_m)`
+/// of `C` with `μ_m > 0`, and `max_step` down the slope along those with
+/// `μ_m ≤ 0`; cap `|δ|` at `max_step`; deform the cell by
+/// `F = I + Σ δ_k E_k` (at fixed volume divided by `det(…)^{1/D}`), relax,
+/// and keep the step if the minimised function did not rise (by more than
+/// 10⁻¹² relative round-off), else halve it (up to 20 times). Stops when
+/// every `|s_k| < tol · p` (`p*` at fixed pressure) and `C` has no
+/// negative eigenvalue. At fixed volume a packing can unjam (its energy
+/// falls to zero: `V/N ≤ 2·10⁻¹⁶`), which is an error. `threshold`: the
+/// rattler count rule.
 pub fn stabilise<const D: usize, S: Shape<D>>(
     scene: &Scene<D, S>,
     threshold: usize,
+    ensemble: Ensemble,
     params: &StabiliseParams,
     fire: &FireParams,
 ) -> Result<Stabilised<D, S>> {
-    params.validate("protocol.stabilise")?;
+    params.validate("stabilise")?;
     let fire = fire.for_family(&scene.packing().shape);
     fire.validate("minimizer")?;
     let omega_zero = ModuliParams::default().omega_zero;
-    let basis = deviatoric_basis::<D>();
+    let mut basis = deviatoric_basis::<D>();
+    let external = match ensemble {
+        Ensemble::Volume => None,
+        Ensemble::Pressure(p) => {
+            if !(p > 0.0 && p.is_finite()) {
+                return Err(Error::invalid(
+                    "pressure",
+                    p,
+                    "the pressure of a stabilisation at fixed pressure must be positive and finite",
+                ));
+            }
+            basis.insert(0, Matrix::<D>::identity() / (D as f64).sqrt());
+            Some(p)
+        }
+    };
+    let bodies = scene.packing().len().max(1) as f64;
     let mut cell = Strained::new(scene, params.margin)?;
     relax_cell(&mut cell, &fire)?;
+    let objective = |c: &Strained<D, S>| c.energy() + external.map_or(0.0, |p| p * c.volume());
     let energy_before = cell.energy();
+    let objective_before = objective(&cell);
     let pressure_before = cell.pressure();
     if !(pressure_before > 0.0) {
         return Err(Error::invalid(
@@ -1291,27 +1339,47 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
             "shear stabilisation needs a packing under positive pressure (jammed)",
         ));
     }
+    let stress = |c: &Strained<D, S>| -> Vec<f64> {
+        let sigma = c.stress();
+        (basis.iter())
+            .map(|e| sigma.component_mul(e).sum() + external.map_or(0.0, |p| p * e.trace()))
+            .collect()
+    };
     let largest = |s: &[f64]| s.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-    let residual_before = largest(&deviatoric_stress(&cell)) / pressure_before;
-    let mut energy = energy_before;
+    let residual_before = largest(&stress(&cell)) / external.unwrap_or(pressure_before);
+    let mut value = objective_before;
     let mut iterations = 0;
     loop {
         cell.relist()?;
         let rattler = cell.rattlers(threshold);
-        let s = deviatoric_stress(&cell);
+        let s = stress(&cell);
         let pressure = cell.pressure();
-        let stiffness = deviatoric_stiffness(&mut cell, &rattler, omega_zero)?;
+        let reference = external.unwrap_or(pressure);
+        let stiffness = deviatoric_stiffness(&mut cell, &rattler, omega_zero, &basis, reference)?;
         let (mu, w) = symmetric_eigen(&stiffness)?;
-        let residual = largest(&s) / pressure;
+        let residual = largest(&s) / reference;
         let stiffness_min = mu.first().copied().unwrap_or(0.0);
+        let per_body = cell.energy() / bodies;
+        if external.is_none() && !(per_body > UNJAMMED && pressure > 0.0) {
+            return Err(Error::JammingFailed {
+                phi: cell.phi,
+                steps: iterations as u64,
+                reason: format!(
+                    "the packing unjammed while its cell's shape relaxed at fixed volume (V/N = {per_body:.3e} after {iterations} strain steps, from {:.3e}): shear stabilisation at fixed volume lowered the energy to zero",
+                    energy_before / bodies
+                ),
+            });
+        }
         if residual < params.tol && stiffness_min >= 0.0 {
             let deformation = cell.total_deformation();
             return Ok(Stabilised {
                 energy_after: cell.energy(),
+                objective_after: objective(&cell),
                 cell,
                 deformation,
                 residual,
                 residual_before,
+                objective_before,
                 energy_before,
                 pressure_before,
                 pressure_after: pressure,
@@ -1325,7 +1393,7 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
                 phi: cell.phi,
                 steps: iterations as u64,
                 reason: format!(
-                    "shear stabilisation did not converge in protocol.stabilise.max_iterations = {} strain steps (deviatoric stress {residual:.3e} p, tolerance {:e}; smallest deviatoric stiffness {stiffness_min:.3e})",
+                    "shear stabilisation did not converge in {} strain steps (stress residual {residual:.3e} p, tolerance {:e}; smallest stiffness {stiffness_min:.3e})",
                     params.max_iterations, params.tol
                 ),
             });
@@ -1353,15 +1421,16 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
             for (x, e) in step.iter().zip(&basis) {
                 f += e * *x;
             }
-            let f = f / determinant(&f).powf(1.0 / D as f64);
+            if external.is_none() {
+                f /= determinant(&f).powf(1.0 / D as f64);
+            }
             let mut trial = cell.clone();
             trial.set_deformation(f);
-            let relaxed = relax_cell(&mut trial, &fire);
-            if relaxed.is_ok() {
-                let e = trial.energy();
-                if e <= energy + 1e-12 * energy.abs() {
+            if relax_cell(&mut trial, &fire).is_ok() {
+                let v = objective(&trial);
+                if v <= value + 1e-12 * value.abs() {
                     cell = trial;
-                    energy = e;
+                    value = v;
                     accepted = true;
                     break;
                 }
@@ -1373,7 +1442,7 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
                 phi: cell.phi,
                 steps: iterations as u64,
                 reason: format!(
-                    "shear stabilisation found no strain step that lowers the energy (deviatoric stress {residual:.3e} p, smallest deviatoric stiffness {stiffness_min:.3e})"
+                    "shear stabilisation found no strain step that lowers the energy (stress residual {residual:.3e} p, smallest stiffness {stiffness_min:.3e})"
                 ),
             });
         }
