@@ -1088,7 +1088,8 @@ pub struct StabiliseParams {
     pub tol: f64,
     /// Give up after this many strain steps.
     pub max_iterations: u32,
-    /// The largest strain step (Frobenius norm of `δ`).
+    /// The largest strain step (Frobenius norm of `δ`); near jamming the
+    /// step is also capped at `10 p/μ_max` ([`stabilise`]).
     pub max_step: f64,
     /// The pair list's margin (as for [`by_deformation`]); the pairs are
     /// listed again before every step.
@@ -1290,8 +1291,9 @@ const UNJAMMED: f64 = 2e-16;
 /// fixed cell; list the pairs again; from the generalised stress
 /// `s_k = σ : E_k + p* tr E_k` and the stiffness `C` (`deviatoric_stiffness`)
 /// take the step `δ = −Σ_m w_m (w_m·s)/μ_m` over the eigenpairs `(μ_m, w_m)`
-/// of `C` with `μ_m > 0`, and `max_step` down the slope along those with
-/// `μ_m ≤ 0`; cap `|δ|` at `max_step`; deform the cell by
+/// of `C` with `μ_m > 0`, and the cap down the slope along those with
+/// `μ_m ≤ 0`; cap `|δ|` at `min(max_step, 10 p/μ_max)` (`μ_max` the
+/// largest eigenvalue of `C`); deform the cell by
 /// `F = I + Σ δ_k E_k` (at fixed volume divided by `det(…)^{1/D}`), relax,
 /// and keep the step if the minimised function did not rise (by more than
 /// 10⁻¹² relative round-off), else halve it (up to 20 times). Stops when
@@ -1398,6 +1400,16 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
                 ),
             });
         }
+        // The strain cap: `max_step`, and near jamming `10 p/μ_max`, ten
+        // times the strain that changes the overlaps by their own size
+        // (`μ_max` the stiffest strain's modulus, ~B): a larger kick along
+        // a soft or unstable strain rearranges (or unjams) the packing.
+        let stiffest = mu.last().copied().unwrap_or(0.0);
+        let cap = if stiffest > 0.0 {
+            params.max_step.min(10.0 * reference / stiffest)
+        } else {
+            params.max_step
+        };
         let mut step = vec![0.0; basis.len()];
         for (m, wm) in w.iter().enumerate() {
             let along: f64 = wm.iter().zip(&s).map(|(a, b)| a * b).sum();
@@ -1405,15 +1417,15 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
                 -along / mu[m]
             } else {
                 // Down the slope (or either way on a flat one) by the cap.
-                -params.max_step * if along > 0.0 { 1.0 } else { -1.0 }
+                -cap * if along > 0.0 { 1.0 } else { -1.0 }
             };
             for (x, wk) in step.iter_mut().zip(wm) {
                 *x += size * wk;
             }
         }
         let norm = step.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm > params.max_step {
-            step.iter_mut().for_each(|x| *x *= params.max_step / norm);
+        if norm > cap {
+            step.iter_mut().for_each(|x| *x *= cap / norm);
         }
         let mut accepted = false;
         for _ in 0..20 {
