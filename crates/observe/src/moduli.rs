@@ -1292,8 +1292,9 @@ const UNJAMMED: f64 = 2e-16;
 /// `s_k = σ : E_k + p* tr E_k` and the stiffness `C` (`deviatoric_stiffness`)
 /// take the step `δ = −Σ_m w_m (w_m·s)/μ_m` over the eigenpairs `(μ_m, w_m)`
 /// of `C` with `μ_m > 0`, and the cap down the slope along those with
-/// `μ_m ≤ 0`; cap `|δ|` at `min(max_step, 10 p/μ_max)` (`μ_max` the
-/// largest eigenvalue of `C`); deform the cell by
+/// `μ_m ≤ 0`; cap `|δ|` at `min(max_step, max(10 p/μ_max, t))` (`μ_max`
+/// the largest eigenvalue of `C`; `t` twice the last step's cap if it was
+/// taken whole, else the step taken); deform the cell by
 /// `F = I + Σ δ_k E_k` (at fixed volume divided by `det(…)^{1/D}`), relax,
 /// and keep the step if the minimised function did not rise (by more than
 /// 10⁻¹² relative round-off), else halve it (up to 20 times). Stops when
@@ -1351,6 +1352,7 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
     let residual_before = largest(&stress(&cell)) / external.unwrap_or(pressure_before);
     let mut value = objective_before;
     let mut iterations = 0;
+    let mut trust = 0.0_f64;
     loop {
         cell.relist()?;
         let rattler = cell.rattlers(threshold);
@@ -1404,12 +1406,15 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
         // times the strain that changes the overlaps by their own size
         // (`μ_max` the stiffest strain's modulus, ~B): a larger kick along
         // a soft or unstable strain rearranges (or unjams) the packing.
+        // Grown by 2 after a step taken whole (a trust region), so that a
+        // long way down a soft strain takes few steps.
         let stiffest = mu.last().copied().unwrap_or(0.0);
-        let cap = if stiffest > 0.0 {
+        let base = if stiffest > 0.0 {
             params.max_step.min(10.0 * reference / stiffest)
         } else {
             params.max_step
         };
+        let cap = trust.max(base).min(params.max_step);
         let mut step = vec![0.0; basis.len()];
         for (m, wm) in w.iter().enumerate() {
             let along: f64 = wm.iter().zip(&s).map(|(a, b)| a * b).sum();
@@ -1428,7 +1433,7 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
             step.iter_mut().for_each(|x| *x *= cap / norm);
         }
         let mut accepted = false;
-        for _ in 0..20 {
+        for halvings in 0..20 {
             let mut f = Matrix::<D>::identity();
             for (x, e) in step.iter().zip(&basis) {
                 f += e * *x;
@@ -1444,6 +1449,11 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
                     cell = trial;
                     value = v;
                     accepted = true;
+                    trust = if halvings == 0 {
+                        2.0 * cap
+                    } else {
+                        cap * 0.5_f64.powi(halvings)
+                    };
                     break;
                 }
             }
