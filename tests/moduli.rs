@@ -450,6 +450,30 @@ fn moduli_observable_options_are_checked() {
     );
 }
 
+/// The packing of the runner test's first sample (disks, N = 32, seed 1,
+/// `Pressure` p = 10⁻³ to 1 %), made through the engine: `G < 0` in its
+/// fixed box.
+fn negative_g_disks() -> Scene<2, Sphere> {
+    pressure_disks(1, 1e-3)
+}
+
+/// Disks, N = 32, `Pressure` protocol to `pressure` (1 %) from seed `seed`.
+fn pressure_disks(seed: u64, pressure: f64) -> Scene<2, Sphere> {
+    use jamkit_engine::{FireParams, PressureParams, compress_to_pressure};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let sizes = SizeDistribution::default().sample(32, &mut rng);
+    let packing = Packing::<2, _>::random(Sphere, sizes, 0.1, &mut rng).unwrap();
+    let mut scene = Scene::new(packing, Potential::Harmonic, 0.4 * 0.5);
+    let params = PressureParams {
+        pressure,
+        tol: 1e-2,
+        ..PressureParams::default()
+    };
+    let mut fire = Fire::new(FireParams::default().for_family::<2, _>(&Sphere));
+    compress_to_pressure(&mut scene, &mut fire, &params).unwrap();
+    scene
+}
+
 /// The packing of the runner test's first sample, remade through the
 /// engine: disks, N = 32, p = 10⁻³. Its linear-response `G` is negative
 /// (with no negative mode of `H`): the packing is stable at fixed box but
@@ -458,18 +482,7 @@ fn moduli_observable_options_are_checked() {
 /// The deformation check confirms the sign and the value (1e-6 relative).
 #[test]
 fn negative_shear_modulus_is_confirmed_by_deformation() {
-    use jamkit_engine::{FireParams, PressureParams, compress_to_pressure};
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
-    let sizes = SizeDistribution::default().sample(32, &mut rng);
-    let packing = Packing::<2, _>::random(Sphere, sizes, 0.1, &mut rng).unwrap();
-    let mut scene = Scene::new(packing, Potential::Harmonic, 0.4 * 0.5);
-    let params = PressureParams {
-        pressure: 1e-3,
-        tol: 1e-2,
-        ..PressureParams::default()
-    };
-    let mut fire = Fire::new(FireParams::default().for_family::<2, _>(&Sphere));
-    compress_to_pressure(&mut scene, &mut fire, &params).unwrap();
+    let mut scene = negative_g_disks();
     let summary = summarize_with(&mut scene, RattlerRule::Count(3));
     let lr = moduli::measure(&mut scene, &summary.rattler, &ModuliParams::default()).unwrap();
     let def = by_deformation(&scene, 1e-6, 0.05, &deformation_minimizer()).unwrap();
@@ -740,4 +753,175 @@ fn ellipsoid_and_dimer_moduli_agree_with_deformation_3d() {
         1e-6,
     );
     eprintln!("3D dimers: {lr:?}\n{def:?}");
+}
+
+/// Shear stabilisation (Dagois-Bohy et al. 2012) of the fixed-box packing
+/// with `G < 0` above, at fixed pressure (its own): the cell's shape and
+/// volume relax with the coordinates. After it the deviatoric stress is
+/// below the tolerance (10⁻⁶ p) and the pressure is p (10⁻⁶), the
+/// enthalpy `U + pV` has not risen (10⁻¹² relative: round-off of the
+/// relaxations), the Hessian has no negative mode, and `G ≥ 0` (every
+/// plane): at a minimum over all deformations the relaxed enthalpy cannot
+/// fall along a simple shear (volume-preserving). The stabilised cell's
+/// linear-response moduli agree with its own deformation check (γ =
+/// 10⁻⁶, 10⁻⁶ relative as for the fixed box, `check_against_deformation`).
+/// At fixed volume this packing unjams (its energy falls to zero, which
+/// `stabilise` refuses, naming it); a packing at p = 10⁻² (seed 3)
+/// stabilises at fixed volume: `det F = 1` (10⁻¹²), the energy has not
+/// risen, and the same checks hold.
+#[test]
+fn shear_stabilisation_makes_the_negative_g_packing_stable() {
+    let params = moduli::StabiliseParams::default();
+    let stabilised = |scene: &mut Scene<2, Sphere>, ensemble| {
+        let summary = summarize_with(scene, RattlerRule::Count(3));
+        let fixed = moduli::measure(scene, &summary.rattler, &ModuliParams::default()).unwrap();
+        let s = moduli::stabilise(scene, 3, ensemble, &params, &deformation_minimizer());
+        (fixed, s)
+    };
+    let check = |mut s: moduli::Stabilised<2, Sphere>| {
+        eprintln!(
+            "stabilised in {} steps: F = {:?}, residual {:e} (before {:e}), U {:e} -> {:e}, p {:e} -> {:e}, C_min {:e}",
+            s.iterations,
+            s.deformation,
+            s.residual,
+            s.residual_before,
+            s.energy_before,
+            s.energy_after,
+            s.pressure_before,
+            s.pressure_after,
+            s.stiffness_min
+        );
+        assert!(s.residual < params.tol, "{}", s.residual);
+        assert!(s.residual_before > params.tol, "{}", s.residual_before);
+        assert!(s.objective_after <= s.objective_before * (1.0 + 1e-12));
+        assert!(s.stiffness_min >= 0.0);
+        let lr =
+            moduli::measure_strained(&mut s.cell, &s.rattler, &ModuliParams::default()).unwrap();
+        eprintln!("stabilised: {lr:?}");
+        assert_eq!(lr.negative_modes, 0, "{lr:?}");
+        assert!(lr.shear_min() >= 0.0, "{lr:?}");
+        assert!((lr.pressure - s.pressure_after).abs() < 1e-9 * lr.pressure);
+        let def = moduli::by_deformation_strained(&s.cell, 1e-6, &deformation_minimizer()).unwrap();
+        eprintln!("{def:?}");
+        for (l, d) in lr.shear_planes.iter().zip(&def.shear_planes) {
+            assert!((l - d).abs() < 1e-6 * l, "{lr:?} {def:?}");
+        }
+        assert!(
+            (lr.bulk - def.bulk).abs() < 1e-6 * lr.bulk,
+            "{lr:?} {def:?}"
+        );
+        s
+    };
+    let mut scene = negative_g_disks();
+    let p = scene.pressure();
+    let (fixed, s) = stabilised(&mut scene, moduli::Ensemble::Pressure(p));
+    eprintln!("fixed box: {fixed:?}");
+    assert!(fixed.shear < 0.0, "{fixed:?}");
+    let s = check(s.unwrap());
+    assert!((s.pressure_after / p - 1.0).abs() < 1e-6);
+    let (_, unjammed) = stabilised(&mut scene, moduli::Ensemble::Volume);
+    let err = unjammed.unwrap_err().to_string();
+    assert!(
+        err.contains("unjammed") && err.contains("fixed volume"),
+        "{err}"
+    );
+
+    let mut scene = pressure_disks(3, 1e-2);
+    let (fixed, s) = stabilised(&mut scene, moduli::Ensemble::Volume);
+    eprintln!("fixed box: {fixed:?}");
+    let s = check(s.unwrap());
+    assert!((s.deformation.determinant() - 1.0).abs() < 1e-12);
+    assert!((s.cell.volume() / scene.packing().bbox.volume() - 1.0).abs() < 1e-12);
+    assert!(s.energy_after <= s.energy_before * (1.0 + 1e-12));
+}
+
+/// `protocol.shear_stabilised` through the runner (disks, N = 32,
+/// `Pressure` p = 10⁻³, the runner test's two samples, of which the first
+/// has `G < 0` in its fixed box; `Pressure` stabilises at fixed pressure,
+/// the packing's own: the second sample unjams when stabilised at fixed
+/// volume). Off (left out or `false`): the packing
+/// files are bit for bit the same, settings included (the field is not
+/// written), wall times aside. On: the same configuration is saved (the
+/// stabilised cell is the moduli's only), the fixed-box moduli stored
+/// beside the stabilised ones are bit for bit those of the run without
+/// it, and every stabilised packing has `G ≥ 0`, no negative mode, and a
+/// residual deviatoric stress below 10⁻⁶ p; `results.csv` reports the
+/// stabilised `G`. A file asking for it without `Moduli` is refused,
+/// naming the field.
+#[test]
+fn shear_stabilised_option_through_the_runner() {
+    let base = r#"(name: "el", family: "sphere", particles: 32, samples: 2, seed: 1,
+        protocol: Pressure(pressure: 1e-3, tol: 1e-2STAB),
+        observables: [Contacts, Pressure, Moduli()])"#;
+    let run = |stab: &str| {
+        let text = base.replace("STAB", stab);
+        let e = jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let report = common::run_ok(&e, dir.path(), 1);
+        let csv = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
+        let mut files = report.packings;
+        files.sort_by(|a, b| a.id.cmp(&b.id));
+        (files, csv)
+    };
+    let without_wall = |f: &jamkit_format::PackingFile| {
+        let mut v = serde_json::to_value(f).unwrap();
+        v["measures"]["wall_s"] = 0.into();
+        v["measures"]["moduli"]["wall_s"] = 0.into();
+        if v["measures"]["moduli"]["stabilisation"].is_object() {
+            v["measures"]["moduli"]["stabilisation"]["wall_s"] = 0.into();
+        }
+        v
+    };
+    let (plain, _) = run("");
+    let (off, _) = run(", shear_stabilised: false");
+    let (on, csv) = run(", shear_stabilised: true");
+    assert_eq!(plain.len(), 2);
+    for ((a, b), c) in plain.iter().zip(&off).zip(&on) {
+        assert_eq!(without_wall(a), without_wall(b));
+        assert!(b.measures.moduli.as_ref().unwrap().stabilisation.is_none());
+        assert_eq!(a.positions, c.positions);
+        let m = c.measures.moduli.as_ref().unwrap();
+        let s = m.stabilisation.as_ref().expect("stabilisation stored");
+        assert_eq!(s.fixed_box, a.measures.moduli.as_ref().unwrap().moduli);
+        eprintln!(
+            "{}: fixed box G = {:e}, stabilised G = {:e}, {s:?}",
+            c.id, s.fixed_box.shear, m.moduli.shear
+        );
+        assert!(m.moduli.shear_min() >= 0.0, "{m:?}");
+        assert_eq!(m.moduli.negative_modes, 0);
+        assert!(s.residual < 1e-6, "{s:?}");
+        // At fixed pressure p* (the packing's own) the enthalpy
+        // `U + p* V` must not rise; the volume is the box's times det F.
+        let f = &s.deformation;
+        let det = f[0][0] * f[1][1] - f[0][1] * f[1][0];
+        let v_per_body = c.box_edges.iter().product::<f64>() / c.particles as f64;
+        let h_before = s.energy_before + s.pressure_before * v_per_body;
+        let h_after = s.energy_after + s.pressure_before * v_per_body * det;
+        assert!(h_after <= h_before * (1.0 + 1e-12), "{s:?}");
+        assert!(
+            (s.pressure_after / s.pressure_before - 1.0).abs() < 1e-6,
+            "{s:?}"
+        );
+        assert!(c.settings["protocol"]["Pressure"]["shear_stabilised"] == true);
+        assert!(
+            a.settings["protocol"]["Pressure"]
+                .get("shear_stabilised")
+                .is_none()
+        );
+    }
+    let first = on[0].measures.moduli.as_ref().unwrap();
+    assert!(first.stabilisation.as_ref().unwrap().fixed_box.shear < 0.0);
+    assert!(csv.contains(&format!("{:e}", first.moduli.shear)), "{csv}");
+    let text = base
+        .replace("STAB", ", shear_stabilised: true")
+        .replace(", Moduli()", "");
+    let err = jamkit_experiment::Experiment::from_ron(&text, "inline")
+        .unwrap()
+        .validate()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("protocol.shear_stabilised") && err.contains("Moduli"),
+        "{err}"
+    );
 }

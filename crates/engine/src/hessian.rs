@@ -62,10 +62,27 @@ impl Hessian {
         rattler: &[bool],
         options: HessianOptions,
     ) -> Result<Self> {
-        let packing = scene.packing();
-        let k = packing.shape.rot_dof();
+        let n = scene.packing().len();
+        let k = scene.packing().shape.rot_dof();
+        let potential = scene.potential();
+        Self::of_contacts::<D>(n, k, potential, rattler, options, |visit| {
+            scene.for_each_gap_hessian(0.0, |i, j, c| visit(i, j, c))
+        })
+    }
+
+    /// Assemble the Hessian of `n` bodies with `k` rotational coordinates
+    /// each from the contacts that `contacts` hands to its visitor (as
+    /// `(i, j, gap Hessian)`), with the rattler rules of [`Self::of_scene`]:
+    /// for packings held other than by a [`Scene`] (a sheared cell).
+    pub fn of_contacts<const D: usize>(
+        n: usize,
+        k: usize,
+        potential: Potential,
+        rattler: &[bool],
+        options: HessianOptions,
+        contacts: impl FnOnce(&mut dyn FnMut(usize, usize, &GapHessian<D>)) -> Result<()>,
+    ) -> Result<Self> {
         let stride = D + k;
-        let n = packing.len();
         let rattles = |i: usize| rattler.get(i).copied().unwrap_or(false);
         let kept = |i: usize| !(options.remove_rattlers && rattles(i));
         // Row of each kept body's first coordinate.
@@ -79,9 +96,8 @@ impl Hessian {
                 rotational.push(a >= D);
             }
         }
-        let potential = scene.potential();
         let mut entries = Vec::new();
-        scene.for_each_gap_hessian(0.0, |i, j, c| {
+        contacts(&mut |i, j, c| {
             if !rattles(i) && !rattles(j) {
                 add_contact::<D>(
                     &mut entries,

@@ -408,6 +408,65 @@ fn rattler_rule<const D: usize, S: Shape<D>>(e: &Experiment, p: &Packing<D, S>) 
     }
 }
 
+/// `protocol.shear_stabilised`: the packing of `scene` shear-stabilised
+/// (`jamkit_observe::moduli::stabilise`, default settings, the deformation
+/// check's minimiser) and the moduli of the stabilised cell, with the
+/// fixed box's `fixed_box` kept beside them. Rattlers by count only (the
+/// cell has no rank rule).
+fn stabilised_moduli<const D: usize, S: Shape<D>>(
+    e: &Experiment,
+    scene: &mut Scene<D, S>,
+    fixed_box: jamkit_observe::moduli::Moduli,
+    params: jamkit_observe::moduli::ModuliParams,
+) -> jamkit_core::Result<ModuliMeasures> {
+    use jamkit_observe::moduli;
+    let threshold = match rattler_rule(e, scene.packing()) {
+        RattlerRule::Count(t) => t,
+        RattlerRule::Rank => {
+            return Err(jamkit_core::Error::Unsupported(
+                "protocol.shear_stabilised = true finds the stabilised cell's rattlers by count; this family's rattlers go by rank: set rattlers.min_contacts".into(),
+            ));
+        }
+    };
+    let start = Instant::now();
+    // At the packing's own pressure (`Pressure`: its target, to the
+    // protocol's tolerance), as Dagois-Bohy et al.: at fixed volume a
+    // packing near jamming can unjam as its cell relaxes (the 2D disks of
+    // `tests/moduli.rs`), which fixed pressure rules out.
+    let ensemble = moduli::Ensemble::Pressure(scene.pressure());
+    let mut s = moduli::stabilise(
+        scene,
+        threshold,
+        ensemble,
+        &moduli::StabiliseParams::default(),
+        &moduli::deformation_minimizer(),
+    )?;
+    let stabilise_s = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let stabilised = moduli::measure_strained(&mut s.cell, &s.rattler, &params)?;
+    let bodies = scene.packing().len().max(1) as f64;
+    Ok(ModuliMeasures {
+        moduli: stabilised,
+        params,
+        wall_s: start.elapsed().as_secs_f64(),
+        stabilisation: Some(jamkit_format::Stabilisation {
+            deformation: (0..D)
+                .map(|a| (0..D).map(|b| s.deformation[(a, b)]).collect())
+                .collect(),
+            residual: s.residual,
+            residual_before: s.residual_before,
+            energy_before: s.energy_before / bodies,
+            energy_after: s.energy_after / bodies,
+            pressure_before: s.pressure_before,
+            pressure_after: s.pressure_after,
+            iterations: s.iterations,
+            stiffness_min: s.stiffness_min,
+            fixed_box,
+            wall_s: stabilise_s,
+        }),
+    })
+}
+
 /// Measure what `e` asks for on a relaxed scene.
 fn observe<const D: usize, S: Shape<D>>(
     e: &Experiment,
@@ -432,11 +491,17 @@ fn observe<const D: usize, S: Shape<D>>(
         Some(params) => {
             let start = Instant::now();
             let moduli = jamkit_observe::moduli::measure(scene, rattler, &params)?;
-            Some(ModuliMeasures {
-                moduli,
-                params,
-                wall_s: start.elapsed().as_secs_f64(),
-            })
+            let wall_s = start.elapsed().as_secs_f64();
+            if e.protocol.shear_stabilised() {
+                Some(stabilised_moduli(e, scene, moduli, params)?)
+            } else {
+                Some(ModuliMeasures {
+                    moduli,
+                    params,
+                    wall_s,
+                    stabilisation: None,
+                })
+            }
         }
         None => None,
     };

@@ -192,6 +192,18 @@ pub enum Protocol {
         /// Give up after this many changes of φ.
         #[serde(default = "default_max_density_steps")]
         max_density_steps: u64,
+        /// After the protocol, shear-stabilise the packing (Dagois-Bohy et
+        /// al. 2012): relax the cell's shape and volume (every strain) with
+        /// the coordinates at the packing's own pressure, minimising the
+        /// enthalpy, until the deviatoric stress is below 10⁻⁶ p
+        /// (`jamkit_observe::moduli::stabilise`).
+        /// The `Moduli` observable (required) then measures the stabilised
+        /// cell; the saved configuration and the other observables stay
+        /// those of the fixed box (the engine's box cannot be sheared).
+        /// Off by default, and not written out when off, so that settings
+        /// of earlier runs are unchanged.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        shear_stabilised: bool,
     },
     /// Jam (as `Jam`), then compress the jammed packing by `delta_phi`
     /// in steps of at most `compress_eps`, relaxing after each: a packing
@@ -221,6 +233,18 @@ pub enum Protocol {
         /// Largest step of φ on the way from φ_J to φ_J + δφ.
         #[serde(default = "default_eps")]
         compress_eps: f64,
+        /// After the protocol, shear-stabilise the packing (Dagois-Bohy et
+        /// al. 2012): relax the cell's shape and volume (every strain) with
+        /// the coordinates at the packing's own pressure, minimising the
+        /// enthalpy, until the deviatoric stress is below 10⁻⁶ p
+        /// (`jamkit_observe::moduli::stabilise`).
+        /// The `Moduli` observable (required) then measures the stabilised
+        /// cell; the saved configuration and the other observables stay
+        /// those of the fixed box (the engine's box cannot be sheared).
+        /// Off by default, and not written out when off, so that settings
+        /// of earlier runs are unchanged.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        shear_stabilised: bool,
     },
 }
 
@@ -298,6 +322,19 @@ impl Protocol {
             | Protocol::AboveJam { delta_phi: t, .. } => *t = OneOrMany::One(value),
         }
         out
+    }
+
+    /// Whether the packing is shear-stabilised after the protocol.
+    pub fn shear_stabilised(&self) -> bool {
+        match *self {
+            Protocol::Pressure {
+                shear_stabilised, ..
+            }
+            | Protocol::AboveJam {
+                shear_stabilised, ..
+            } => shear_stabilised,
+            Protocol::Jam { .. } | Protocol::Phi { .. } => false,
+        }
     }
 
     /// A short name for tables.
@@ -736,6 +773,13 @@ impl Experiment {
         self.validate_protocol()?;
         self.scanned()?;
         self.validate_observables()?;
+        if self.protocol.shear_stabilised() && self.moduli().is_none() {
+            return Err(ExperimentError::invalid(
+                "protocol.shear_stabilised",
+                true,
+                "needs the Moduli observable (only the moduli are measured on the stabilised cell)",
+            ));
+        }
         if !(self.engine.skin > 0.0 && self.engine.skin <= 2.0) {
             return Err(ExperimentError::invalid(
                 "engine.skin",

@@ -14,8 +14,8 @@ pub mod tables;
 pub use error::FormatError;
 pub use jamkit_core::stats::mean_sem;
 pub use record::{
-    JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures, without_configuration,
-    write_atomic,
+    JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures, Stabilisation,
+    without_configuration, write_atomic,
 };
 pub use tables::{
     PointSummary, dos_csv, gaps_csv, pooled_histogram, results_csv, summarize_points, summary_csv,

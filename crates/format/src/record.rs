@@ -90,6 +90,40 @@ pub struct ModuliMeasures {
     pub params: ModuliParams,
     /// Seconds for assembly, diagonalisation and the strain derivatives.
     pub wall_s: f64,
+    /// With `protocol.shear_stabilised`: how the cell was stabilised and
+    /// the moduli of the fixed box before (`moduli` above are the
+    /// stabilised cell's). Absent otherwise, so other files are unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stabilisation: Option<Stabilisation>,
+}
+
+/// A shear stabilisation (`jamkit_observe::moduli::stabilise`), as stored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Stabilisation {
+    /// The cell's deformation `F` from the fixed box (`det F = 1`), row by
+    /// row: the cell is `F · diag(box_edges)`.
+    pub deformation: Vec<Vec<f64>>,
+    /// `max_k |σ : E_k| / p` over the deviatoric strains, at the end …
+    pub residual: f64,
+    /// … and in the fixed box.
+    pub residual_before: f64,
+    /// `V/N` in the fixed box (relaxed to the stabiliser's tolerance) …
+    pub energy_before: f64,
+    /// … and in the stabilised cell.
+    pub energy_after: f64,
+    /// The pressure in the fixed box …
+    pub pressure_before: f64,
+    /// … and in the stabilised cell (same volume).
+    pub pressure_after: f64,
+    /// Strain steps taken.
+    pub iterations: u32,
+    /// The smallest eigenvalue of the deviatoric stiffness at the end.
+    pub stiffness_min: f64,
+    /// The linear-response moduli of the fixed box (as without
+    /// stabilisation).
+    pub fixed_box: Moduli,
+    /// Seconds for the stabilisation.
+    pub wall_s: f64,
 }
 
 /// The spectrum of one packing, as stored.

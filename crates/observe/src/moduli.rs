@@ -61,7 +61,7 @@
 
 use crate::hessian::{Hessian, HessianOptions, add_contact};
 use crate::spectrum::ZeroModes;
-use jamkit_core::{Error, Matrix, Packing, Potential, Result, Shape, Vector};
+use jamkit_core::{Error, Matrix, Packing, PeriodicBox, Potential, Result, Shape, Vector};
 use jamkit_engine::{Fire, FireParams, Objective, Scene};
 use serde::{Deserialize, Serialize};
 
@@ -144,11 +144,84 @@ pub fn strain_derivatives<const D: usize, S: Shape<D>>(
     hessian: &Hessian,
     e: &Matrix<D>,
 ) -> Result<StrainDerivatives> {
-    let k = scene.packing().shape.rot_dof();
+    strain_derivatives_of(scene, rattler, hessian, e)
+}
+
+/// What the moduli need of a packing, whether held by a [`Scene`] (the
+/// engine's orthorhombic box) or by a [`Strained`] cell: its contacts with
+/// their separations and gap Hessians.
+trait Cell<const D: usize> {
+    /// Number of bodies.
+    fn body_count(&self) -> usize;
+    /// Rotational coordinates per body.
+    fn rot_coordinates(&self) -> usize;
+    /// The pair potential.
+    fn pair_potential(&self) -> Potential;
+    /// The cell's volume.
+    fn cell_volume(&self) -> f64;
+    /// Visit every contact as `(i, j, r_ij, gap Hessian)`.
+    fn visit_gap_hessians(
+        &mut self,
+        visit: &mut dyn FnMut(usize, usize, &Vector<D>, &jamkit_core::GapHessian<D>),
+    ) -> Result<()>;
+    /// The Hessian (stiffness and stress parts) with the rattlers' rows
+    /// and contacts removed.
+    fn full_hessian(&mut self, rattler: &[bool]) -> Result<Hessian>;
+}
+
+const FULL_HESSIAN: HessianOptions = HessianOptions {
+    stiffness_only: false,
+    remove_rattlers: true,
+};
+
+impl<const D: usize, S: Shape<D>> Cell<D> for Scene<D, S> {
+    fn body_count(&self) -> usize {
+        self.packing().len()
+    }
+
+    fn rot_coordinates(&self) -> usize {
+        self.packing().shape.rot_dof()
+    }
+
+    fn pair_potential(&self) -> Potential {
+        self.potential()
+    }
+
+    fn cell_volume(&self) -> f64 {
+        self.packing().bbox.volume()
+    }
+
+    fn visit_gap_hessians(
+        &mut self,
+        visit: &mut dyn FnMut(usize, usize, &Vector<D>, &jamkit_core::GapHessian<D>),
+    ) -> Result<()> {
+        // The separation of each visited pair: `for_each_gap_hessian` does
+        // not pass it, so it is recomputed here as the scene's pair loop
+        // does.
+        let positions = self.packing().positions.clone();
+        let bbox = self.packing().bbox.clone();
+        self.for_each_gap_hessian(0.0, |i, j, c| {
+            let r = bbox.minimum_image(positions[j] - positions[i]);
+            visit(i, j, &r, c);
+        })
+    }
+
+    fn full_hessian(&mut self, rattler: &[bool]) -> Result<Hessian> {
+        Hessian::of_scene(self, rattler, FULL_HESSIAN)
+    }
+}
+
+fn strain_derivatives_of<const D: usize, C: Cell<D>>(
+    cell: &mut C,
+    rattler: &[bool],
+    hessian: &Hessian,
+    e: &Matrix<D>,
+) -> Result<StrainDerivatives> {
+    let k = cell.rot_coordinates();
     let stride = D + k;
-    let first_row = first_rows(hessian, scene.packing().len());
+    let first_row = first_rows(hessian, cell.body_count());
     let rattles = |i: usize| rattler.get(i).copied().unwrap_or(false);
-    let potential = scene.potential();
+    let potential = cell.pair_potential();
     let mut out = StrainDerivatives {
         first: 0.0,
         affine: 0.0,
@@ -156,16 +229,11 @@ pub fn strain_derivatives<const D: usize, S: Shape<D>>(
     };
     let mut local = vec![0.0; 2 * stride];
     let mut missing = None;
-    // The separation of each visited pair: `for_each_gap_hessian` does not
-    // pass it, so it is recomputed here as the scene's pair loop does.
-    let positions = scene.packing().positions.clone();
-    let bbox = scene.packing().bbox.clone();
-    scene.for_each_gap_hessian(0.0, |i, j, c| {
+    cell.visit_gap_hessians(&mut |i, j, r, c| {
         if rattles(i) || rattles(j) {
             return;
         }
-        let r = bbox.minimum_image(positions[j] - positions[i]);
-        let (first, affine) = contact_strain(potential, c, &r, e, k, &mut local);
+        let (first, affine) = contact_strain(potential, c, r, e, k, &mut local);
         out.first += first;
         out.affine += affine;
         for (side, body) in [i, j].into_iter().enumerate() {
@@ -284,25 +352,45 @@ pub fn measure<const D: usize, S: Shape<D>>(
     rattler: &[bool],
     params: &ModuliParams,
 ) -> Result<Moduli> {
-    params.validate("moduli")?;
-    let options = HessianOptions {
-        stiffness_only: false,
-        remove_rattlers: true,
-    };
-    let hessian = Hessian::of_scene(scene, rattler, options)?;
+    measure_cell(scene, rattler, params)
+}
+
+/// The linear-response moduli of a relaxed [`Strained`] cell (the same
+/// definitions as [`measure`], in the deformed cell: `V` its volume, the
+/// strains applied on top of its deformation); `rattler` as there.
+pub fn measure_strained<const D: usize, S: Shape<D>>(
+    cell: &mut Strained<D, S>,
+    rattler: &[bool],
+    params: &ModuliParams,
+) -> Result<Moduli> {
+    measure_cell(cell, rattler, params)
+}
+
+/// The eigenvalues and eigenvectors of a Hessian (ascending).
+fn modes(hessian: &Hessian) -> Result<(Vec<f64>, faer::Mat<f64>)> {
     let n = hessian.size;
-    let volume = scene.packing().bbox.volume();
+    if n == 0 {
+        return Ok((Vec::new(), faer::Mat::<f64>::zeros(0, 0)));
+    }
+    let evd = hessian
+        .dense()
+        .self_adjoint_eigen(faer::Side::Lower)
+        .map_err(|e| Error::Unsupported(format!("eigensolver failed: {e:?}")))?;
+    let values: Vec<f64> = (0..n).map(|m| evd.S()[m]).collect();
+    Ok((values, evd.U().to_owned()))
+}
+
+fn measure_cell<const D: usize, C: Cell<D>>(
+    scene: &mut C,
+    rattler: &[bool],
+    params: &ModuliParams,
+) -> Result<Moduli> {
+    params.validate("moduli")?;
+    let hessian = scene.full_hessian(rattler)?;
+    let n = hessian.size;
+    let volume = scene.cell_volume();
     let lambda_zero = params.omega_zero * params.omega_zero;
-    let (values, vectors) = if n == 0 {
-        (Vec::new(), faer::Mat::<f64>::zeros(0, 0))
-    } else {
-        let evd = hessian
-            .dense()
-            .self_adjoint_eigen(faer::Side::Lower)
-            .map_err(|e| Error::Unsupported(format!("eigensolver failed: {e:?}")))?;
-        let values: Vec<f64> = (0..n).map(|m| evd.S()[m]).collect();
-        (values, evd.U().to_owned())
-    };
+    let (values, vectors) = modes(&hessian)?;
     // The softest mode above the zero modes (eigenvalues ascend).
     let softest = values.iter().position(|&l| l > lambda_zero);
     // `U_min'' = A − Σ_{λ > λ0} (u·Ξ)²/λ`, the share of `|Ξ|²` on the
@@ -334,7 +422,7 @@ pub fn measure<const D: usize, S: Shape<D>>(
     let mut shear_affine = 0.0;
     let mut soft_share = None;
     for &(a, b) in &planes {
-        let d = strain_derivatives(scene, rattler, &hessian, &simple_shear::<D>(a, b))?;
+        let d = strain_derivatives_of(scene, rattler, &hessian, &simple_shear::<D>(a, b))?;
         let (c, share, soft) = relaxed(&d);
         floppy_share = floppy_share.max(share);
         if per_plane.iter().all(|&g| c / volume < g) {
@@ -343,7 +431,7 @@ pub fn measure<const D: usize, S: Shape<D>>(
         per_plane.push(c / volume);
         shear_affine += d.affine / volume / planes.len() as f64;
     }
-    let d = strain_derivatives(scene, rattler, &hessian, &Matrix::<D>::identity())?;
+    let d = strain_derivatives_of(scene, rattler, &hessian, &Matrix::<D>::identity())?;
     let (c, share, _) = relaxed(&d);
     floppy_share = floppy_share.max(share);
     let dd = (D * D) as f64;
@@ -389,6 +477,13 @@ pub struct Strained<const D: usize, S: Shape<D>> {
     pairs: Vec<(u32, u32, Vector<D>)>,
     deformation: Matrix<D>,
     volume: f64,
+    /// The centres as of the last [`Self::relist`] (or as built), for
+    /// listing the pairs again.
+    positions: Vec<Vector<D>>,
+    /// The deformation folded in by [`Self::rebase`]: the cell is
+    /// `lattice · diag(L)` of the box it was built from.
+    lattice: Matrix<D>,
+    bbox: PeriodicBox<D>,
     inverse_masses: Vec<f64>,
     margin: f64,
     phi: f64,
@@ -442,15 +537,126 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
             pairs,
             deformation: Matrix::<D>::identity(),
             volume: p.bbox.volume(),
+            positions: p.positions.clone(),
+            lattice: Matrix::<D>::identity(),
+            bbox: p.bbox.clone(),
             inverse_masses: p.inverse_masses(),
             margin,
             phi: p.phi(),
         })
     }
 
-    /// Deform the cell to `F = I + γ E` (the displacements are kept).
+    /// Deform the cell to `F = I + γ E` (the displacements are kept),
+    /// `F` relative to the cell as built or as last [`Self::rebase`]d.
     pub fn set_strain(&mut self, gamma: f64, e: &Matrix<D>) {
         self.deformation = Matrix::<D>::identity() + e * gamma;
+    }
+
+    /// Deform the cell by `F` (relative as for [`Self::set_strain`]).
+    pub fn set_deformation(&mut self, f: Matrix<D>) {
+        self.deformation = f;
+    }
+
+    /// The cell's deformation from the box it was built from,
+    /// `F · lattice` (the cell is `F · lattice · diag(L)`).
+    pub fn total_deformation(&self) -> Matrix<D> {
+        self.deformation * self.lattice
+    }
+
+    /// Make the current cell and configuration the reference: each pair
+    /// vector becomes its current separation `F R_ij + u_j − u_i`, each
+    /// centre `F x_i + u_i`, the deformation is folded into the lattice
+    /// and the displacements are zeroed. Energy, forces and stress are
+    /// unchanged (up to round-off); strains set afterwards act on the
+    /// current cell.
+    pub fn rebase(&mut self) {
+        let f = self.deformation;
+        for (i, j, r) in &mut self.pairs {
+            *r = f * *r + self.displacement[*j as usize] - self.displacement[*i as usize];
+        }
+        for (x, u) in self.positions.iter_mut().zip(&mut self.displacement) {
+            *x = f * *x + *u;
+            *u = Vector::<D>::zeros();
+        }
+        self.lattice = f * self.lattice;
+        self.volume *= determinant(&f);
+        self.deformation = Matrix::<D>::identity();
+    }
+
+    /// [`Self::rebase`], then list the pairs again in the deformed cell:
+    /// each pair's image is the minimum image in the coordinates of the
+    /// undeformed box, `r = M ⌊M⁻¹ (x_j − x_i)⌉_L` with `M` the lattice.
+    /// Exact while the lattice is near `I`: refused when an entry of
+    /// `M − I` exceeds 0.2 or the pair range no longer fits in the sheared
+    /// cell.
+    pub fn relist(&mut self) -> Result<()> {
+        self.rebase();
+        let m = self.lattice;
+        let strain = (m - Matrix::<D>::identity()).abs().max();
+        if !(strain <= 0.2) {
+            return Err(Error::invalid(
+                "strain",
+                strain,
+                "the cell's strain (largest entry of F − I) must stay at or below 0.2 for its pair list",
+            ));
+        }
+        let reach: Vec<f64> = (self.sizes.iter())
+            .map(|&s| self.shape.bounding_radius(s))
+            .collect();
+        let widest = reach.iter().copied().fold(0.0, f64::max);
+        // A sheared cell is narrower than its box by at most `D · strain`
+        // of an edge.
+        let width = self.bbox.min_edge() * (1.0 - D as f64 * strain);
+        if 2.0 * (2.0 * widest + self.margin) > width {
+            return Err(Error::invalid(
+                "strain",
+                strain,
+                format!(
+                    "the sheared cell (narrowest width about {width}) must stay wider than twice the pair range {}",
+                    2.0 * widest + self.margin
+                ),
+            ));
+        }
+        let inv = inverse(&m).ok_or_else(|| {
+            Error::invalid(
+                "strain",
+                strain,
+                "the cell's deformation must be invertible",
+            )
+        })?;
+        let reduced: Vec<Vector<D>> = self.positions.iter().map(|x| inv * x).collect();
+        self.pairs.clear();
+        for i in 0..reduced.len() {
+            for j in i + 1..reduced.len() {
+                let r = m * self.bbox.minimum_image(reduced[j] - reduced[i]);
+                let cut = reach[i] + reach[j] + self.margin;
+                if r.norm_squared() < cut * cut {
+                    self.pairs.push((i as u32, j as u32, r));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The energy of the cell.
+    pub fn energy(&self) -> f64 {
+        let mut grad = vec![0.0; Objective::dof(self)];
+        self.energy_and_gradient(&mut grad)
+    }
+
+    /// Rattlers of the cell: bodies with fewer than `threshold` contacts
+    /// (`h < 0`), removed iteratively ([`crate::contacts::find_rattlers`]).
+    pub fn rattlers(&self, threshold: usize) -> Vec<bool> {
+        let mut network = crate::contacts::ContactNetwork {
+            bodies: self.sizes.len(),
+            contacts: Vec::new(),
+        };
+        self.visit(|i, j, _, _, c| {
+            if c.gap < 0.0 {
+                network.contacts.push((i as u32, j as u32));
+            }
+        });
+        crate::contacts::find_rattlers(&network, threshold)
     }
 
     /// The cell's volume, `V₀ det F`.
@@ -574,6 +780,34 @@ fn determinant<const D: usize>(m: &Matrix<D>) -> f64 {
         }
     }
     det
+}
+
+/// `m⁻¹` by Gauss–Jordan elimination with partial pivoting; `None` when
+/// `m` is singular.
+fn inverse<const D: usize>(m: &Matrix<D>) -> Option<Matrix<D>> {
+    let mut a = *m;
+    let mut inv = Matrix::<D>::identity();
+    for col in 0..D {
+        let pivot = (col..D).max_by(|&x, &y| a[(x, col)].abs().total_cmp(&a[(y, col)].abs()))?;
+        if a[(pivot, col)] == 0.0 {
+            return None;
+        }
+        a.swap_rows(pivot, col);
+        inv.swap_rows(pivot, col);
+        let d = a[(col, col)];
+        for c in 0..D {
+            a[(col, c)] /= d;
+            inv[(col, c)] /= d;
+        }
+        for row in (0..D).filter(|&r| r != col) {
+            let f = a[(row, col)];
+            for c in 0..D {
+                a[(row, c)] -= f * a[(col, c)];
+                inv[(row, c)] -= f * inv[(col, c)];
+            }
+        }
+    }
+    Some(inv)
 }
 
 fn max_reach<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> f64 {
@@ -714,7 +948,35 @@ pub fn by_deformation<const D: usize, S: Shape<D>>(
     }
     let fire = fire.for_family(&scene.packing().shape);
     fire.validate("minimizer")?;
-    let mut base = Strained::new(scene, margin)?;
+    deformation_of(Strained::new(scene, margin)?, gamma, &fire)
+}
+
+/// [`by_deformation`] of a [`Strained`] cell (e.g. a shear-stabilised
+/// packing, [`stabilise`]): the strains `±gamma` act on top of its
+/// current deformation.
+pub fn by_deformation_strained<const D: usize, S: Shape<D>>(
+    cell: &Strained<D, S>,
+    gamma: f64,
+    fire: &FireParams,
+) -> Result<Deformation> {
+    if !(gamma > 0.0 && gamma < 0.01) {
+        return Err(Error::invalid(
+            "gamma",
+            gamma,
+            "must lie strictly between 0 and 0.01 (a small strain)",
+        ));
+    }
+    let fire = fire.for_family(&cell.shape);
+    fire.validate("minimizer")?;
+    deformation_of(cell.clone(), gamma, &fire)
+}
+
+fn deformation_of<const D: usize, S: Shape<D>>(
+    mut base: Strained<D, S>,
+    gamma: f64,
+    fire: &FireParams,
+) -> Result<Deformation> {
+    base.rebase();
     Fire::new(fire.clone()).minimize(&mut base)?;
     let pressure = base.pressure();
     let mut max_displacement = base.max_displacement();
@@ -744,4 +1006,468 @@ pub fn by_deformation<const D: usize, S: Shape<D>>(
         pressure,
         max_displacement,
     })
+}
+
+impl<const D: usize, S: Shape<D>> Cell<D> for Strained<D, S> {
+    fn body_count(&self) -> usize {
+        self.sizes.len()
+    }
+
+    fn rot_coordinates(&self) -> usize {
+        self.shape.rot_dof()
+    }
+
+    fn pair_potential(&self) -> Potential {
+        self.potential
+    }
+
+    fn cell_volume(&self) -> f64 {
+        self.volume()
+    }
+
+    fn visit_gap_hessians(
+        &mut self,
+        visit: &mut dyn FnMut(usize, usize, &Vector<D>, &jamkit_core::GapHessian<D>),
+    ) -> Result<()> {
+        for &(i, j, r0) in &self.pairs {
+            let (i, j) = (i as usize, j as usize);
+            let r = self.deformation * r0 + self.displacement[j] - self.displacement[i];
+            self.shape.gap_hessians(
+                self.sizes[i],
+                &self.orientations[i],
+                self.sizes[j],
+                &self.orientations[j],
+                &r,
+                0.0,
+                |c| visit(i, j, &r, &c),
+            )?;
+        }
+        Ok(())
+    }
+
+    fn full_hessian(&mut self, rattler: &[bool]) -> Result<Hessian> {
+        let (n, k, potential) = (self.body_count(), self.rot_coordinates(), self.potential);
+        Hessian::of_contacts::<D>(n, k, potential, rattler, FULL_HESSIAN, |visit| {
+            self.visit_gap_hessians(&mut |i, j, _, c| visit(i, j, c))
+        })
+    }
+}
+
+/// An orthonormal basis (under `A : B = Σ A_ab B_ab`) of the symmetric
+/// traceless (deviatoric) strains: the `D(D−1)/2` shears
+/// `(e_a e_bᵀ + e_b e_aᵀ)/√2`, `a < b`, then the `D − 1` normal ones
+/// `diag(1, …, 1, −k, 0, …)/√(k + k²)`, `k = 1 … D−1` (2D: `diag(1, −1)/√2`;
+/// 3D: `diag(1, −1, 0)/√2`, `diag(1, 1, −2)/√6`).
+pub fn deviatoric_basis<const D: usize>() -> Vec<Matrix<D>> {
+    let mut out = Vec::new();
+    for (a, b) in shear_planes::<D>() {
+        let mut e = Matrix::<D>::zeros();
+        e[(a, b)] = std::f64::consts::FRAC_1_SQRT_2;
+        e[(b, a)] = std::f64::consts::FRAC_1_SQRT_2;
+        out.push(e);
+    }
+    for k in 1..D {
+        let mut e = Matrix::<D>::zeros();
+        let norm = ((k + k * k) as f64).sqrt();
+        for a in 0..k {
+            e[(a, a)] = 1.0 / norm;
+        }
+        e[(k, k)] = -(k as f64) / norm;
+        out.push(e);
+    }
+    out
+}
+
+/// How [`stabilise`] relaxes the cell's shape.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StabiliseParams {
+    /// Stop when every deviatoric stress component `|σ : E_k|` is below
+    /// `tol · p` and the cell's deviatoric stiffness has no negative
+    /// eigenvalue.
+    pub tol: f64,
+    /// Give up after this many strain steps.
+    pub max_iterations: u32,
+    /// The largest strain step (Frobenius norm of `δ`); near jamming the
+    /// step is also capped at `10 p/μ_max` ([`stabilise`]).
+    pub max_step: f64,
+    /// The pair list's margin (as for [`by_deformation`]); the pairs are
+    /// listed again before every step.
+    pub margin: f64,
+}
+
+impl Default for StabiliseParams {
+    fn default() -> Self {
+        Self {
+            tol: 1e-6,
+            max_iterations: 200,
+            max_step: 1e-2,
+            margin: 0.1,
+        }
+    }
+}
+
+impl StabiliseParams {
+    /// Check ranges; names the offending field.
+    pub fn validate(&self, prefix: &str) -> Result<()> {
+        if !(self.tol > 0.0 && self.tol < 1.0) {
+            return Err(Error::invalid(
+                format!("{prefix}.tol"),
+                self.tol,
+                "must lie in (0, 1)",
+            ));
+        }
+        if self.max_iterations == 0 {
+            return Err(Error::invalid(
+                format!("{prefix}.max_iterations"),
+                0,
+                "must be at least 1",
+            ));
+        }
+        if !(self.max_step > 0.0 && self.max_step <= 0.05) {
+            return Err(Error::invalid(
+                format!("{prefix}.max_step"),
+                self.max_step,
+                "must lie in (0, 0.05]",
+            ));
+        }
+        if !(self.margin > 0.0 && self.margin.is_finite()) {
+            return Err(Error::invalid(
+                format!("{prefix}.margin"),
+                self.margin,
+                "must be positive and finite",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What [`stabilise`] holds fixed besides the particles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Ensemble {
+    /// The volume: the energy is minimised over the deviatoric strains.
+    Volume,
+    /// The pressure `p*`: the enthalpy `U + p* V` is minimised over every
+    /// strain (the deviatoric ones and the dilation).
+    Pressure(f64),
+}
+
+/// A shear-stabilised packing ([`stabilise`]).
+#[derive(Clone, Debug)]
+pub struct Stabilised<const D: usize, S: Shape<D>> {
+    /// The packing in its relaxed, deformed cell (rebased: strains set on
+    /// it act on top of the stabilising deformation).
+    pub cell: Strained<D, S>,
+    /// The cell's deformation from the box it started in (`det = 1`).
+    pub deformation: Matrix<D>,
+    /// `max_k |σ : E_k| / p` at the end.
+    pub residual: f64,
+    /// The same in the fixed box, relaxed in the cell before any strain.
+    pub residual_before: f64,
+    /// What was minimised (`U`, or `U + p* V` at fixed pressure) in the
+    /// fixed box and at the end.
+    pub objective_before: f64,
+    /// See `objective_before`.
+    pub objective_after: f64,
+    /// Energy in the fixed box (relaxed in the cell) and at the end.
+    pub energy_before: f64,
+    /// See `energy_before`.
+    pub energy_after: f64,
+    /// Pressure in the fixed box and at the end.
+    pub pressure_before: f64,
+    /// See `pressure_before`.
+    pub pressure_after: f64,
+    /// Strain steps taken.
+    pub iterations: u32,
+    /// The smallest eigenvalue of the deviatoric stiffness `C` at the end.
+    pub stiffness_min: f64,
+    /// Rattlers of the final cell (by count).
+    pub rattler: Vec<bool>,
+}
+
+/// The stiffness of a relaxed cell along the strains `basis`: the second
+/// derivative per volume of its relaxed energy plus `P V` along
+/// `F = I + Σ δ_k E_k`,
+/// `C_kl = (A_kl − Ξ_kᵀ H⁺ Ξ_l) / V + P (tr E_k tr E_l − tr E_k E_l)`
+/// (`A_kl` by polarisation of the affine terms). At fixed volume (the
+/// deviatoric basis, `F` normalised to `det F = 1`) `P` is the cell's own
+/// pressure `p` and the last term is `−p δ_kl`: the normalisation's
+/// second-order isotropic strain `|δ|²/(2D)` meets `U_γ(I) = −D V p`. At
+/// fixed pressure `P = p*`, the enthalpy's `p* V`.
+fn deviatoric_stiffness<const D: usize, S: Shape<D>>(
+    cell: &mut Strained<D, S>,
+    rattler: &[bool],
+    omega_zero: f64,
+    basis: &[Matrix<D>],
+    volume_pressure: f64,
+) -> Result<Vec<Vec<f64>>> {
+    let hessian = cell.full_hessian(rattler)?;
+    let (values, vectors) = modes(&hessian)?;
+    let n = hessian.size;
+    let lambda_zero = omega_zero * omega_zero;
+    let kk = basis.len();
+    let mut single = Vec::new();
+    for e in basis {
+        single.push(strain_derivatives_of(cell, rattler, &hessian, e)?);
+    }
+    let coefficients = |xi: &[f64]| -> Vec<f64> {
+        (0..n)
+            .map(|m| (0..n).map(|r| vectors[(r, m)] * xi[r]).sum())
+            .collect()
+    };
+    let c: Vec<Vec<f64>> = single.iter().map(|d| coefficients(&d.xi)).collect();
+    let volume = cell.volume();
+    let mut out = vec![vec![0.0; kk]; kk];
+    for k in 0..kk {
+        for l in k..kk {
+            let affine = if k == l {
+                single[k].affine
+            } else {
+                let both = strain_derivatives_of(cell, rattler, &hessian, &(basis[k] + basis[l]))?;
+                0.5 * (both.affine - single[k].affine - single[l].affine)
+            };
+            let non_affine: f64 = (0..n)
+                .filter(|&m| values[m] > lambda_zero)
+                .map(|m| c[k][m] * c[l][m] / values[m])
+                .sum();
+            // `P ∂²det(I + Σ δ E)/∂δ_k∂δ_l = P (tr E_k tr E_l − tr E_k E_l)`.
+            let volume_term = volume_pressure
+                * (basis[k].trace() * basis[l].trace() - (basis[k] * basis[l]).trace());
+            let v = (affine - non_affine) / volume + volume_term;
+            out[k][l] = v;
+            out[l][k] = v;
+        }
+    }
+    Ok(out)
+}
+
+/// Eigenvalues (ascending) and eigenvectors (columns) of a small symmetric
+/// matrix.
+fn symmetric_eigen(m: &[Vec<f64>]) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
+    let n = m.len();
+    let a = faer::Mat::<f64>::from_fn(n, n, |r, c| m[r][c]);
+    let evd = a
+        .self_adjoint_eigen(faer::Side::Lower)
+        .map_err(|e| Error::Unsupported(format!("eigensolver failed: {e:?}")))?;
+    let values = (0..n).map(|k| evd.S()[k]).collect();
+    let vectors = (0..n)
+        .map(|k| (0..n).map(|r| evd.U()[(r, k)]).collect())
+        .collect();
+    Ok((values, vectors))
+}
+
+/// Relax a cell at fixed deformation; while some body moved by more than
+/// half the pair margin (a pair may be missing from the list), list the
+/// pairs again and relax again (at most 20 times).
+fn relax_cell<const D: usize, S: Shape<D>>(
+    cell: &mut Strained<D, S>,
+    fire: &FireParams,
+) -> Result<()> {
+    for _ in 0..20 {
+        Fire::new(fire.clone()).minimize(cell)?;
+        if cell.check_pairs().is_ok() {
+            return Ok(());
+        }
+        cell.relist()?;
+    }
+    cell.check_pairs()
+}
+
+/// `V/N` at or below which a stabilised cell counts as unjammed (the
+/// jamming window's upper edge, `protocol.energy_high`'s default).
+const UNJAMMED: f64 = 2e-16;
+
+/// Shear-stabilise a relaxed packing (Dagois-Bohy, Tighe, Simon, Henkes &
+/// van Hecke, PRL 109, 095703, 2012): minimise its energy over the
+/// coordinates **and** the cell's shape, at fixed volume (or its enthalpy
+/// `U + p* V` at fixed pressure, the cell's volume free too), so that the
+/// deviatoric stress vanishes (and `p = p*`) and the packing is stable to
+/// every small deformation; then every shear modulus is `≥ 0`.
+///
+/// The cell is a [`Strained`] one (the engine's box is orthorhombic and
+/// cannot be sheared); its deformation ranges over all `D(D+1)/2 − 1`
+/// deviatoric strains ([`deviatoric_basis`]), and at fixed pressure also
+/// over the dilation `E_0 = I/√D`. Alternating: relax the coordinates at
+/// fixed cell; list the pairs again; from the generalised stress
+/// `s_k = σ : E_k + p* tr E_k` and the stiffness `C` (`deviatoric_stiffness`)
+/// take the step `δ = −Σ_m w_m (w_m·s)/μ_m` over the eigenpairs `(μ_m, w_m)`
+/// of `C` with `μ_m > 0`, and the cap down the slope along those with
+/// `μ_m ≤ 0`; cap `|δ|` at `min(max_step, max(10 p/μ_max, t))` (`μ_max`
+/// the largest eigenvalue of `C`; `t` twice the last step's cap if it was
+/// taken whole, else the step taken); deform the cell by
+/// `F = I + Σ δ_k E_k` (at fixed volume divided by `det(…)^{1/D}`), relax,
+/// and keep the step if the minimised function did not rise (by more than
+/// 10⁻¹² relative round-off), else halve it (up to 20 times). Stops when
+/// every `|s_k| < tol · p` (`p*` at fixed pressure) and `C` has no
+/// negative eigenvalue. At fixed volume a packing can unjam (its energy
+/// falls to zero: `V/N ≤ 2·10⁻¹⁶`), which is an error. `threshold`: the
+/// rattler count rule.
+pub fn stabilise<const D: usize, S: Shape<D>>(
+    scene: &Scene<D, S>,
+    threshold: usize,
+    ensemble: Ensemble,
+    params: &StabiliseParams,
+    fire: &FireParams,
+) -> Result<Stabilised<D, S>> {
+    params.validate("stabilise")?;
+    let fire = fire.for_family(&scene.packing().shape);
+    fire.validate("minimizer")?;
+    let omega_zero = ModuliParams::default().omega_zero;
+    let mut basis = deviatoric_basis::<D>();
+    let external = match ensemble {
+        Ensemble::Volume => None,
+        Ensemble::Pressure(p) => {
+            if !(p > 0.0 && p.is_finite()) {
+                return Err(Error::invalid(
+                    "pressure",
+                    p,
+                    "the pressure of a stabilisation at fixed pressure must be positive and finite",
+                ));
+            }
+            basis.insert(0, Matrix::<D>::identity() / (D as f64).sqrt());
+            Some(p)
+        }
+    };
+    let bodies = scene.packing().len().max(1) as f64;
+    let mut cell = Strained::new(scene, params.margin)?;
+    relax_cell(&mut cell, &fire)?;
+    let objective = |c: &Strained<D, S>| c.energy() + external.map_or(0.0, |p| p * c.volume());
+    let energy_before = cell.energy();
+    let objective_before = objective(&cell);
+    let pressure_before = cell.pressure();
+    if !(pressure_before > 0.0) {
+        return Err(Error::invalid(
+            "pressure",
+            pressure_before,
+            "shear stabilisation needs a packing under positive pressure (jammed)",
+        ));
+    }
+    let stress = |c: &Strained<D, S>| -> Vec<f64> {
+        let sigma = c.stress();
+        (basis.iter())
+            .map(|e| sigma.component_mul(e).sum() + external.map_or(0.0, |p| p * e.trace()))
+            .collect()
+    };
+    let largest = |s: &[f64]| s.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let residual_before = largest(&stress(&cell)) / external.unwrap_or(pressure_before);
+    let mut value = objective_before;
+    let mut iterations = 0;
+    let mut trust = 0.0_f64;
+    loop {
+        cell.relist()?;
+        let rattler = cell.rattlers(threshold);
+        let s = stress(&cell);
+        let pressure = cell.pressure();
+        let reference = external.unwrap_or(pressure);
+        let stiffness = deviatoric_stiffness(&mut cell, &rattler, omega_zero, &basis, reference)?;
+        let (mu, w) = symmetric_eigen(&stiffness)?;
+        let residual = largest(&s) / reference;
+        let stiffness_min = mu.first().copied().unwrap_or(0.0);
+        let per_body = cell.energy() / bodies;
+        if external.is_none() && !(per_body > UNJAMMED && pressure > 0.0) {
+            return Err(Error::JammingFailed {
+                phi: cell.phi,
+                steps: iterations as u64,
+                reason: format!(
+                    "the packing unjammed while its cell's shape relaxed at fixed volume (V/N = {per_body:.3e} after {iterations} strain steps, from {:.3e}): shear stabilisation at fixed volume lowered the energy to zero",
+                    energy_before / bodies
+                ),
+            });
+        }
+        if residual < params.tol && stiffness_min >= 0.0 {
+            let deformation = cell.total_deformation();
+            return Ok(Stabilised {
+                energy_after: cell.energy(),
+                objective_after: objective(&cell),
+                cell,
+                deformation,
+                residual,
+                residual_before,
+                objective_before,
+                energy_before,
+                pressure_before,
+                pressure_after: pressure,
+                iterations,
+                stiffness_min,
+                rattler,
+            });
+        }
+        if iterations >= params.max_iterations {
+            return Err(Error::JammingFailed {
+                phi: cell.phi,
+                steps: iterations as u64,
+                reason: format!(
+                    "shear stabilisation did not converge in {} strain steps (stress residual {residual:.3e} p, tolerance {:e}; smallest stiffness {stiffness_min:.3e})",
+                    params.max_iterations, params.tol
+                ),
+            });
+        }
+        // The strain cap: `max_step`, and near jamming `10 p/μ_max`, ten
+        // times the strain that changes the overlaps by their own size
+        // (`μ_max` the stiffest strain's modulus, ~B): a larger kick along
+        // a soft or unstable strain rearranges (or unjams) the packing.
+        // Grown by 2 after a step taken whole (a trust region), so that a
+        // long way down a soft strain takes few steps.
+        let stiffest = mu.last().copied().unwrap_or(0.0);
+        let base = if stiffest > 0.0 {
+            params.max_step.min(10.0 * reference / stiffest)
+        } else {
+            params.max_step
+        };
+        let cap = trust.max(base).min(params.max_step);
+        let mut step = vec![0.0; basis.len()];
+        for (m, wm) in w.iter().enumerate() {
+            let along: f64 = wm.iter().zip(&s).map(|(a, b)| a * b).sum();
+            let size = if mu[m] > 0.0 {
+                -along / mu[m]
+            } else {
+                // Down the slope (or either way on a flat one) by the cap.
+                -cap * if along > 0.0 { 1.0 } else { -1.0 }
+            };
+            for (x, wk) in step.iter_mut().zip(wm) {
+                *x += size * wk;
+            }
+        }
+        let norm = step.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if norm > cap {
+            step.iter_mut().for_each(|x| *x *= cap / norm);
+        }
+        let mut accepted = false;
+        for halvings in 0..20 {
+            let mut f = Matrix::<D>::identity();
+            for (x, e) in step.iter().zip(&basis) {
+                f += e * *x;
+            }
+            if external.is_none() {
+                f /= determinant(&f).powf(1.0 / D as f64);
+            }
+            let mut trial = cell.clone();
+            trial.set_deformation(f);
+            if relax_cell(&mut trial, &fire).is_ok() {
+                let v = objective(&trial);
+                if v <= value + 1e-12 * value.abs() {
+                    cell = trial;
+                    value = v;
+                    accepted = true;
+                    trust = if halvings == 0 {
+                        2.0 * cap
+                    } else {
+                        cap * 0.5_f64.powi(halvings)
+                    };
+                    break;
+                }
+            }
+            step.iter_mut().for_each(|x| *x *= 0.5);
+        }
+        if !accepted {
+            return Err(Error::JammingFailed {
+                phi: cell.phi,
+                steps: iterations as u64,
+                reason: format!(
+                    "shear stabilisation found no strain step that lowers the energy (stress residual {residual:.3e} p, smallest stiffness {stiffness_min:.3e})"
+                ),
+            });
+        }
+        iterations += 1;
+    }
 }
