@@ -1,0 +1,251 @@
+//! The energy and gradient of families with contact slots
+//! (`Shape::contact_slots`, bodies made of spheres: up to `k²` contacts per
+//! pair, sphere `a` of one body against sphere `b` of the other), several
+//! pairs at a time.
+//!
+//! The generic pass (`Scene::pair_sum`) takes one pair at a time: a branch
+//! on the bounding test, the family's contacts (for `nmer`: both rotation
+//! matrices, both bodies' rotated sphere offsets, then `k²` sphere pairs
+//! one by one, each behind a branch on its gap), a push of each contact
+//! into a buffer, and a branch per contact to sum it. This kernel works
+//! like the near-disks' one (`lanes`), in two phases over chunks of the
+//! neighbour list, after the family's terms of every body (the rotated
+//! offsets) are computed once per evaluation (`Shape::body_terms`):
+//!
+//! 1. **Slot terms** of the whole chunk with no branch: separation (minimum
+//!    image), the family's contacts slot by slot (one call of
+//!    `Shape::slot_contacts_lanes` for the chunk, one loop over the chunk's
+//!    pairs per slot), then per slot `v(h)`, `f = v'(h) ∂h/∂r_j` and the
+//!    torques, zero where a slot has no contact; the AVX2 copy (`simd`)
+//!    computes four lanes per instruction.
+//! 2. **Sums**, one pair at a time in list order and each pair's slots in
+//!    order: `V += v`, `g_j += (f, τ_j)`, and `g_i += (−f, τ_i)` in
+//!    registers, added to `g_i` when `i`'s partners end.
+//!
+//! NOTE: the arithmetic of each contact and the order of every sum are
+//! those of the generic pass (`Shape::slot_contacts_lanes` promises
+//! `Shape::contacts`' bits, which visits the slots in order; `v' · x =
+//! x · v'` exactly), so the results are the same bits: slots without a
+//! contact add exact zeros, and `x + 0 = x − 0 = x` for every sum here
+//! (none of them is ever `−0`: they start at `+0`, and `+0 + −0 = +0`).
+
+use crate::lanes::add;
+use jamkit_core::{ContactLanes, MAX_ROT, MAX_SLOTS, Packing, PeriodicBox, Potential, RotVec};
+use jamkit_core::{Shape, SlotPairs, Vector};
+
+/// Pairs per chunk: with `k²` slots of contacts a pair, a chunk's terms
+/// stay in L1 between the phases (3D dimers: 4 × 5 kB).
+const CHUNK: usize = 32;
+
+/// The bodies and the list, as the kernel reads them.
+pub(crate) struct Slots<'a, const D: usize, S: Shape<D>> {
+    pub packing: &'a Packing<D, S>,
+    /// `Shape::body_terms` of every body, `Shape::body_terms_len` a body.
+    pub terms: &'a [f64],
+    /// `[b_i, b_j]` per pair, in list order.
+    pub pair_reach: &'a [[f64; 2]],
+    pub owners: &'a [u32],
+    pub partners: &'a [u32],
+    pub potential: Potential,
+}
+
+impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
+    /// The energy, with its gradient (`D + rot_dof` coordinates per body)
+    /// in `grad`.
+    pub fn energy_gradient(&self, grad: &mut [f64]) -> f64 {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`).
+            // Why: four lanes per instruction; same bits.
+            return unsafe { self.energy_gradient_avx2(grad) };
+        }
+        self.energy_gradient_portable(grad)
+    }
+
+    /// [`Slots::energy_gradient_portable`] compiled with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn energy_gradient_avx2(&self, grad: &mut [f64]) -> f64 {
+        self.energy_gradient_portable(grad)
+    }
+
+    #[inline(always)]
+    fn energy_gradient_portable(&self, grad: &mut [f64]) -> f64 {
+        match self.potential {
+            Potential::Harmonic => self.sum(grad, |h| Potential::Harmonic.energy_and_derivative(h)),
+            Potential::Hertzian => self.sum(grad, |h| Potential::Hertzian.energy_and_derivative(h)),
+        }
+    }
+
+    #[inline(always)]
+    fn sum(&self, grad: &mut [f64], v: impl Fn(f64) -> (f64, f64) + Copy) -> f64 {
+        grad.fill(0.0);
+        let pairs = self.partners.len();
+        if pairs == 0 {
+            return 0.0;
+        }
+        let k = self.packing.shape.rot_dof();
+        let slots = self.packing.shape.contact_slots().min(MAX_SLOTS);
+        // Each slot's contacts, then (in place) its terms: `gap` holds
+        // `v(h)`, `grad_r` the force, `grad_rot_*` the torques.
+        // NOTE: on the stack, not in a `Vec`: with the heap's buffer the
+        // family's lane loops were left scalar.
+        let mut contacts = [ContactLanes::<D, CHUNK>::default(); MAX_SLOTS];
+        let contacts = &mut contacts[..slots];
+        let mut lanes = SlotPairs::<D, CHUNK> {
+            body_i: [0; CHUNK],
+            body_j: [0; CHUNK],
+            r_ij: [[0.0; CHUNK]; D],
+            r2: [0.0; CHUNK],
+        };
+        let mut energy = 0.0;
+        // Body i's own gradient, kept until its last partner is done.
+        let mut state = (usize::MAX, Vector::<D>::zeros(), [0.0; MAX_ROT]);
+        for start in (0..pairs).step_by(CHUNK) {
+            let len = CHUNK.min(pairs - start);
+            self.slot_terms(start, k, &mut lanes, contacts, v);
+            (state, energy) = accumulate(
+                &self.owners[start..start + len],
+                &self.partners[start..start + len],
+                contacts,
+                (k, grad),
+                (state, energy),
+            );
+        }
+        let (owner, g_r, g_q) = state;
+        if owner != usize::MAX {
+            add(grad, owner, k, &g_r, &g_q);
+        }
+        energy
+    }
+
+    /// The slot terms of the chunk of pairs from `start` on, zeros where a
+    /// slot has no contact. A short last chunk repeats the last pair of the
+    /// list in its spare lanes (whose terms `accumulate` never reads).
+    #[inline(always)]
+    fn slot_terms(
+        &self,
+        start: usize,
+        k: usize,
+        lanes: &mut SlotPairs<D, CHUNK>,
+        contacts: &mut [ContactLanes<D, CHUNK>],
+        v: impl Fn(f64) -> (f64, f64),
+    ) {
+        const W: usize = CHUNK;
+        let p = self.packing;
+        let n = p.positions.len();
+        let positions = &p.positions[..n];
+        let bbox: &PeriodicBox<D> = &p.bbox;
+        let last = self.partners.len() - 1;
+        let (owners, partners, pair_reach) = (
+            &self.owners[..=last],
+            &self.partners[..=last],
+            &self.pair_reach[..=last],
+        );
+        let mut cut2 = [0.0; W];
+        for l in 0..W {
+            let pair = (start + l).min(last);
+            let i = (owners[pair] as usize).min(n - 1);
+            let j = (partners[pair] as usize).min(n - 1);
+            let raw = positions[j] - positions[i];
+            for a in 0..D {
+                lanes.r_ij[a][l] = raw[a];
+            }
+            lanes.body_i[l] = i;
+            lanes.body_j[l] = j;
+            let [b_i, b_j] = pair_reach[pair];
+            let cut = b_i + b_j;
+            cut2[l] = cut * cut;
+        }
+        // Minimum image and `r²`, the same operations in the same order as
+        // `Scene::pair_sum`'s, apart from the gathers above so that this
+        // loop is vectorised.
+        for l in 0..W {
+            let d = bbox.minimum_image(lanes.separation(l));
+            lanes.r2[l] = d.norm_squared();
+            for a in 0..D {
+                lanes.r_ij[a][l] = d[a];
+            }
+        }
+        p.shape.slot_contacts_lanes(self.terms, lanes, contacts);
+        // NOTE: as in `Scene::pair_sum`, a pair counts unless `r² ≥ cut²`
+        // (so a NaN separation counts, and shows up in V).
+        let mut near = [false; W];
+        for l in 0..W {
+            near[l] = !(lanes.r2[l] >= cut2[l]);
+        }
+        for c in contacts.iter_mut() {
+            let (mut counts, mut dv) = ([false; W], [0.0; W]);
+            for l in 0..W {
+                counts[l] = near[l] && c.found[l];
+                let e;
+                (e, dv[l]) = v(c.gap[l]);
+                c.gap[l] = if counts[l] { e } else { 0.0 };
+                for a in 0..D {
+                    c.grad_r[a][l] = if counts[l] {
+                        c.grad_r[a][l] * dv[l]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+            for a in 0..k.min(MAX_ROT) {
+                for l in 0..W {
+                    c.grad_rot_i[a][l] = if counts[l] {
+                        dv[l] * c.grad_rot_i[a][l]
+                    } else {
+                        0.0
+                    };
+                    c.grad_rot_j[a][l] = if counts[l] {
+                        dv[l] * c.grad_rot_j[a][l]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+        }
+    }
+}
+
+/// Phase 2 over one chunk: for each pair in list order and each of its
+/// slots in order, `V += v`, `g_j += (f, τ_j)`, `g_i += (−f, τ_i)` (in
+/// registers until `i`'s partners end). `state`: the body whose partners
+/// are under way and its gradient so far; then `V`.
+///
+/// NOTE: a function of its own, never inlined (as `lanes::accumulate`).
+#[inline(never)]
+fn accumulate<const D: usize, const W: usize>(
+    owners: &[u32],
+    partners: &[u32],
+    slots: &[ContactLanes<D, W>],
+    (k, grad): (usize, &mut [f64]),
+    (state, mut energy): ((usize, Vector<D>, RotVec), f64),
+) -> ((usize, Vector<D>, RotVec), f64) {
+    let (mut owner, mut g_r, mut g_q) = state;
+    let stride = D + k;
+    for (at, (&i, &j)) in owners.iter().zip(partners).enumerate() {
+        let (i, j) = (i as usize, j as usize);
+        if i != owner {
+            if owner != usize::MAX {
+                add(grad, owner, k, &g_r, &g_q);
+            }
+            owner = i;
+            g_r = Vector::<D>::zeros();
+            g_q = [0.0; MAX_ROT];
+        }
+        let gj = &mut grad[j * stride..(j + 1) * stride];
+        for terms in slots {
+            energy += terms.gap[at];
+            let f = Vector::<D>::from_fn(|a, _| terms.grad_r[a][at]);
+            g_r -= f;
+            for a in 0..D {
+                gj[a] += f[a];
+            }
+            for a in 0..k {
+                g_q[a] += terms.grad_rot_i[a][at];
+                gj[D + a] += terms.grad_rot_j[a][at];
+            }
+        }
+    }
+    ((owner, g_r, g_q), energy)
+}
