@@ -27,6 +27,8 @@ pub struct Scene<const D: usize, S: Shape<D>> {
     found: Vec<(u32, Contact<D>)>,
     /// Scratch: `Shape::body_terms` of every body (the slots kernel).
     body_terms: Vec<f64>,
+    /// Scratch: the slots kernel's buffers.
+    slot_scratch: crate::slots::Scratch<D>,
     /// Centres and orientations of the last [`Objective::save`].
     saved: (Vec<Vector<D>>, Vec<S::Orientation>),
 }
@@ -50,6 +52,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             evaluations: 0,
             found: Vec::new(),
             body_terms: Vec::new(),
+            slot_scratch: Default::default(),
             saved: (Vec::new(), Vec::new()),
         };
         scene.rebuild_neighbors();
@@ -240,7 +243,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
                 partners,
                 potential: self.potential,
             }
-            .energy_gradient(grad);
+            .energy_gradient(grad, &mut self.slot_scratch);
         }
         if S::LANE_CONTACTS && self.packing.shape.use_lanes() {
             let p = &self.packing;

@@ -49,36 +49,57 @@ pub(crate) struct Slots<'a, const D: usize, S: Shape<D>> {
     pub potential: Potential,
 }
 
+/// The kernel's buffers, kept by the scene from one evaluation to the next
+/// (made anew, zeroing them took 5 % of a 3D dimer run).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Scratch<const D: usize> {
+    /// Each slot's contacts in a chunk (`Shape::contact_slots` of them).
+    contacts: Vec<ContactLanes<D, CHUNK>>,
+    /// The chunk's contacts that count, as (pair in the chunk, slot).
+    found: Vec<(u16, u16)>,
+    /// Their terms.
+    terms: Vec<Term<D>>,
+}
+
 impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
     /// The energy, with its gradient (`D + rot_dof` coordinates per body)
     /// in `grad`.
-    pub fn energy_gradient(&self, grad: &mut [f64]) -> f64 {
+    pub fn energy_gradient(&self, grad: &mut [f64], scratch: &mut Scratch<D>) -> f64 {
         #[cfg(target_arch = "x86_64")]
         if crate::simd::avx2() {
             // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`).
             // Why: four lanes per instruction; same bits.
-            return unsafe { self.energy_gradient_avx2(grad) };
+            return unsafe { self.energy_gradient_avx2(grad, scratch) };
         }
-        self.energy_gradient_portable(grad)
+        self.energy_gradient_portable(grad, scratch)
     }
 
     /// [`Slots::energy_gradient_portable`] compiled with AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn energy_gradient_avx2(&self, grad: &mut [f64]) -> f64 {
-        self.energy_gradient_portable(grad)
+    unsafe fn energy_gradient_avx2(&self, grad: &mut [f64], scratch: &mut Scratch<D>) -> f64 {
+        self.energy_gradient_portable(grad, scratch)
     }
 
     #[inline(always)]
-    fn energy_gradient_portable(&self, grad: &mut [f64]) -> f64 {
+    fn energy_gradient_portable(&self, grad: &mut [f64], scratch: &mut Scratch<D>) -> f64 {
         match self.potential {
-            Potential::Harmonic => self.sum(grad, |h| Potential::Harmonic.energy_and_derivative(h)),
-            Potential::Hertzian => self.sum(grad, |h| Potential::Hertzian.energy_and_derivative(h)),
+            Potential::Harmonic => self.sum(grad, scratch, |h| {
+                Potential::Harmonic.energy_and_derivative(h)
+            }),
+            Potential::Hertzian => self.sum(grad, scratch, |h| {
+                Potential::Hertzian.energy_and_derivative(h)
+            }),
         }
     }
 
     #[inline(always)]
-    fn sum(&self, grad: &mut [f64], v: impl Fn(f64) -> (f64, f64) + Copy) -> f64 {
+    fn sum(
+        &self,
+        grad: &mut [f64],
+        scratch: &mut Scratch<D>,
+        v: impl Fn(f64) -> (f64, f64) + Copy,
+    ) -> f64 {
         grad.fill(0.0);
         let pairs = self.partners.len();
         if pairs == 0 {
@@ -86,12 +107,14 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
         }
         let k = self.packing.shape.rot_dof();
         let slots = self.packing.shape.contact_slots().min(MAX_SLOTS);
-        // Each slot's contacts, then (in place) its terms: `gap` holds
-        // `v(h)`, `grad_r` the force, `grad_rot_*` the torques.
-        // NOTE: on the stack, not in a `Vec`: with the heap's buffer the
-        // family's lane loops were left scalar.
-        let mut contacts = [ContactLanes::<D, CHUNK>::default(); MAX_SLOTS];
-        let contacts = &mut contacts[..slots];
+        let Scratch {
+            contacts,
+            found,
+            terms,
+        } = scratch;
+        contacts.resize(slots, ContactLanes::default());
+        found.resize(CHUNK * slots, (0, 0));
+        terms.resize(CHUNK * slots, Term::default());
         let mut lanes = SlotPairs::<D, CHUNK> {
             body_i: [0; CHUNK],
             body_j: [0; CHUNK],
@@ -103,11 +126,11 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
         let mut state = (usize::MAX, Vector::<D>::zeros(), [0.0; MAX_ROT]);
         for start in (0..pairs).step_by(CHUNK) {
             let len = CHUNK.min(pairs - start);
-            self.slot_terms(start, k, &mut lanes, contacts, v);
+            let m = self.slot_terms(start, k, &mut lanes, contacts, (found, terms), v);
             (state, energy) = accumulate(
                 &self.owners[start..start + len],
                 &self.partners[start..start + len],
-                contacts,
+                &terms[..m],
                 (k, grad),
                 (state, energy),
             );
@@ -129,8 +152,9 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
         k: usize,
         lanes: &mut SlotPairs<D, CHUNK>,
         contacts: &mut [ContactLanes<D, CHUNK>],
+        (found, terms): (&mut [(u16, u16)], &mut [Term<D>]),
         v: impl Fn(f64) -> (f64, f64),
-    ) {
+    ) -> usize {
         const W: usize = CHUNK;
         let p = self.packing;
         let n = p.positions.len();
@@ -174,57 +198,77 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
         for l in 0..W {
             near[l] = !(lanes.r2[l] >= cut2[l]);
         }
-        for c in contacts.iter_mut() {
-            let (mut counts, mut dv) = ([false; W], [0.0; W]);
-            for l in 0..W {
-                counts[l] = near[l] && c.found[l];
-                let e;
-                (e, dv[l]) = v(c.gap[l]);
-                c.gap[l] = if counts[l] { e } else { 0.0 };
-                for a in 0..D {
-                    c.grad_r[a][l] = if counts[l] {
-                        c.grad_r[a][l] * dv[l]
-                    } else {
-                        0.0
-                    };
-                }
+        // The contacts that count, pair by pair and each pair's slots in
+        // order (the generic pass's order), with no branch.
+        let len = CHUNK.min(self.partners.len() - start);
+        let mut m = 0;
+        for at in 0..len {
+            for (s, c) in contacts.iter().enumerate() {
+                found[m] = (at as u16, s as u16);
+                m += usize::from(near[at] & c.found[at]);
+            }
+        }
+        for (t, &(at, s)) in terms.iter_mut().zip(&found[..m]) {
+            let (at, c) = (at as usize, &contacts[s as usize]);
+            let (e, dv) = v(c.gap[at]);
+            t.energy = e;
+            t.pair = at as u32;
+            for a in 0..D {
+                t.force[a] = c.grad_r[a][at] * dv;
             }
             for a in 0..k.min(MAX_ROT) {
-                for l in 0..W {
-                    c.grad_rot_i[a][l] = if counts[l] {
-                        dv[l] * c.grad_rot_i[a][l]
-                    } else {
-                        0.0
-                    };
-                    c.grad_rot_j[a][l] = if counts[l] {
-                        dv[l] * c.grad_rot_j[a][l]
-                    } else {
-                        0.0
-                    };
-                }
+                t.torque_i[a] = dv * c.grad_rot_i[a][at];
+                t.torque_j[a] = dv * c.grad_rot_j[a][at];
             }
+        }
+        m
+    }
+}
+
+/// One contact's terms: `v(h)`, `f = v'(h) ∂h/∂r_j`, the torques, and its
+/// pair's place in the chunk.
+#[derive(Clone, Copy, Debug)]
+struct Term<const D: usize> {
+    pair: u32,
+    energy: f64,
+    force: [f64; D],
+    torque_i: RotVec,
+    torque_j: RotVec,
+}
+
+impl<const D: usize> Default for Term<D> {
+    fn default() -> Self {
+        Self {
+            pair: 0,
+            energy: 0.0,
+            force: [0.0; D],
+            torque_i: [0.0; MAX_ROT],
+            torque_j: [0.0; MAX_ROT],
         }
     }
 }
 
-/// Phase 2 over one chunk: for each pair in list order and each of its
-/// slots in order, `V += v`, `g_j += (f, τ_j)`, `g_i += (−f, τ_i)` (in
-/// registers until `i`'s partners end). `state`: the body whose partners
-/// are under way and its gradient so far; then `V`.
+/// Phase 2 over one chunk: for each contact in order, `V += v`,
+/// `g_j += (f, τ_j)`, `g_i += (−f, τ_i)` (in registers until `i`'s partners
+/// end). `state`: the body whose partners are under way and its gradient
+/// so far; then `V`.
 ///
 /// NOTE: a function of its own, never inlined (as `lanes::accumulate`).
 #[inline(never)]
-fn accumulate<const D: usize, const W: usize>(
+fn accumulate<const D: usize>(
     owners: &[u32],
     partners: &[u32],
-    slots: &[ContactLanes<D, W>],
+    terms: &[Term<D>],
     (k, grad): (usize, &mut [f64]),
     (state, mut energy): ((usize, Vector<D>, RotVec), f64),
 ) -> ((usize, Vector<D>, RotVec), f64) {
     let (mut owner, mut g_r, mut g_q) = state;
     let stride = D + k;
-    for (at, (&i, &j)) in owners.iter().zip(partners).enumerate() {
-        let (i, j) = (i as usize, j as usize);
+    for t in terms {
+        let (i, j) = (
+            owners[t.pair as usize] as usize,
+            partners[t.pair as usize] as usize,
+        );
         if i != owner {
             if owner != usize::MAX {
                 add(grad, owner, k, &g_r, &g_q);
@@ -233,18 +277,16 @@ fn accumulate<const D: usize, const W: usize>(
             g_r = Vector::<D>::zeros();
             g_q = [0.0; MAX_ROT];
         }
+        energy += t.energy;
+        let f = Vector::<D>::from_fn(|a, _| t.force[a]);
+        g_r -= f;
         let gj = &mut grad[j * stride..(j + 1) * stride];
-        for terms in slots {
-            energy += terms.gap[at];
-            let f = Vector::<D>::from_fn(|a, _| terms.grad_r[a][at]);
-            g_r -= f;
-            for a in 0..D {
-                gj[a] += f[a];
-            }
-            for a in 0..k {
-                g_q[a] += terms.grad_rot_i[a][at];
-                gj[D + a] += terms.grad_rot_j[a][at];
-            }
+        for a in 0..D {
+            gj[a] += f[a];
+        }
+        for a in 0..k {
+            g_q[a] += t.torque_i[a];
+            gj[D + a] += t.torque_j[a];
         }
     }
     ((owner, g_r, g_q), energy)

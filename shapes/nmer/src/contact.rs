@@ -358,7 +358,11 @@ impl Nmer<3> {
 
     /// [`Nmer::world`] from the columns of `R(o)`.
     #[inline(always)]
-    pub(crate) fn world_of<const M: usize>(&self, size: f64, columns: &[Vector<3>; 3]) -> Offsets<3, M> {
+    pub(crate) fn world_of<const M: usize>(
+        &self,
+        size: f64,
+        columns: &[Vector<3>; 3],
+    ) -> Offsets<3, M> {
         let [c0, c1, c2] = columns;
         let mut d = [Vector::<3>::zeros(); M];
         for (out, s) in d.iter_mut().zip(&self.offsets) {

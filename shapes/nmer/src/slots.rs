@@ -172,7 +172,13 @@ fn sphere_pair<const D: usize, const W: usize>(
 impl Nmer<2> {
     /// `R⁰` and the world offsets of one body.
     pub(crate) fn write_body_terms(&self, size: f64, o: &Angle, out: &mut [f64]) {
-        self.write_offsets(size, &self.world::<{ crate::MAX_SPHERES }>(size, o), out);
+        // NOTE: room for the spheres the path takes (`SLOT_SPHERES`), not
+        // `MAX_SPHERES`: moving 16 offsets a body cost 4 % of a run.
+        if self.spheres() <= 2 {
+            self.write_offsets(size, &self.world::<2>(size, o), out);
+        } else {
+            self.write_offsets(size, &self.world::<SLOT_SPHERES>(size, o), out);
+        }
     }
 
     /// [`Shape::slot_contacts_lanes`](jamkit_core::Shape::slot_contacts_lanes).
@@ -208,11 +214,12 @@ impl Nmer<3> {
     /// body, from one rotation matrix as in `contacts`.
     pub(crate) fn write_body_terms(&self, size: f64, o: &Quaternion, out: &mut [f64]) {
         let columns = o.columns();
-        self.write_offsets(
-            size,
-            &self.world_of::<{ crate::MAX_SPHERES }>(size, &columns),
-            out,
-        );
+        // Room as in 2D (see there).
+        if self.spheres() <= 2 {
+            self.write_offsets(size, &self.world_of::<2>(size, &columns), out);
+        } else {
+            self.write_offsets(size, &self.world_of::<SLOT_SPHERES>(size, &columns), out);
+        }
         if self.linear {
             let e = self.axes(&columns);
             let at = self.terms_len(0);
@@ -244,9 +251,8 @@ impl Nmer<3> {
                     }
                 }
             }
-            let axis = |side: usize, p: usize, l: usize| {
-                Vector::<3>::from_fn(|c, _| e[side][p][c][l])
-            };
+            let axis =
+                |side: usize, p: usize, l: usize| Vector::<3>::from_fn(|c, _| e[side][p][c][l]);
             // The torques of `Nmer::<3>::contact` through `project`, linear.
             let torques = |l: usize, n: &Vector<3>, d_a: &Vector<3>, d_b: &Vector<3>| {
                 let (t_i, t_j) = (-d_a.cross(n), d_b.cross(n));
