@@ -96,6 +96,9 @@ fn nmer_dimers_and_trimers_in_2d_and_3d() {
     let bent = "(spheres: [(offset: [0.0, 0.0, 0.0], radius: 1.0), (offset: [1.0, 0.0, 0.0], radius: 0.8), (offset: [0.0, 1.0, 0.0], radius: 0.8)])";
     let done = check_registered("nmer", 3, bent);
     assert!(done.ran.contains(&"rotation"), "{done:?}");
+    // Up to four spheres a body go through the slots kernel, checked
+    // against the generic pass.
+    assert!(done.ran.contains(&"lanes"), "{done:?}");
     check_bad_params(
         "nmer",
         2,

@@ -53,5 +53,7 @@ pub use periodic::PeriodicBox;
 pub use potential::Potential;
 pub use quaternion::Quaternion;
 pub use rotation::{Angle, Rotation2};
-pub use shape::{Contact, ContactLanes, GapHessian, PairLanes, Shape, contacts_one_by_one};
+pub use shape::{
+    Contact, ContactLanes, GapHessian, MAX_SLOTS, PairLanes, Shape, SlotPairs, contacts_one_by_one,
+};
 pub use sizes::SizeDistribution;

@@ -184,6 +184,33 @@ impl<const D: usize, const W: usize> ContactLanes<D, W> {
     }
 }
 
+/// The most contacts per pair on the engine's slots path
+/// ([`Shape::contact_slots`]).
+pub const MAX_SLOTS: usize = 16;
+
+/// `W` pairs side by side for [`Shape::slot_contacts_lanes`]: the two
+/// bodies (their places in the scene, for the family's body terms, see
+/// [`Shape::body_terms`]) and the separation, one entry per lane.
+#[derive(Clone, Copy, Debug)]
+pub struct SlotPairs<const D: usize, const W: usize> {
+    /// Body `i`.
+    pub body_i: [usize; W],
+    /// Body `j`.
+    pub body_j: [usize; W],
+    /// `r_ij = r_j − r_i` (minimum image), one array per axis.
+    pub r_ij: [[f64; W]; D],
+    /// `|r_ij|²`, bit for bit `Vector::norm_squared` of `r_ij`.
+    pub r2: [f64; W],
+}
+
+impl<const D: usize, const W: usize> SlotPairs<D, W> {
+    /// Lane `l`'s separation as a vector.
+    #[inline(always)]
+    pub fn separation(&self, l: usize) -> Vector<D> {
+        Vector::<D>::from_fn(|a, _| self.r_ij[a][l])
+    }
+}
+
 /// [`Shape::contacts_lanes`] one pair at a time through
 /// [`Shape::contacts`] (its default; a family that overrides it for some
 /// parameters calls this for the others). A pair with more than one contact
@@ -254,6 +281,52 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     /// does with less overhead.
     fn use_lanes(&self) -> bool {
         true
+    }
+
+    /// Contacts per pair on the engine's *slots* path (default 0: not on
+    /// it). A family whose pair of bodies has at most this many contacts,
+    /// each at a fixed place `s` (a *slot*: for bodies made of spheres,
+    /// sphere `a` of `i` against sphere `b` of `j`), visited by
+    /// [`Shape::contacts`] in slot order, may compute them a chunk of pairs
+    /// at a time in [`Shape::slot_contacts_lanes`], from terms of each body
+    /// computed once per energy evaluation ([`Shape::body_terms`]). The
+    /// energy pass then sums each pair's slots in order with no branch per
+    /// pair or contact; `tests` check that it gives the same bits as the
+    /// pass through [`Shape::contacts`]. At most [`MAX_SLOTS`].
+    fn contact_slots(&self) -> usize {
+        0
+    }
+
+    /// Numbers per body for [`Shape::body_terms`] (only asked when
+    /// [`Shape::contact_slots`] is not 0).
+    fn body_terms_len(&self) -> usize {
+        0
+    }
+
+    /// Write the terms of one body (size `size`, orientation `o`) that
+    /// [`Shape::slot_contacts_lanes`] reads, [`Shape::body_terms_len`]
+    /// numbers, into `out`: what [`Shape::contacts`] computes anew for
+    /// every pair (e.g. the rotated sphere offsets), once per evaluation.
+    fn body_terms(&self, _size: f64, _o: &Self::Orientation, _out: &mut [f64]) {}
+
+    /// The contacts of `W` pairs with `max_gap = 0`, slot by slot: lane `l`
+    /// of `out[s]` gets the contact [`Shape::contacts`] visits at slot `s`
+    /// of pair `l`, bit for bit, or none (`found` false) where it visits
+    /// none. `terms` holds [`Shape::body_terms`] of every body of the scene,
+    /// [`Shape::body_terms_len`] numbers each, in body order. `out` has
+    /// [`Shape::contact_slots`] entries; every lane's `found` must be
+    /// written. The default finds no contact (it is never asked: a family
+    /// with [`Shape::contact_slots`] 0 is not on this path).
+    #[inline(always)]
+    fn slot_contacts_lanes<const W: usize>(
+        &self,
+        _terms: &[f64],
+        _pairs: &SlotPairs<D, W>,
+        out: &mut [ContactLanes<D, W>],
+    ) {
+        for slots in out {
+            slots.found = [false; W];
+        }
     }
 
     /// The largest FIRE time step for packings of this family (translations

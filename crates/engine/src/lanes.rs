@@ -270,7 +270,13 @@ fn accumulate<const D: usize>(
 
 /// `grad[body] += (g_r, g_q)`.
 #[inline(always)]
-fn add<const D: usize>(grad: &mut [f64], body: usize, k: usize, g_r: &Vector<D>, g_q: &RotVec) {
+pub(crate) fn add<const D: usize>(
+    grad: &mut [f64],
+    body: usize,
+    k: usize,
+    g_r: &Vector<D>,
+    g_q: &RotVec,
+) {
     let g = &mut grad[body * (D + k)..(body + 1) * (D + k)];
     for a in 0..D {
         g[a] += g_r[a];

@@ -30,6 +30,7 @@ pub mod precon;
 pub mod protocol;
 pub mod scene;
 pub mod simd;
+mod slots;
 
 pub use fire::{
     Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Objective, Progress,

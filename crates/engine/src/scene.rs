@@ -25,6 +25,10 @@ pub struct Scene<const D: usize, S: Shape<D>> {
     evaluations: u64,
     /// Scratch: the contacts of one chunk of the list, `(pair, contact)`.
     found: Vec<(u32, Contact<D>)>,
+    /// Scratch: `Shape::body_terms` of every body (the slots kernel).
+    body_terms: Vec<f64>,
+    /// Scratch: the slots kernel's buffers.
+    slot_scratch: crate::slots::Scratch<D>,
     /// Centres and orientations of the last [`Objective::save`].
     saved: (Vec<Vector<D>>, Vec<S::Orientation>),
 }
@@ -47,6 +51,8 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             inverse_masses,
             evaluations: 0,
             found: Vec::new(),
+            body_terms: Vec::new(),
+            slot_scratch: Default::default(),
             saved: (Vec::new(), Vec::new()),
         };
         scene.rebuild_neighbors();
@@ -219,6 +225,25 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
                 potential: self.potential,
             }
             .energy_gradient(grad);
+        }
+        if self.packing.shape.contact_slots() > 0 {
+            let p = &self.packing;
+            let len = p.shape.body_terms_len();
+            self.body_terms.resize(p.len() * len, 0.0);
+            for (b, (&size, o)) in p.sizes.iter().zip(&p.orientations).enumerate() {
+                p.shape
+                    .body_terms(size, o, &mut self.body_terms[b * len..(b + 1) * len]);
+            }
+            let (owners, partners) = self.neighbors.pairs();
+            return crate::slots::Slots {
+                packing: p,
+                terms: &self.body_terms,
+                pair_reach: self.neighbors.pair_reach(),
+                owners,
+                partners,
+                potential: self.potential,
+            }
+            .energy_gradient(grad, &mut self.slot_scratch);
         }
         if S::LANE_CONTACTS && self.packing.shape.use_lanes() {
             let p = &self.packing;

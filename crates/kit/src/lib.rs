@@ -19,7 +19,7 @@
 //!   family's rotational coordinates allow turning a body about that axis
 //!   (none, one angle in 2D, three world-frame angles in 3D);
 //! * **lanes = generic pass bit for bit**, for families with lane kernels
-//!   (`Shape::LANE_CONTACTS`);
+//!   (`Shape::LANE_CONTACTS`) and contact slots (`Shape::contact_slots`);
 //! * **a small jamming run**: 16 bodies or more (as many as the box
 //!   needs to hold twice the interaction range) compressed from φ = 0.1 to the
 //!   paper's window `10⁻¹⁶ < V/N < 2·10⁻¹⁶`;
@@ -96,7 +96,7 @@ pub fn check_family<const D: usize, S: Shape<D>>(shape: S) -> Checked {
             "its rotational coordinates cannot turn a body about a fixed world axis",
         ));
     }
-    if S::LANE_CONTACTS && shape.use_lanes() {
+    if (S::LANE_CONTACTS && shape.use_lanes()) || shape.contact_slots() > 0 {
         check_lanes(&shape);
         done.ran.push("lanes");
     } else {
@@ -294,7 +294,7 @@ pub fn check_rotation<const D: usize, S: Shape<D>>(shape: &S) -> bool {
     true
 }
 
-/// The lane kernel gives the generic pass's energy and gradient bit for
+/// The lane kernel (or the slots kernel) gives the generic pass's energy and gradient bit for
 /// bit (the same operations in the same order, several pairs at a time).
 pub fn check_lanes<const D: usize, S: Shape<D>>(shape: &S) {
     let name = &describe(shape);

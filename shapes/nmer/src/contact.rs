@@ -33,7 +33,9 @@
 
 use crate::orientation::{Angle, Quaternion};
 use crate::{MAX_SPHERES, Nmer};
-use jamkit_core::{Contact, GapHessian, MAX_ROT, Matrix, RotVec, Shape, Vector};
+use jamkit_core::{
+    Contact, ContactLanes, GapHessian, MAX_ROT, Matrix, RotVec, Shape, SlotPairs, Vector,
+};
 
 /// FIRE's largest time step for bodies made of spheres in 3D. Two bodies
 /// touch at up to four points, nearly parallel, so jammed dimers vibrate
@@ -185,7 +187,7 @@ fn assemble<const D: usize>(
 }
 
 impl Nmer<2> {
-    fn world<const M: usize>(&self, size: f64, o: &Angle) -> Offsets<2, M> {
+    pub(crate) fn world<const M: usize>(&self, size: f64, o: &Angle) -> Offsets<2, M> {
         let mut d = [Vector::<2>::zeros(); M];
         for (out, s) in d.iter_mut().zip(&self.offsets) {
             *out = o.apply(s) * size;
@@ -196,7 +198,7 @@ impl Nmer<2> {
     /// The contact of sphere `a` of body `i` (offset `d_a`) with sphere `b`
     /// of body `j` (offset `d_b`): gap, `n` and `∂h/∂q = n · t`.
     #[inline(always)]
-    fn contact(gap: f64, n: Vector<2>, d_a: &Vector<2>, d_b: &Vector<2>) -> Contact<2> {
+    pub(crate) fn contact(gap: f64, n: Vector<2>, d_a: &Vector<2>, d_b: &Vector<2>) -> Contact<2> {
         Contact {
             gap,
             grad_r: n,
@@ -256,6 +258,30 @@ impl Shape<2> for Nmer<2> {
 
     fn sphere_decomposition(&self, size: f64, o: &Angle) -> Option<Vec<(Vector<2>, f64)>> {
         self.spheres_at(size, &self.world::<MAX_SPHERES>(size, o))
+    }
+
+    /// `k²` sphere pairs for up to four spheres a body (the engine's slots
+    /// path, `crate::slots`), else 0.
+    fn contact_slots(&self) -> usize {
+        self.slots()
+    }
+
+    fn body_terms_len(&self) -> usize {
+        self.terms_len(0)
+    }
+
+    fn body_terms(&self, size: f64, o: &Angle, out: &mut [f64]) {
+        self.write_body_terms(size, o, out)
+    }
+
+    #[inline(always)]
+    fn slot_contacts_lanes<const W: usize>(
+        &self,
+        terms: &[f64],
+        pairs: &SlotPairs<2, W>,
+        out: &mut [ContactLanes<2, W>],
+    ) {
+        self.slot_contacts(terms, pairs, out)
     }
 
     #[inline(always)]
@@ -332,7 +358,11 @@ impl Nmer<3> {
 
     /// [`Nmer::world`] from the columns of `R(o)`.
     #[inline(always)]
-    fn world_of<const M: usize>(&self, size: f64, columns: &[Vector<3>; 3]) -> Offsets<3, M> {
+    pub(crate) fn world_of<const M: usize>(
+        &self,
+        size: f64,
+        columns: &[Vector<3>; 3],
+    ) -> Offsets<3, M> {
         let [c0, c1, c2] = columns;
         let mut d = [Vector::<3>::zeros(); M];
         for (out, s) in d.iter_mut().zip(&self.offsets) {
@@ -345,7 +375,7 @@ impl Nmer<3> {
     /// the columns of `R(o)`: the world axes, or `R(o) x̂, R(o) ŷ` for a
     /// linear body.
     #[inline(always)]
-    fn axes(&self, columns: &[Vector<3>; 3]) -> [Vector<3>; 3] {
+    pub(crate) fn axes(&self, columns: &[Vector<3>; 3]) -> [Vector<3>; 3] {
         Quaternion::step_axes(columns, self.linear)
     }
 
@@ -442,6 +472,30 @@ impl Shape<3> for Nmer<3> {
 
     fn sphere_decomposition(&self, size: f64, o: &Quaternion) -> Option<Vec<(Vector<3>, f64)>> {
         self.spheres_at(size, &self.world::<MAX_SPHERES>(size, o))
+    }
+
+    /// `k²` sphere pairs for up to four spheres a body (the engine's slots
+    /// path, `crate::slots`), else 0.
+    fn contact_slots(&self) -> usize {
+        self.slots()
+    }
+
+    fn body_terms_len(&self) -> usize {
+        Nmer::<3>::body_terms_len(self)
+    }
+
+    fn body_terms(&self, size: f64, o: &Quaternion, out: &mut [f64]) {
+        self.write_body_terms(size, o, out)
+    }
+
+    #[inline(always)]
+    fn slot_contacts_lanes<const W: usize>(
+        &self,
+        terms: &[f64],
+        pairs: &SlotPairs<3, W>,
+        out: &mut [ContactLanes<3, W>],
+    ) {
+        self.slot_contacts(terms, pairs, out)
     }
 
     #[inline(always)]

@@ -59,6 +59,7 @@
 
 pub mod contact;
 pub mod orientation;
+mod slots;
 pub mod volume;
 
 pub use orientation::{Angle, Quaternion};

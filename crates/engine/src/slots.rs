@@ -1,0 +1,301 @@
+//! The energy and gradient of families with contact slots
+//! (`Shape::contact_slots`, bodies made of spheres: up to `k²` contacts per
+//! pair, sphere `a` of one body against sphere `b` of the other), several
+//! pairs at a time.
+//!
+//! The generic pass (`Scene::pair_sum`) takes one pair at a time: a branch
+//! on the bounding test, the family's contacts (for `nmer`: both rotation
+//! matrices, both bodies' rotated sphere offsets, then `k²` sphere pairs
+//! one by one, each behind a branch on its gap), a push of each contact
+//! into a buffer, and a branch per contact to sum it. This kernel works
+//! like the near-disks' one (`lanes`), in two phases over chunks of the
+//! neighbour list, after the family's terms of every body (the rotated
+//! offsets) are computed once per evaluation (`Shape::body_terms`):
+//!
+//! 1. **Slots** of the whole chunk with no branch: separation (minimum
+//!    image), the family's contacts slot by slot (one call of
+//!    `Shape::slot_contacts_lanes` for the chunk, one loop over the chunk's
+//!    pairs per slot; the AVX2 copy (`simd`) computes four lanes per
+//!    instruction); then the contacts that count, compacted with no branch
+//!    in the generic pass's order (pair by pair, each pair's slots in
+//!    order), with `v(h)`, `f = v'(h) ∂h/∂r_j` and the torques.
+//! 2. **Sums**, one contact at a time in that order: `V += v`,
+//!    `g_j += (f, τ_j)`, and `g_i += (−f, τ_i)` in registers, added to `g_i`
+//!    when `i`'s partners end.
+//!
+//! NOTE: the arithmetic of each contact and the order of every sum are
+//! those of the generic pass (`Shape::slot_contacts_lanes` promises
+//! `Shape::contacts`' bits, which visits the slots in order; `v' · x =
+//! x · v'` exactly), so the results are the same bits: slots without a
+//! contact add nothing, as in the generic pass.
+
+use crate::lanes::add;
+use jamkit_core::{ContactLanes, MAX_ROT, MAX_SLOTS, Packing, PeriodicBox, Potential, RotVec};
+use jamkit_core::{Shape, SlotPairs, Vector};
+
+/// Pairs per chunk: with `k²` slots of contacts a pair, a chunk's terms
+/// stay in L1 between the phases (3D dimers: 4 × 5 kB).
+const CHUNK: usize = 32;
+
+/// The bodies and the list, as the kernel reads them.
+pub(crate) struct Slots<'a, const D: usize, S: Shape<D>> {
+    pub packing: &'a Packing<D, S>,
+    /// `Shape::body_terms` of every body, `Shape::body_terms_len` a body.
+    pub terms: &'a [f64],
+    /// `[b_i, b_j]` per pair, in list order.
+    pub pair_reach: &'a [[f64; 2]],
+    pub owners: &'a [u32],
+    pub partners: &'a [u32],
+    pub potential: Potential,
+}
+
+/// The kernel's buffers, kept by the scene from one evaluation to the next
+/// (made anew, zeroing them took 5 % of a 3D dimer run).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Scratch<const D: usize> {
+    /// Each slot's contacts in a chunk (`Shape::contact_slots` of them).
+    contacts: Vec<ContactLanes<D, CHUNK>>,
+    /// The chunk's contacts that count, as (pair in the chunk, slot).
+    found: Vec<(u16, u16)>,
+    /// Their terms.
+    terms: Vec<Term<D>>,
+}
+
+impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
+    /// The energy, with its gradient (`D + rot_dof` coordinates per body)
+    /// in `grad`.
+    pub fn energy_gradient(&self, grad: &mut [f64], scratch: &mut Scratch<D>) -> f64 {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`).
+            // Why: four lanes per instruction; same bits.
+            return unsafe { self.energy_gradient_avx2(grad, scratch) };
+        }
+        self.energy_gradient_portable(grad, scratch)
+    }
+
+    /// [`Slots::energy_gradient_portable`] compiled with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn energy_gradient_avx2(&self, grad: &mut [f64], scratch: &mut Scratch<D>) -> f64 {
+        self.energy_gradient_portable(grad, scratch)
+    }
+
+    #[inline(always)]
+    fn energy_gradient_portable(&self, grad: &mut [f64], scratch: &mut Scratch<D>) -> f64 {
+        match self.potential {
+            Potential::Harmonic => self.sum(grad, scratch, |h| {
+                Potential::Harmonic.energy_and_derivative(h)
+            }),
+            Potential::Hertzian => self.sum(grad, scratch, |h| {
+                Potential::Hertzian.energy_and_derivative(h)
+            }),
+        }
+    }
+
+    #[inline(always)]
+    fn sum(
+        &self,
+        grad: &mut [f64],
+        scratch: &mut Scratch<D>,
+        v: impl Fn(f64) -> (f64, f64) + Copy,
+    ) -> f64 {
+        grad.fill(0.0);
+        let pairs = self.partners.len();
+        if pairs == 0 {
+            return 0.0;
+        }
+        let k = self.packing.shape.rot_dof();
+        let slots = self.packing.shape.contact_slots().min(MAX_SLOTS);
+        let Scratch {
+            contacts,
+            found,
+            terms,
+        } = scratch;
+        contacts.resize(slots, ContactLanes::default());
+        found.resize(CHUNK * slots, (0, 0));
+        terms.resize(CHUNK * slots, Term::default());
+        let mut lanes = SlotPairs::<D, CHUNK> {
+            body_i: [0; CHUNK],
+            body_j: [0; CHUNK],
+            r_ij: [[0.0; CHUNK]; D],
+            r2: [0.0; CHUNK],
+        };
+        let mut energy = 0.0;
+        // Body i's own gradient, kept until its last partner is done.
+        let mut state = (usize::MAX, Vector::<D>::zeros(), [0.0; MAX_ROT]);
+        for start in (0..pairs).step_by(CHUNK) {
+            let len = CHUNK.min(pairs - start);
+            let m = self.slot_terms(start, k, &mut lanes, contacts, (found, terms), v);
+            (state, energy) = accumulate(
+                &self.owners[start..start + len],
+                &self.partners[start..start + len],
+                &terms[..m],
+                (k, grad),
+                (state, energy),
+            );
+        }
+        let (owner, g_r, g_q) = state;
+        if owner != usize::MAX {
+            add(grad, owner, k, &g_r, &g_q);
+        }
+        energy
+    }
+
+    /// The terms of the contacts that count in the chunk of pairs from
+    /// `start` on, pair by pair and each pair's slots in order, into
+    /// `terms`; returns how many. A short last chunk repeats the last pair
+    /// of the list in its spare lanes (never counted: only the chunk's
+    /// `len` pairs are compacted).
+    ///
+    /// NOTE: the family's slots are computed in every lane (vectorised);
+    /// `v(h)` and the sums take only the contacts that count (about one a
+    /// pair in a jammed 3D dimer packing against `k² = 4` slots): summing
+    /// every slot with zeros left the kernel 1.5× slower than the generic
+    /// pass.
+    #[inline(always)]
+    fn slot_terms(
+        &self,
+        start: usize,
+        k: usize,
+        lanes: &mut SlotPairs<D, CHUNK>,
+        contacts: &mut [ContactLanes<D, CHUNK>],
+        (found, terms): (&mut [(u16, u16)], &mut [Term<D>]),
+        v: impl Fn(f64) -> (f64, f64),
+    ) -> usize {
+        const W: usize = CHUNK;
+        let p = self.packing;
+        let n = p.positions.len();
+        let positions = &p.positions[..n];
+        let bbox: &PeriodicBox<D> = &p.bbox;
+        let last = self.partners.len() - 1;
+        let (owners, partners, pair_reach) = (
+            &self.owners[..=last],
+            &self.partners[..=last],
+            &self.pair_reach[..=last],
+        );
+        let mut cut2 = [0.0; W];
+        for l in 0..W {
+            let pair = (start + l).min(last);
+            let i = (owners[pair] as usize).min(n - 1);
+            let j = (partners[pair] as usize).min(n - 1);
+            let raw = positions[j] - positions[i];
+            for a in 0..D {
+                lanes.r_ij[a][l] = raw[a];
+            }
+            lanes.body_i[l] = i;
+            lanes.body_j[l] = j;
+            let [b_i, b_j] = pair_reach[pair];
+            let cut = b_i + b_j;
+            cut2[l] = cut * cut;
+        }
+        // Minimum image and `r²`, the same operations in the same order as
+        // `Scene::pair_sum`'s, apart from the gathers above so that this
+        // loop is vectorised.
+        for l in 0..W {
+            let d = bbox.minimum_image(lanes.separation(l));
+            lanes.r2[l] = d.norm_squared();
+            for a in 0..D {
+                lanes.r_ij[a][l] = d[a];
+            }
+        }
+        p.shape.slot_contacts_lanes(self.terms, lanes, contacts);
+        // NOTE: as in `Scene::pair_sum`, a pair counts unless `r² ≥ cut²`
+        // (so a NaN separation counts, and shows up in V).
+        let mut near = [false; W];
+        for l in 0..W {
+            near[l] = !(lanes.r2[l] >= cut2[l]);
+        }
+        // The contacts that count, pair by pair and each pair's slots in
+        // order (the generic pass's order), with no branch.
+        let len = CHUNK.min(self.partners.len() - start);
+        let mut m = 0;
+        for at in 0..len {
+            for (s, c) in contacts.iter().enumerate() {
+                found[m] = (at as u16, s as u16);
+                m += usize::from(near[at] & c.found[at]);
+            }
+        }
+        for (t, &(at, s)) in terms.iter_mut().zip(&found[..m]) {
+            let (at, c) = (at as usize, &contacts[s as usize]);
+            let (e, dv) = v(c.gap[at]);
+            t.energy = e;
+            t.pair = at as u32;
+            for a in 0..D {
+                t.force[a] = c.grad_r[a][at] * dv;
+            }
+            for a in 0..k.min(MAX_ROT) {
+                t.torque_i[a] = dv * c.grad_rot_i[a][at];
+                t.torque_j[a] = dv * c.grad_rot_j[a][at];
+            }
+        }
+        m
+    }
+}
+
+/// One contact's terms: `v(h)`, `f = v'(h) ∂h/∂r_j`, the torques, and its
+/// pair's place in the chunk.
+#[derive(Clone, Copy, Debug)]
+struct Term<const D: usize> {
+    pair: u32,
+    energy: f64,
+    force: [f64; D],
+    torque_i: RotVec,
+    torque_j: RotVec,
+}
+
+impl<const D: usize> Default for Term<D> {
+    fn default() -> Self {
+        Self {
+            pair: 0,
+            energy: 0.0,
+            force: [0.0; D],
+            torque_i: [0.0; MAX_ROT],
+            torque_j: [0.0; MAX_ROT],
+        }
+    }
+}
+
+/// Phase 2 over one chunk: for each contact in order, `V += v`,
+/// `g_j += (f, τ_j)`, `g_i += (−f, τ_i)` (in registers until `i`'s partners
+/// end). `state`: the body whose partners are under way and its gradient
+/// so far; then `V`.
+///
+/// NOTE: a function of its own, never inlined (as `lanes::accumulate`).
+#[inline(never)]
+fn accumulate<const D: usize>(
+    owners: &[u32],
+    partners: &[u32],
+    terms: &[Term<D>],
+    (k, grad): (usize, &mut [f64]),
+    (state, mut energy): ((usize, Vector<D>, RotVec), f64),
+) -> ((usize, Vector<D>, RotVec), f64) {
+    let (mut owner, mut g_r, mut g_q) = state;
+    let stride = D + k;
+    for t in terms {
+        let (i, j) = (
+            owners[t.pair as usize] as usize,
+            partners[t.pair as usize] as usize,
+        );
+        if i != owner {
+            if owner != usize::MAX {
+                add(grad, owner, k, &g_r, &g_q);
+            }
+            owner = i;
+            g_r = Vector::<D>::zeros();
+            g_q = [0.0; MAX_ROT];
+        }
+        energy += t.energy;
+        let f = Vector::<D>::from_fn(|a, _| t.force[a]);
+        g_r -= f;
+        let gj = &mut grad[j * stride..(j + 1) * stride];
+        for a in 0..D {
+            gj[a] += f[a];
+        }
+        for a in 0..k {
+            g_q[a] += t.torque_i[a];
+            gj[D + a] += t.torque_j[a];
+        }
+    }
+    ((owner, g_r, g_q), energy)
+}
