@@ -685,6 +685,12 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
         Ok(())
     }
 
+    /// The strained separation of pair `(i, j)` whose separation in the
+    /// cell as built is `r0`: `F r0 + u_j − u_i`.
+    fn separation(&self, i: usize, j: usize, r0: &Vector<D>) -> Vector<D> {
+        self.deformation * r0 + self.displacement[j] - self.displacement[i]
+    }
+
     /// Visit every contact of the strained cell as `(i, j, r0, r, contact)`:
     /// `r0` the pair's separation in the cell as built, `r` the strained
     /// one.
@@ -694,7 +700,7 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
     {
         for &(i, j, r0) in &self.pairs {
             let (i, j) = (i as usize, j as usize);
-            let r = self.deformation * r0 + self.displacement[j] - self.displacement[i];
+            let r = self.separation(i, j, &r0);
             self.shape.contacts(
                 self.sizes[i],
                 &self.orientations[i],
@@ -859,7 +865,7 @@ impl<const D: usize, S: Shape<D>> Objective for Strained<D, S> {
         let stride = (D + k) as u32;
         for &(i, j, r0) in &self.pairs {
             let (iu, ju) = (i as usize, j as usize);
-            let r = self.deformation * r0 + self.displacement[ju] - self.displacement[iu];
+            let r = self.separation(iu, ju, &r0);
             let outcome = self.shape.gap_hessians(
                 self.sizes[iu],
                 &self.orientations[iu],
@@ -1031,7 +1037,7 @@ impl<const D: usize, S: Shape<D>> Cell<D> for Strained<D, S> {
     ) -> Result<()> {
         for &(i, j, r0) in &self.pairs {
             let (i, j) = (i as usize, j as usize);
-            let r = self.deformation * r0 + self.displacement[j] - self.displacement[i];
+            let r = self.separation(i, j, &r0);
             self.shape.gap_hessians(
                 self.sizes[i],
                 &self.orientations[i],
