@@ -672,15 +672,19 @@ fn saddle_escape_finds_no_saddle_on_small_dimer_packings() {
 /// for bit: dimers, trimers and four-sphere bodies in 2D and 3D (linear
 /// bodies with two rotational coordinates, others with three), both
 /// potentials, lists whose length is no multiple of the kernel's chunk,
+/// pairs the kernel's bounding pre-pass leaves out,
 /// dense scenes where every pair overlaps at several spheres and looser
 /// ones, and two bodies on top of each other (coincident sphere centres,
 /// where `n` is the first axis).
 #[test]
 fn slots_kernel_matches_the_generic_pass_bit_for_bit() {
-    fn check<const D: usize>(shape: Nmer<D>, phi: f64)
+    /// Returns, per scene, the listed pairs whose bounding balls overlap
+    /// (the slots kernel's pre-pass queues them) and those it leaves out.
+    fn check<const D: usize>(shape: Nmer<D>, phi: f64) -> Vec<(usize, usize)>
     where
         Nmer<D>: Shape<D>,
     {
+        let mut queued = Vec::new();
         assert!(
             shape.contact_slots() > 0,
             "{shape:?} is not on the slots path"
@@ -705,9 +709,23 @@ fn slots_kernel_matches_the_generic_pass_bit_for_bit() {
                 let what = format!("{shape:?}, N = {n}, φ = {phi}, {potential:?}");
                 assert_eq!(e_fast.to_bits(), e_generic.to_bits(), "{what}");
                 assert_eq!(bits(&fast), bits(&generic), "{what}");
+                let p = scene.packing();
+                let overlap = |i: usize, j: usize| {
+                    let d = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
+                    let cut =
+                        p.shape.bounding_radius(p.sizes[i]) + p.shape.bounding_radius(p.sizes[j]);
+                    d.norm_squared() < cut * cut
+                };
+                let within = (0..n)
+                    .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+                    .filter(|&(i, j)| overlap(i, j))
+                    .count();
+                queued.push((within, scene.neighbor_pairs() - within));
             }
         }
+        queued
     }
+    let mut queued = Vec::new();
     let four_2d = body::<2>(&[
         (&[0.0, 0.0], 0.8),
         (&[1.0, 0.0], 0.8),
@@ -716,12 +734,20 @@ fn slots_kernel_matches_the_generic_pass_bit_for_bit() {
     ]);
     for shape in shapes_2d().into_iter().chain([four_2d]) {
         for phi in [0.9, 0.6] {
-            check::<2>(shape.clone(), phi);
+            queued.extend(check::<2>(shape.clone(), phi));
         }
     }
     for shape in shapes_3d() {
         for phi in [0.9, 0.5] {
-            check::<3>(shape.clone(), phi);
+            queued.extend(check::<3>(shape.clone(), phi));
         }
     }
+    // The pre-pass was put to work: scenes where it leaves listed pairs
+    // out and queues more than two chunks (32 pairs each) of the others,
+    // so that the queue carries pairs from one chunk of the list to the
+    // next.
+    assert!(
+        queued.iter().any(|&(within, out)| out > 0 && within > 64),
+        "no scene exercises the pre-pass: {queued:?}"
+    );
 }

@@ -8,12 +8,19 @@
 //! matrices, both bodies' rotated sphere offsets, then `k²` sphere pairs
 //! one by one, each behind a branch on its gap), a push of each contact
 //! into a buffer, and a branch per contact to sum it. This kernel works
-//! like the near-disks' one (`lanes`), in two phases over chunks of the
+//! like the near-disks' one (`lanes`), in phases over chunks of the
 //! neighbour list, after the family's terms of every body (the rotated
 //! offsets) are computed once per evaluation (`Shape::body_terms`):
 //!
-//! 1. **Slots** of the whole chunk with no branch: separation (minimum
-//!    image), the family's contacts slot by slot (one call of
+//! 0. **Bounding pre-pass** over each chunk of the list with no branch and
+//!    no square root: separation (minimum image), `r²`, and the pairs whose
+//!    bounding balls overlap (`r² < (b_i + b_j)²`, the generic pass's own
+//!    test) appended in list order to a queue; the slots below take the
+//!    queue a full chunk at a time. In a jammed 3D dimer packing a quarter
+//!    of the listed pairs fail that test (docs/performance.md, "The slots
+//!    kernel").
+//! 1. **Slots** of a chunk of queued pairs with no branch: the family's
+//!    contacts slot by slot (one call of
 //!    `Shape::slot_contacts_lanes` for the chunk, one loop over the chunk's
 //!    pairs per slot; the AVX2 copy (`simd`) computes four lanes per
 //!    instruction); then the contacts that count, compacted with no branch
@@ -27,7 +34,9 @@
 //! those of the generic pass (`Shape::slot_contacts_lanes` promises
 //! `Shape::contacts`' bits, which visits the slots in order; `v' · x =
 //! x · v'` exactly), so the results are the same bits: slots without a
-//! contact add nothing, as in the generic pass.
+//! contact add nothing, as in the generic pass, and neither do the pairs
+//! the pre-pass leaves out (the generic pass skips them by the same test;
+//! the queue keeps list order).
 
 use crate::lanes::add;
 use jamkit_core::{ContactLanes, MAX_ROT, MAX_SLOTS, Packing, PeriodicBox, Potential, RotVec};
@@ -121,19 +130,26 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
             r_ij: [[0.0; CHUNK]; D],
             r2: [0.0; CHUNK],
         };
+        let mut picked = Picked::<D>::default();
         let mut energy = 0.0;
         // Body i's own gradient, kept until its last partner is done.
         let mut state = (usize::MAX, Vector::<D>::zeros(), [0.0; MAX_ROT]);
+        let (owners, partners) = (&self.owners[..pairs], &self.partners[..pairs]);
+        // NOTE: written out twice rather than as a closure: a closure is
+        // not compiled with the AVX2 of `energy_gradient_avx2`.
         for start in (0..pairs).step_by(CHUNK) {
-            let len = CHUNK.min(pairs - start);
-            let m = self.slot_terms(start, k, &mut lanes, contacts, (found, terms), v);
-            (state, energy) = accumulate(
-                &self.owners[start..start + len],
-                &self.partners[start..start + len],
-                &terms[..m],
-                (k, grad),
-                (state, energy),
-            );
+            self.pick(start, &mut picked);
+            if picked.len >= CHUNK {
+                let m = self.slot_terms(&picked, CHUNK, k, &mut lanes, contacts, (found, terms), v);
+                (state, energy) =
+                    accumulate(owners, partners, &terms[..m], (k, grad), (state, energy));
+                picked.drop_front();
+            }
+        }
+        if picked.len > 0 {
+            let len = picked.len;
+            let m = self.slot_terms(&picked, len, k, &mut lanes, contacts, (found, terms), v);
+            (state, energy) = accumulate(owners, partners, &terms[..m], (k, grad), (state, energy));
         }
         let (owner, g_r, g_q) = state;
         if owner != usize::MAX {
@@ -142,27 +158,16 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
         energy
     }
 
-    /// The terms of the contacts that count in the chunk of pairs from
-    /// `start` on, pair by pair and each pair's slots in order, into
-    /// `terms`; returns how many. A short last chunk repeats the last pair
-    /// of the list in its spare lanes (never counted: only the chunk's
-    /// `len` pairs are compacted).
+    /// The bounding pre-pass over the chunk of list pairs from `start` on:
+    /// the separation (minimum image) and `r²` of every pair, with no
+    /// branch and no square root, and the pairs whose bounding balls
+    /// overlap (`r² < (b_i + b_j)²`, the generic pass's test) appended to
+    /// `picked` in list order, with no branch.
     ///
-    /// NOTE: the family's slots are computed in every lane (vectorised);
-    /// `v(h)` and the sums take only the contacts that count (about one a
-    /// pair in a jammed 3D dimer packing against `k² = 4` slots): summing
-    /// every slot with zeros left the kernel 1.5× slower than the generic
-    /// pass.
+    /// NOTE: as in `Scene::pair_sum`, a pair is taken unless `r² ≥ cut²`
+    /// (so a NaN separation is taken, and shows up in V).
     #[inline(always)]
-    fn slot_terms(
-        &self,
-        start: usize,
-        k: usize,
-        lanes: &mut SlotPairs<D, CHUNK>,
-        contacts: &mut [ContactLanes<D, CHUNK>],
-        (found, terms): (&mut [(u16, u16)], &mut [Term<D>]),
-        v: impl Fn(f64) -> (f64, f64),
-    ) -> usize {
+    fn pick(&self, start: usize, picked: &mut Picked<D>) {
         const W: usize = CHUNK;
         let p = self.packing;
         let n = p.positions.len();
@@ -174,6 +179,8 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
             &self.partners[..=last],
             &self.pair_reach[..=last],
         );
+        let mut r_ij = [[0.0; W]; D];
+        let mut r2 = [0.0; W];
         let mut cut2 = [0.0; W];
         for l in 0..W {
             let pair = (start + l).min(last);
@@ -181,10 +188,8 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
             let j = (partners[pair] as usize).min(n - 1);
             let raw = positions[j] - positions[i];
             for a in 0..D {
-                lanes.r_ij[a][l] = raw[a];
+                r_ij[a][l] = raw[a];
             }
-            lanes.body_i[l] = i;
-            lanes.body_j[l] = j;
             let [b_i, b_j] = pair_reach[pair];
             let cut = b_i + b_j;
             cut2[l] = cut * cut;
@@ -193,34 +198,76 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
         // `Scene::pair_sum`'s, apart from the gathers above so that this
         // loop is vectorised.
         for l in 0..W {
-            let d = bbox.minimum_image(lanes.separation(l));
-            lanes.r2[l] = d.norm_squared();
+            let d = bbox.minimum_image(Vector::<D>::from_fn(|a, _| r_ij[a][l]));
+            r2[l] = d.norm_squared();
             for a in 0..D {
-                lanes.r_ij[a][l] = d[a];
+                r_ij[a][l] = d[a];
             }
         }
-        p.shape.slot_contacts_lanes(self.terms, lanes, contacts);
-        // NOTE: as in `Scene::pair_sum`, a pair counts unless `r² ≥ cut²`
-        // (so a NaN separation counts, and shows up in V).
-        let mut near = [false; W];
-        for l in 0..W {
-            near[l] = !(lanes.r2[l] >= cut2[l]);
+        let len = W.min(self.partners.len() - start);
+        for l in 0..len {
+            let at = picked.len;
+            picked.pair[at] = (start + l) as u32;
+            for a in 0..D {
+                picked.r_ij[a][at] = r_ij[a][l];
+            }
+            picked.r2[at] = r2[l];
+            picked.len += usize::from(!(r2[l] >= cut2[l]));
         }
+    }
+
+    /// The terms of the contacts of the first `len` picked pairs, pair by
+    /// pair and each pair's slots in order, into `terms`; returns how many.
+    /// A short chunk repeats the last picked pair in its spare lanes (never
+    /// counted: only `len` pairs are compacted).
+    ///
+    /// NOTE: the family's slots are computed in every lane (vectorised);
+    /// `v(h)` and the sums take only the contacts that count (about one a
+    /// pair in a jammed 3D dimer packing against `k² = 4` slots): summing
+    /// every slot with zeros left the kernel 1.5× slower than the generic
+    /// pass.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn slot_terms(
+        &self,
+        picked: &Picked<D>,
+        len: usize,
+        k: usize,
+        lanes: &mut SlotPairs<D, CHUNK>,
+        contacts: &mut [ContactLanes<D, CHUNK>],
+        (found, terms): (&mut [(u16, u16)], &mut [Term<D>]),
+        v: impl Fn(f64) -> (f64, f64),
+    ) -> usize {
+        let n = self.packing.positions.len();
+        let last = self.partners.len() - 1;
+        let (owners, partners) = (&self.owners[..=last], &self.partners[..=last]);
+        for l in 0..CHUNK {
+            let at = l.min(len - 1);
+            let pair = (picked.pair[at] as usize).min(last);
+            lanes.body_i[l] = (owners[pair] as usize).min(n - 1);
+            lanes.body_j[l] = (partners[pair] as usize).min(n - 1);
+            for a in 0..D {
+                lanes.r_ij[a][l] = picked.r_ij[a][at];
+            }
+            lanes.r2[l] = picked.r2[at];
+        }
+        self.packing
+            .shape
+            .slot_contacts_lanes(self.terms, lanes, contacts);
         // The contacts that count, pair by pair and each pair's slots in
         // order (the generic pass's order), with no branch.
-        let len = CHUNK.min(self.partners.len() - start);
         let mut m = 0;
         for at in 0..len {
             for (s, c) in contacts.iter().enumerate() {
                 found[m] = (at as u16, s as u16);
-                m += usize::from(near[at] & c.found[at]);
+                m += usize::from(c.found[at]);
             }
         }
         for (t, &(at, s)) in terms.iter_mut().zip(&found[..m]) {
             let (at, c) = (at as usize, &contacts[s as usize]);
             let (e, dv) = v(c.gap[at]);
             t.energy = e;
-            t.pair = at as u32;
+            t.pair = picked.pair[at];
             for a in 0..D {
                 t.force[a] = c.grad_r[a][at] * dv;
             }
@@ -233,8 +280,44 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
     }
 }
 
+/// The list pairs the pre-pass took and the slots have not yet: their
+/// places in the list, separations and `r²`, in list order. Room for two
+/// chunks: fewer than one is left after each chunk of slots, and one chunk
+/// of the list adds at most one.
+#[derive(Clone, Copy, Debug)]
+struct Picked<const D: usize> {
+    len: usize,
+    pair: [u32; 2 * CHUNK],
+    r_ij: [[f64; 2 * CHUNK]; D],
+    r2: [f64; 2 * CHUNK],
+}
+
+impl<const D: usize> Default for Picked<D> {
+    fn default() -> Self {
+        Self {
+            len: 0,
+            pair: [0; 2 * CHUNK],
+            r_ij: [[0.0; 2 * CHUNK]; D],
+            r2: [0.0; 2 * CHUNK],
+        }
+    }
+}
+
+impl<const D: usize> Picked<D> {
+    /// Forget the first chunk (its slots are done).
+    #[inline(always)]
+    fn drop_front(&mut self) {
+        self.pair.copy_within(CHUNK.., 0);
+        for r in &mut self.r_ij {
+            r.copy_within(CHUNK.., 0);
+        }
+        self.r2.copy_within(CHUNK.., 0);
+        self.len -= CHUNK;
+    }
+}
+
 /// One contact's terms: `v(h)`, `f = v'(h) ∂h/∂r_j`, the torques, and its
-/// pair's place in the chunk.
+/// pair's place in the list.
 #[derive(Clone, Copy, Debug)]
 struct Term<const D: usize> {
     pair: u32,
