@@ -472,7 +472,7 @@ fn measure_cell<const D: usize, C: Cell<D>>(
 /// of the margin since the last listing ([`Objective::displace`]). Without
 /// it a rearrangement (a plastic event under strain) ran on the fixed list,
 /// where unlisted neighbours do not repel: bodies slid through each other
-/// by ~2 diameters and the listed energy fell to zero (3D spheres, N = 128,
+/// (moving by up to 1.9) and the listed energy fell to zero (3D spheres, N = 128,
 /// δφ = 10⁻¹; docs/elasticity.md, "Why stabilisation failed at δφ = 10⁻¹").
 #[derive(Clone, Debug)]
 pub struct Strained<const D: usize, S: Shape<D>> {
