@@ -835,6 +835,103 @@ fn shear_stabilisation_makes_the_negative_g_packing_stable() {
     assert!(s.energy_after <= s.energy_before * (1.0 + 1e-12));
 }
 
+/// The strained cell follows a rearrangement. Disks (N = 32, φ = 0.88),
+/// sheared by γ = 0.15 in one go (far beyond the strain at which such a
+/// packing yields) and relaxed with the deformation check's minimiser:
+/// bodies move by
+/// more than the pair margin (0.1) from their affine positions, so the
+/// pairs they touch at the end were not all listed at the start. The cell
+/// lists its pairs again as bodies move (a quarter of the margin), so the
+/// relaxed cell is a minimum of the true energy: a fresh listing of every
+/// pair gives the same energy and forces (10⁻¹² relative and absolute: the
+/// rebasing's round-off), the largest force is below the minimiser's
+/// `max_i g² < 10⁻²⁶`, and `check_pairs` passes. On a fixed list (before)
+/// unlisted neighbours did not repel and bodies slid through them: in the
+/// failing 3D case below the listed energy fell to zero and the true one
+/// rose ×50 (docs/elasticity.md, "Why stabilisation failed at δφ = 10⁻¹").
+#[test]
+fn strained_cell_follows_a_rearrangement() {
+    let scene = relaxed::<2, _>(Sphere, 32, 1, 0.88);
+    let margin = 0.1;
+    let start = scene.packing().positions.clone();
+    let mut cell = Strained::new(&scene, margin).unwrap();
+    cell.set_strain(0.15, &simple_shear::<2>(0, 1));
+    cell.relist().unwrap();
+    let fire = deformation_minimizer().for_family::<2, Sphere>(&scene.packing().shape);
+    let out = Fire::new(fire).minimize(&mut cell).unwrap();
+    cell.check_pairs().unwrap();
+    let f = cell.total_deformation();
+    let moved = (cell.centres().iter().zip(&start))
+        .map(|(c, x)| (c - f * x).norm())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "{} FIRE steps, {} Newton, V = {:e}, largest non-affine displacement {moved}",
+        out.steps, out.newton_iterations, out.energy
+    );
+    assert!(moved > margin, "{moved}");
+    let mut fresh = cell.clone();
+    fresh.relist().unwrap();
+    let n = Objective::dof(&cell);
+    let (mut g, mut g_fresh) = (vec![0.0; n], vec![0.0; n]);
+    let e = cell.energy_and_gradient(&mut g);
+    let e_fresh = fresh.energy_and_gradient(&mut g_fresh);
+    assert!(e > 0.0 && (e - e_fresh).abs() < 1e-12 * e, "{e} {e_fresh}");
+    for (a, b) in g.iter().zip(&g_fresh) {
+        assert!((a - b).abs() < 1e-12, "{a} {b}");
+        assert!(b * b < 1e-26, "{b}");
+    }
+}
+
+/// The packings session 16 could not stabilise: 3D spheres, N = 128,
+/// δφ = 10⁻¹ above their own φ_J (`experiments/elasticity/above_jam_3d.ron`,
+/// seeds 1 and 2). Both failed with "no strain step lowers the energy"
+/// (seed 1 after 11 steps: residual 3.2 % of p, smallest stiffness −0.24):
+/// along the stress-lowering strain the packing rearranges, which the
+/// fixed pair list could not follow. Now each stabilises: residual below
+/// 10⁻⁶ p, stiffness `C` with no negative eigenvalue, `G_min ≥ 0`, no
+/// negative mode, the pressure held (10⁻⁶) and the enthalpy not risen
+/// (10⁻¹² relative).
+#[test]
+fn dense_3d_spheres_stabilise() {
+    let report = common::run_file(
+        "experiments/elasticity/above_jam_3d.ron",
+        &[
+            "samples=2",
+            r#"params={"l": 2, "m": 0, "delta": 0.0}"#,
+            "protocol.delta_phi=1e-1",
+            "protocol.shear_stabilised=true",
+        ],
+        1,
+    );
+    assert_eq!(report.packings.len(), 2);
+    for c in &report.packings {
+        let m = c.measures.moduli.as_ref().unwrap();
+        let s = m.stabilisation.as_ref().expect("stabilisation stored");
+        eprintln!(
+            "{}: fixed box G = {:e}, stabilised G = {:e} (G_min {:e}), {} steps, residual {:e}",
+            c.id,
+            s.fixed_box.shear,
+            m.moduli.shear,
+            m.moduli.shear_min(),
+            s.iterations,
+            s.residual
+        );
+        assert!(s.residual < 1e-6 && s.residual_before > 1e-6, "{s:?}");
+        assert!(s.stiffness_min >= 0.0, "{s:?}");
+        assert!(m.moduli.shear_min() >= 0.0, "{m:?}");
+        assert_eq!(m.moduli.negative_modes, 0);
+        assert!(
+            (s.pressure_after / s.pressure_before - 1.0).abs() < 1e-6,
+            "{s:?}"
+        );
+        let f = Matrix::<3>::from_fn(|a, b| s.deformation[a][b]);
+        let v_per_body = c.box_edges.iter().product::<f64>() / c.particles as f64;
+        let h_before = s.energy_before + s.pressure_before * v_per_body;
+        let h_after = s.energy_after + s.pressure_before * v_per_body * f.determinant();
+        assert!(h_after <= h_before * (1.0 + 1e-12), "{s:?}");
+    }
+}
+
 /// `protocol.shear_stabilised` through the runner (disks, N = 32,
 /// `Pressure` p = 10⁻³, the runner test's two samples, of which the first
 /// has `G < 0` in its fixed box; `Pressure` stabilises at fixed pressure,

@@ -466,27 +466,43 @@ fn measure_cell<const D: usize, C: Cell<D>>(
 /// `u` the displacements since. An [`Objective`] in the same coordinates
 /// as the [`Scene`] it was built from (translations then rotations, body
 /// by body), with the same Hessian, so the engine's minimisers relax it.
+///
+/// Like the engine's neighbour list, the pairs are listed again while a
+/// minimiser moves the bodies: as soon as some body has moved by a quarter
+/// of the margin since the last listing ([`Objective::displace`]). Without
+/// it a rearrangement (a plastic event under strain) ran on the fixed list,
+/// where unlisted neighbours do not repel: bodies slid through each other
+/// (moving by up to 1.9) and the listed energy fell to zero (3D spheres, N = 128,
+/// δφ = 10⁻¹; docs/elasticity.md, "Why stabilisation failed at δφ = 10⁻¹").
 #[derive(Clone, Debug)]
 pub struct Strained<const D: usize, S: Shape<D>> {
     shape: S,
     potential: Potential,
     sizes: Vec<f64>,
     orientations: Vec<S::Orientation>,
-    displacement: Vec<Vector<D>>,
-    saved: (Vec<Vector<D>>, Vec<S::Orientation>),
-    pairs: Vec<(u32, u32, Vector<D>)>,
-    deformation: Matrix<D>,
-    volume: f64,
-    /// The centres as of the last [`Self::relist`] (or as built), for
-    /// listing the pairs again.
-    positions: Vec<Vector<D>>,
-    /// The deformation folded in by [`Self::rebase`]: the cell is
-    /// `lattice · diag(L)` of the box it was built from.
-    lattice: Matrix<D>,
+    geometry: Geometry<D>,
+    /// The geometry and orientations at the last [`Objective::save`].
+    saved: Option<Box<(Geometry<D>, Vec<S::Orientation>)>>,
     bbox: PeriodicBox<D>,
     inverse_masses: Vec<f64>,
     margin: f64,
     phi: f64,
+}
+
+/// The cell and the bodies' centres of a [`Strained`] packing (what a
+/// listing of the pairs changes).
+#[derive(Clone, Debug)]
+struct Geometry<const D: usize> {
+    displacement: Vec<Vector<D>>,
+    pairs: Vec<(u32, u32, Vector<D>)>,
+    deformation: Matrix<D>,
+    volume: f64,
+    /// The centres as of the last listing (or as built), for listing the
+    /// pairs again.
+    positions: Vec<Vector<D>>,
+    /// The deformation folded in by [`Strained::rebase`]: the cell is
+    /// `lattice · diag(L)` of the box it was built from.
+    lattice: Matrix<D>,
 }
 
 impl<const D: usize, S: Shape<D>> Strained<D, S> {
@@ -532,13 +548,15 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
             potential: scene.potential(),
             sizes: p.sizes.clone(),
             orientations: p.orientations.clone(),
-            displacement: vec![Vector::<D>::zeros(); p.len()],
-            saved: (Vec::new(), Vec::new()),
-            pairs,
-            deformation: Matrix::<D>::identity(),
-            volume: p.bbox.volume(),
-            positions: p.positions.clone(),
-            lattice: Matrix::<D>::identity(),
+            geometry: Geometry {
+                displacement: vec![Vector::<D>::zeros(); p.len()],
+                pairs,
+                deformation: Matrix::<D>::identity(),
+                volume: p.bbox.volume(),
+                positions: p.positions.clone(),
+                lattice: Matrix::<D>::identity(),
+            },
+            saved: None,
             bbox: p.bbox.clone(),
             inverse_masses: p.inverse_masses(),
             margin,
@@ -549,18 +567,18 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
     /// Deform the cell to `F = I + γ E` (the displacements are kept),
     /// `F` relative to the cell as built or as last [`Self::rebase`]d.
     pub fn set_strain(&mut self, gamma: f64, e: &Matrix<D>) {
-        self.deformation = Matrix::<D>::identity() + e * gamma;
+        self.geometry.deformation = Matrix::<D>::identity() + e * gamma;
     }
 
     /// Deform the cell by `F` (relative as for [`Self::set_strain`]).
     pub fn set_deformation(&mut self, f: Matrix<D>) {
-        self.deformation = f;
+        self.geometry.deformation = f;
     }
 
     /// The cell's deformation from the box it was built from,
     /// `F · lattice` (the cell is `F · lattice · diag(L)`).
     pub fn total_deformation(&self) -> Matrix<D> {
-        self.deformation * self.lattice
+        self.geometry.deformation * self.geometry.lattice
     }
 
     /// Make the current cell and configuration the reference: each pair
@@ -570,17 +588,23 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
     /// unchanged (up to round-off); strains set afterwards act on the
     /// current cell.
     pub fn rebase(&mut self) {
-        let f = self.deformation;
-        for (i, j, r) in &mut self.pairs {
-            *r = f * *r + self.displacement[*j as usize] - self.displacement[*i as usize];
+        let f = self.geometry.deformation;
+        for (i, j, r) in &mut self.geometry.pairs {
+            *r = f * *r + self.geometry.displacement[*j as usize]
+                - self.geometry.displacement[*i as usize];
         }
-        for (x, u) in self.positions.iter_mut().zip(&mut self.displacement) {
+        for (x, u) in self
+            .geometry
+            .positions
+            .iter_mut()
+            .zip(&mut self.geometry.displacement)
+        {
             *x = f * *x + *u;
             *u = Vector::<D>::zeros();
         }
-        self.lattice = f * self.lattice;
-        self.volume *= determinant(&f);
-        self.deformation = Matrix::<D>::identity();
+        self.geometry.lattice = f * self.geometry.lattice;
+        self.geometry.volume *= determinant(&f);
+        self.geometry.deformation = Matrix::<D>::identity();
     }
 
     /// [`Self::rebase`], then list the pairs again in the deformed cell:
@@ -591,7 +615,7 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
     /// cell.
     pub fn relist(&mut self) -> Result<()> {
         self.rebase();
-        let m = self.lattice;
+        let m = self.geometry.lattice;
         let strain = (m - Matrix::<D>::identity()).abs().max();
         if !(strain <= 0.2) {
             return Err(Error::invalid(
@@ -617,25 +641,39 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
                 ),
             ));
         }
-        let inv = inverse(&m).ok_or_else(|| {
-            Error::invalid(
+        if !self.list_pairs() {
+            return Err(Error::invalid(
                 "strain",
                 strain,
                 "the cell's deformation must be invertible",
-            )
-        })?;
-        let reduced: Vec<Vector<D>> = self.positions.iter().map(|x| inv * x).collect();
-        self.pairs.clear();
+            ));
+        }
+        Ok(())
+    }
+
+    /// List the pairs of the rebased cell (the listing of [`Self::relist`],
+    /// without its checks of the lattice); `false` when the lattice is
+    /// singular (the list is then left as it was).
+    fn list_pairs(&mut self) -> bool {
+        let m = self.geometry.lattice;
+        let Some(inv) = inverse(&m) else {
+            return false;
+        };
+        let reach: Vec<f64> = (self.sizes.iter())
+            .map(|&s| self.shape.bounding_radius(s))
+            .collect();
+        let reduced: Vec<Vector<D>> = self.geometry.positions.iter().map(|x| inv * x).collect();
+        self.geometry.pairs.clear();
         for i in 0..reduced.len() {
             for j in i + 1..reduced.len() {
                 let r = m * self.bbox.minimum_image(reduced[j] - reduced[i]);
                 let cut = reach[i] + reach[j] + self.margin;
                 if r.norm_squared() < cut * cut {
-                    self.pairs.push((i as u32, j as u32, r));
+                    self.geometry.pairs.push((i as u32, j as u32, r));
                 }
             }
         }
-        Ok(())
+        true
     }
 
     /// The energy of the cell.
@@ -661,19 +699,35 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
 
     /// The cell's volume, `V₀ det F`.
     pub fn volume(&self) -> f64 {
-        self.volume * determinant(&self.deformation)
+        self.geometry.volume * determinant(&self.geometry.deformation)
+    }
+
+    /// The bodies' centres in the deformed cell, `F x_i + u_i` (not wrapped
+    /// into the cell: a body's centre minus its position in the box it was
+    /// built from, mapped by [`Self::total_deformation`], is its non-affine
+    /// displacement).
+    pub fn centres(&self) -> Vec<Vector<D>> {
+        let g = &self.geometry;
+        (g.positions.iter().zip(&g.displacement))
+            .map(|(x, u)| g.deformation * x + u)
+            .collect()
     }
 
     /// The largest displacement of a centre since the pairs were listed.
     pub fn max_displacement(&self) -> f64 {
-        self.displacement
+        self.geometry
+            .displacement
             .iter()
             .map(|u| u.norm())
             .fold(0.0, f64::max)
     }
 
-    /// Fail when some body moved so far that a pair missing from the list
-    /// could touch (or an image vector could have changed).
+    /// Fail when some body moved so far since the pairs were listed that a
+    /// pair missing from the list could touch (or an image vector could
+    /// have changed). A minimiser step that moves a body further than a
+    /// quarter of the margin before the list catches up only bends the
+    /// path: the list made then is complete for the state it ends in as
+    /// long as this check holds.
     pub fn check_pairs(&self) -> Result<()> {
         let moved = self.max_displacement();
         if 2.0 * moved >= self.margin {
@@ -688,7 +742,8 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
     /// The strained separation of pair `(i, j)` whose separation in the
     /// cell as built is `r0`: `F r0 + u_j − u_i`.
     fn separation(&self, i: usize, j: usize, r0: &Vector<D>) -> Vector<D> {
-        self.deformation * r0 + self.displacement[j] - self.displacement[i]
+        self.geometry.deformation * r0 + self.geometry.displacement[j]
+            - self.geometry.displacement[i]
     }
 
     /// Visit every contact of the strained cell as `(i, j, r0, r, contact)`:
@@ -698,7 +753,7 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
     where
         F: FnMut(usize, usize, &Vector<D>, &Vector<D>, &jamkit_core::Contact<D>),
     {
-        for &(i, j, r0) in &self.pairs {
+        for &(i, j, r0) in &self.geometry.pairs {
             let (i, j) = (i as usize, j as usize);
             let r = self.separation(i, j, &r0);
             self.shape.contacts(
@@ -840,15 +895,22 @@ impl<const D: usize, S: Shape<D>> Objective for Strained<D, S> {
         self.energy_and_gradient(grad)
     }
 
+    /// Move the bodies by `dq`; when some body has now moved by a quarter
+    /// of the margin since the pairs were listed, [`Strained::rebase`] and
+    /// list them again (energy and forces unchanged up to round-off).
     fn displace(&mut self, dq: &[f64]) {
         let stride = D + self.shape.rot_dof();
         for (i, chunk) in dq.chunks_exact(stride).enumerate() {
             for a in 0..D {
-                self.displacement[i][a] += chunk[a];
+                self.geometry.displacement[i][a] += chunk[a];
             }
             if stride > D {
                 self.shape.rotate(&mut self.orientations[i], &chunk[D..]);
             }
+        }
+        if 4.0 * self.max_displacement() >= self.margin {
+            self.rebase();
+            self.list_pairs();
         }
     }
 
@@ -863,7 +925,7 @@ impl<const D: usize, S: Shape<D>> Objective for Strained<D, S> {
     fn hessian_entries(&mut self, entries: &mut Vec<(u32, u32, f64)>) -> Result<bool> {
         let k = self.shape.rot_dof();
         let stride = (D + k) as u32;
-        for &(i, j, r0) in &self.pairs {
+        for &(i, j, r0) in &self.geometry.pairs {
             let (iu, ju) = (i as usize, j as usize);
             let r = self.separation(iu, ju, &r0);
             let outcome = self.shape.gap_hessians(
@@ -893,14 +955,26 @@ impl<const D: usize, S: Shape<D>> Objective for Strained<D, S> {
         Ok(true)
     }
 
+    /// Saves the geometry with the orientations: a listing of the pairs
+    /// between save and restore changes the reference the displacements
+    /// are measured from.
     fn save(&mut self) {
-        self.saved.0.clone_from(&self.displacement);
-        self.saved.1.clone_from(&self.orientations);
+        match &mut self.saved {
+            Some(saved) => {
+                saved.0.clone_from(&self.geometry);
+                saved.1.clone_from(&self.orientations);
+            }
+            None => {
+                self.saved = Some(Box::new((self.geometry.clone(), self.orientations.clone())));
+            }
+        }
     }
 
     fn restore(&mut self) {
-        self.displacement.clone_from(&self.saved.0);
-        self.orientations.clone_from(&self.saved.1);
+        if let Some(saved) = &self.saved {
+            self.geometry.clone_from(&saved.0);
+            self.orientations.clone_from(&saved.1);
+        }
     }
 }
 
@@ -1035,7 +1109,7 @@ impl<const D: usize, S: Shape<D>> Cell<D> for Strained<D, S> {
         &mut self,
         visit: &mut dyn FnMut(usize, usize, &Vector<D>, &jamkit_core::GapHessian<D>),
     ) -> Result<()> {
-        for &(i, j, r0) in &self.pairs {
+        for &(i, j, r0) in &self.geometry.pairs {
             let (i, j) = (i as usize, j as usize);
             let r = self.separation(i, j, &r0);
             self.shape.gap_hessians(
@@ -1262,20 +1336,14 @@ fn symmetric_eigen(m: &[Vec<f64>]) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
     Ok((values, vectors))
 }
 
-/// Relax a cell at fixed deformation; while some body moved by more than
-/// half the pair margin (a pair may be missing from the list), list the
-/// pairs again and relax again (at most 20 times).
+/// Relax a cell at fixed deformation (the cell lists its pairs again as
+/// bodies move, [`Strained`]); fails when the last step moved a body too
+/// far for its list ([`Strained::check_pairs`]).
 fn relax_cell<const D: usize, S: Shape<D>>(
     cell: &mut Strained<D, S>,
     fire: &FireParams,
 ) -> Result<()> {
-    for _ in 0..20 {
-        Fire::new(fire.clone()).minimize(cell)?;
-        if cell.check_pairs().is_ok() {
-            return Ok(());
-        }
-        cell.relist()?;
-    }
+    Fire::new(fire.clone()).minimize(cell)?;
     cell.check_pairs()
 }
 
@@ -1449,7 +1517,9 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
             }
             let mut trial = cell.clone();
             trial.set_deformation(f);
-            if relax_cell(&mut trial, &fire).is_ok() {
+            // The pairs of the deformed cell before it relaxes (a strain
+            // of `|δ|` moves a pair's separation by `|δ| r`).
+            if trial.relist().is_ok() && relax_cell(&mut trial, &fire).is_ok() {
                 let v = objective(&trial);
                 if v <= value + 1e-12 * value.abs() {
                     cell = trial;

@@ -1,0 +1,161 @@
+#!/usr/bin/env python3
+"""Per-packing table and per-point summary of shear-stabilised runs
+(`protocol.shear_stabilised: true`; docs/elasticity.md, "Shear-stabilised
+packings").
+
+    python3 experiments/elasticity/stabilised.py [--csv OUT.csv] DIR...
+
+Reads the packing files of every DIR (`packings/*.json`; the samples that
+unjammed on their way up, `*.failed.json`, are listed with their V/N; a
+sample whose stabilisation failed leaves no file, only its error in the
+run's output) and writes one row per packing (--csv): the fixed-box moduli kept in
+`moduli.stabilisation.fixed_box` beside the stabilised ones, det F, the
+largest entry of |F - I|, strain steps, residuals, V/N before and after.
+Then prints per family parameters and delta_phi (or target pressure): the
+number of packings, mean p, mean +- s.e.m. of G fixed and stabilised with
+the counts of G < 0 and G_min < 0, mean B fixed and stabilised, the largest
+|F - I| and |det F - 1|, the range of strain steps, the largest residual
+and the largest number of negative modes. Only the standard library.
+"""
+import argparse
+import glob
+import json
+import math
+import os
+import re
+from collections import defaultdict
+
+
+def mean_sem(xs):
+    n = len(xs)
+    m = sum(xs) / n
+    if n < 2:
+        return m, float("nan")
+    var = sum((x - m) ** 2 for x in xs) / (n - 1)
+    return m, math.sqrt(var / n)
+
+
+def det(f):
+    if len(f) == 2:
+        return f[0][0] * f[1][1] - f[0][1] * f[1][0]
+    return (
+        f[0][0] * (f[1][1] * f[2][2] - f[1][2] * f[2][1])
+        - f[0][1] * (f[1][0] * f[2][2] - f[1][2] * f[2][0])
+        + f[0][2] * (f[1][0] * f[2][1] - f[1][1] * f[2][0])
+    )
+
+
+def point_of(d):
+    protocol = d["settings"]["protocol"]
+    if "AboveJam" in protocol:
+        return "dphi", protocol["AboveJam"]["delta_phi"]
+    if "Pressure" in protocol:
+        return "p_target", protocol["Pressure"]["pressure"]
+    raise SystemExit(f"{d['id']}: not an AboveJam or Pressure packing")
+
+
+def family_of(d):
+    params = {k: v for k, v in sorted(d["params"].items()) if v is not None}
+    return d["family"] + " " + " ".join(f"{k}={v}" for k, v in params.items())
+
+
+def rows_of(directory):
+    rows = []
+    for path in sorted(glob.glob(os.path.join(directory, "packings", "*.json"))):
+        if path.endswith(".failed.json"):
+            continue
+        d = json.load(open(path))
+        m = d["measures"]["moduli"]
+        s = m.get("stabilisation")
+        if s is None:
+            raise SystemExit(f"{path}: not shear-stabilised")
+        fixed, stab = s["fixed_box"], m["moduli"]
+        f = s["deformation"]
+        dim = len(f)
+        strain = max(abs(f[a][b] - (1.0 if a == b else 0.0)) for a in range(dim) for b in range(dim))
+        label, x = point_of(d)
+        rows.append(
+            {
+                "id": d["id"],
+                "family": family_of(d),
+                label: x,
+                "x": x,
+                "label": label,
+                "seed": d["seed"],
+                "p": stab["pressure"],
+                "G_fixed": fixed["shear"],
+                "Gmin_fixed": min(fixed["shear_planes"]),
+                "G": stab["shear"],
+                "Gmin": min(stab["shear_planes"]),
+                "B_fixed": fixed["bulk"],
+                "B": stab["bulk"],
+                "detF": det(f),
+                "strain": strain,
+                "iterations": s["iterations"],
+                "residual_before": s["residual_before"],
+                "residual": s["residual"],
+                "neg_modes": stab["negative_modes"],
+                "e_before": s["energy_before"],
+                "e_after": s["energy_after"],
+                "stab_s": s["wall_s"],
+            }
+        )
+    failed = sorted(glob.glob(os.path.join(directory, "packings", "*.failed.json")))
+    return rows, failed
+
+
+COLUMNS = [
+    "id", "family", "x", "label", "seed", "p", "G_fixed", "Gmin_fixed", "G", "Gmin",
+    "B_fixed", "B", "detF", "strain", "iterations", "residual_before", "residual",
+    "neg_modes", "e_before", "e_after", "stab_s",
+]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--csv", help="write the per-packing table here")
+    ap.add_argument("dirs", nargs="+")
+    args = ap.parse_args()
+    rows, failed = [], []
+    for d in args.dirs:
+        r, f = rows_of(d)
+        rows += r
+        failed += f
+    if args.csv:
+        with open(args.csv, "w") as out:
+            out.write(",".join(COLUMNS) + "\n")
+            for r in rows:
+                out.write(",".join(
+                    f"{r[c]:.6e}" if isinstance(r[c], float) else str(r[c]) for c in COLUMNS
+                ) + "\n")
+    groups = defaultdict(list)
+    for r in rows:
+        groups[(r["family"], r["label"], r["x"])].append(r)
+    print("| family | x | packings | p | G fixed (G<0; G_min<0) | G stabilised (G<0; G_min<0) "
+          "| B fixed | B stab. | max abs(F-I) | max abs(detF-1) | steps | max residual | neg. modes |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for (fam, label, x), g in sorted(groups.items(), key=lambda kv: (kv[0][0], -kv[0][2])):
+        def ms(key):
+            m, e = mean_sem([r[key] for r in g])
+            return f"{m:.4g} ± {e:.2g}"
+        neg = lambda key: sum(1 for r in g if r[key] < 0)
+        print(
+            f"| {fam} | {label} = {x:g} | {len(g)} | {sum(r['p'] for r in g) / len(g):.3e} "
+            f"| {ms('G_fixed')} ({neg('G_fixed')}; {neg('Gmin_fixed')}) "
+            f"| {ms('G')} ({neg('G')}; {neg('Gmin')}) "
+            f"| {sum(r['B_fixed'] for r in g) / len(g):.3f} | {sum(r['B'] for r in g) / len(g):.3f} "
+            f"| {max(r['strain'] for r in g):.3f} | {max(abs(r['detF'] - 1) for r in g):.3f} "
+            f"| {min(r['iterations'] for r in g)}–{max(r['iterations'] for r in g)} "
+            f"| {max(r['residual'] for r in g):.1e} | {max(r['neg_modes'] for r in g)} |"
+        )
+    print(f"\n{len(rows)} packings; G < 0: fixed box {sum(1 for r in rows if r['G_fixed'] < 0)}, "
+          f"stabilised {sum(1 for r in rows if r['G'] < 0)}; G_min < 0: fixed box "
+          f"{sum(1 for r in rows if r['Gmin_fixed'] < 0)}, stabilised {sum(1 for r in rows if r['Gmin'] < 0)}")
+    print(f"{len(failed)} samples unjammed on the way up (failed.json):")
+    for f in failed:
+        d = json.load(open(f))
+        print(f"  {d['id']}: V/N = {d['energy_per_particle']:.3e}")
+
+
+if __name__ == "__main__":
+    main()
