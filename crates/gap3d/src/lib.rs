@@ -208,9 +208,10 @@ pub struct ExactGap3 {
     pub normal: Vector<3>,
     /// The signed distance `h = g(n)`.
     pub gap: f64,
-    /// Body `i`'s support jet at `n`.
+    /// Body `i`'s support jet at `n` (its `hess` zero from [`exact_with`]
+    /// without `hessians`).
     pub jet_i: SupportJet3,
-    /// Body `j`'s support jet at `−n`.
+    /// Body `j`'s support jet at `−n` (likewise).
     pub jet_j: SupportJet3,
     /// Iterations taken (each evaluates both support functions at least
     /// once).
@@ -220,14 +221,45 @@ pub struct ExactGap3 {
     pub converged: bool,
 }
 
-/// One evaluation of `g`, its tangent gradient and `W` at a unit `u`.
+/// A support function read at one direction `u`: its value and support
+/// point at once, its Hessian `∇∇s(u)` on request. [`exact`] asks for the
+/// Hessian only at the points its Newton steps start from (and, with
+/// `hessians`, at the optimum), not at rejected line-search points, at a
+/// pair it skips, or at the last point of a search for a contact; for a
+/// support found by a search ([`RadialFound`]) the Hessian is the costly
+/// part (a 3 × 3 inverse and two products).
+pub trait SupportAt {
+    /// `s(u)`.
+    fn value(&self) -> f64;
+    /// `∇s(u)`, the support point relative to the centre.
+    fn point(&self) -> Vector<3>;
+    /// `∇∇s(u)`.
+    fn hess(&self) -> Matrix<3>;
+}
+
+impl SupportAt for SupportJet3 {
+    #[inline(always)]
+    fn value(&self) -> f64 {
+        self.h
+    }
+    #[inline(always)]
+    fn point(&self) -> Vector<3> {
+        self.point
+    }
+    #[inline(always)]
+    fn hess(&self) -> Matrix<3> {
+        self.hess
+    }
+}
+
+/// One evaluation of `g` and its tangent gradient at a unit `u`, with the
+/// two supports (whose Hessians give `W` when a Newton step needs it).
 #[derive(Clone, Copy, Debug)]
-struct Eval {
+struct Eval<I, J> {
     g: f64,
     t: Vector<3>,
-    w: Matrix<3>,
-    ji: SupportJet3,
-    jj: SupportJet3,
+    ji: I,
+    jj: J,
 }
 
 /// `u` moved by the tangent vector `δ` and projected back onto the sphere,
@@ -264,30 +296,68 @@ fn safeguarded_step(newton: Option<Vector<3>>, t: &Vector<3>) -> Option<(Vector<
     Some((step, is_newton, len))
 }
 
+/// The support jet of `s`, its Hessian zero unless `hessians`.
+#[inline(always)]
+fn jet_of<S: SupportAt>(s: &S, hessians: bool) -> SupportJet3 {
+    SupportJet3 {
+        h: s.value(),
+        point: s.point(),
+        hess: if hessians {
+            s.hess()
+        } else {
+            Matrix::<3>::zeros()
+        },
+    }
+}
+
 /// The exact signed distance `h = max_{|u|=1} [u·r_ij − s_i(u) − s_j(−u)]`
 /// (module documentation), with `sup_i(u)` and `sup_j(v)` the two bodies'
-/// world-frame support jets (the solver asks body `j` at `v = −u`), started
+/// world-frame supports (the solver asks body `j` at `v = −u`), started
 /// from the line of centres (`x̂` at coincident centres). `None` when `g`
 /// at the line of centres already exceeds `max_gap` (then `h > max_gap`).
+/// The result's support jets carry their Hessians: [`exact_with`] with
+/// `hessians = true`.
 #[inline]
-pub fn exact<A, B>(r_ij: &Vector<3>, sup_i: A, sup_j: B, max_gap: f64) -> Option<ExactGap3>
+pub fn exact<A, B, I, J>(r_ij: &Vector<3>, sup_i: A, sup_j: B, max_gap: f64) -> Option<ExactGap3>
 where
-    A: Fn(&Vector<3>) -> SupportJet3,
-    B: Fn(&Vector<3>) -> SupportJet3,
+    A: Fn(&Vector<3>) -> I,
+    B: Fn(&Vector<3>) -> J,
+    I: SupportAt,
+    J: SupportAt,
+{
+    exact_with(r_ij, sup_i, sup_j, max_gap, true)
+}
+
+/// [`exact`], with the two support Hessians at the optimum computed only
+/// when `hessians` (else the result's `jet_i.hess` and `jet_j.hess` are
+/// zero): [`ExactGap3::contact`] does not read them, [`ExactGap3::hessian`]
+/// does. Everything else, the normal, the gap and the support points, is
+/// the same bit for bit either way.
+#[inline]
+pub fn exact_with<A, B, I, J>(
+    r_ij: &Vector<3>,
+    sup_i: A,
+    sup_j: B,
+    max_gap: f64,
+    hessians: bool,
+) -> Option<ExactGap3>
+where
+    A: Fn(&Vector<3>) -> I,
+    B: Fn(&Vector<3>) -> J,
+    I: SupportAt,
+    J: SupportAt,
 {
     let eval = |u: &Vector<3>| {
         let ji = sup_i(u);
         let jj = sup_j(&-u);
-        let g = u.dot(r_ij) - ji.h - jj.h;
-        let t = r_ij - ji.point + jj.point - u * g;
+        let g = u.dot(r_ij) - ji.value() - jj.value();
+        let t = r_ij - ji.point() + jj.point() - u * g;
+        Eval { g, t, ji, jj }
+    };
+    // W = S_i + S_j + g P at the point a Newton step starts from.
+    let w = |e: &Eval<I, J>, u: &Vector<3>| {
         let p = Matrix::<3>::identity() - u * u.transpose();
-        Eval {
-            g,
-            t,
-            w: ji.hess + jj.hess + p * g,
-            ji,
-            jj,
-        }
+        e.ji.hess() + e.jj.hess() + p * e.g
     };
     let r = r_ij.norm();
     let mut u = if r > 0.0 { r_ij / r } else { Vector::<3>::x() };
@@ -301,7 +371,7 @@ where
         iterations += 1;
         // The tangent component only (t ⊥ u up to round-off).
         let t = cur.t - u * u.dot(&cur.t);
-        let newton = (cur.w + u * u.transpose())
+        let newton = (w(&cur, &u) + u * u.transpose())
             .cholesky()
             .map(|c| c.solve(&t))
             .map(|d| d - u * u.dot(&d));
@@ -342,8 +412,8 @@ where
     Some(ExactGap3 {
         normal: u,
         gap: cur.g,
-        jet_i: cur.ji,
-        jet_j: cur.jj,
+        jet_i: jet_of(&cur.ji, hessians),
+        jet_j: jet_of(&cur.jj, hessians),
         iterations,
         converged,
     })
@@ -362,6 +432,97 @@ pub struct RadialSupport {
     pub converged: bool,
 }
 
+/// The radial function and the height at one unit vector `y` of a
+/// [`radial_support`] search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct At {
+    y: Vector<3>,
+    rho: f64,
+    g: Vector<3>,
+    h: Matrix<3>,
+    phi: f64,
+}
+
+/// `t` and `A` (module documentation) at a point of the search for the
+/// direction `u`.
+#[inline(always)]
+fn tangent(u: &Vector<3>, a: &At) -> (Vector<3>, Matrix<3>) {
+    let y = a.y;
+    let c = u.dot(&y);
+    let p = Matrix::<3>::identity() - y * y.transpose();
+    let pu = u - y * c;
+    let g = a.g - y * y.dot(&a.g);
+    let t = g * c + pu * a.rho;
+    let gp = g * pu.transpose();
+    let big = p * (a.rho * c) - p * a.h * p * c - (gp + gp.transpose());
+    (t, big)
+}
+
+/// Where a [`radial_search`] ended: the support value and point at once,
+/// the Hessian `∇∇s = B A⁺ Bᵀ` on request ([`RadialFound::hess`]), all in
+/// the frame of the radial function.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadialFound {
+    u: Vector<3>,
+    at: At,
+    /// Newton or gradient steps taken.
+    pub iterations: u32,
+    /// False when the search stopped at its cap (the last iterate is used).
+    pub converged: bool,
+}
+
+impl RadialFound {
+    /// `s(u)`.
+    #[inline(always)]
+    pub fn value(&self) -> f64 {
+        self.at.phi
+    }
+
+    /// The support point `ρ(y*) y*`.
+    #[inline(always)]
+    pub fn point(&self) -> Vector<3> {
+        self.at.y * self.at.rho
+    }
+
+    /// The unit vector `y*` of the support point.
+    #[inline(always)]
+    pub fn y(&self) -> Vector<3> {
+        self.at.y
+    }
+
+    /// `∇∇s(u) = B A⁺ Bᵀ` (module documentation), symmetrised.
+    #[inline(always)]
+    pub fn hess(&self) -> Matrix<3> {
+        let cur = &self.at;
+        let y = cur.y;
+        let (_, big) = tangent(&self.u, cur);
+        let yy = y * y.transpose();
+        let inv = match (big + yy).cholesky() {
+            Some(c) => c.inverse() - yy,
+            None => Matrix::<3>::zeros(),
+        };
+        let g = cur.g - y * y.dot(&cur.g);
+        let b = (Matrix::<3>::identity() - yy) * cur.rho + y * g.transpose();
+        let hess = b * inv * b.transpose();
+        (hess + hess.transpose()) * 0.5
+    }
+
+    /// The whole [`RadialSupport`].
+    #[inline(always)]
+    pub fn support(&self) -> RadialSupport {
+        RadialSupport {
+            jet: SupportJet3 {
+                h: self.value(),
+                point: self.point(),
+                hess: self.hess(),
+            },
+            y: self.at.y,
+            iterations: self.iterations,
+            converged: self.converged,
+        }
+    }
+}
+
 /// The support jet of the star-shaped surface `x(y) = ρ(y) y` in the
 /// direction `u` (unit; the frame of `radial`), from the surface point
 /// whose outward normal is `u` (module documentation), searched from the
@@ -372,13 +533,16 @@ pub fn radial_support<F>(u: &Vector<3>, start: &Vector<3>, radial: F) -> RadialS
 where
     F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
 {
-    struct At {
-        y: Vector<3>,
-        rho: f64,
-        g: Vector<3>,
-        h: Matrix<3>,
-        phi: f64,
-    }
+    radial_search(u, start, radial).support()
+}
+
+/// The search of [`radial_support`], its Hessian left for later
+/// ([`RadialFound::hess`]; the same bits).
+#[inline]
+pub fn radial_search<F>(u: &Vector<3>, start: &Vector<3>, radial: F) -> RadialFound
+where
+    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+{
     let at = |y: Vector<3>| {
         let (rho, g, h) = radial(&y);
         At {
@@ -389,25 +553,13 @@ where
             h,
         }
     };
-    // t and A (module documentation) at a point.
-    let tangent = |a: &At| {
-        let y = a.y;
-        let c = u.dot(&y);
-        let p = Matrix::<3>::identity() - y * y.transpose();
-        let pu = u - y * c;
-        let g = a.g - y * y.dot(&a.g);
-        let t = g * c + pu * a.rho;
-        let gp = g * pu.transpose();
-        let big = p * (a.rho * c) - p * a.h * p * c - (gp + gp.transpose());
-        (t, big)
-    };
     let mut cur = at(start.normalize());
     let mut iterations = 0;
     let mut converged = false;
     while iterations < 60 {
         iterations += 1;
         let y = cur.y;
-        let (t, big) = tangent(&cur);
+        let (t, big) = tangent(u, &cur);
         let newton = (big + y * y.transpose())
             .cholesky()
             .map(|c| c.solve(&t))
@@ -435,23 +587,9 @@ where
         }
         cur = next;
     }
-    let y = cur.y;
-    let (_, big) = tangent(&cur);
-    let yy = y * y.transpose();
-    let inv = match (big + yy).cholesky() {
-        Some(c) => c.inverse() - yy,
-        None => Matrix::<3>::zeros(),
-    };
-    let g = cur.g - y * y.dot(&cur.g);
-    let b = (Matrix::<3>::identity() - yy) * cur.rho + y * g.transpose();
-    let hess = b * inv * b.transpose();
-    RadialSupport {
-        jet: SupportJet3 {
-            h: cur.phi,
-            point: y * cur.rho,
-            hess: (hess + hess.transpose()) * 0.5,
-        },
-        y,
+    RadialFound {
+        u: *u,
+        at: cur,
         iterations,
         converged,
     }

@@ -107,7 +107,7 @@ use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, Matrix, ParamSpec, Quaternion, RotVec,
     Shape, ShapeVisitor, Vector,
 };
-use jamkit_gap3d::{self as gap3d, ExactGap3, RadialSupport};
+use jamkit_gap3d::{self as gap3d, ExactGap3, RadialSupport, SupportAt};
 use serde::Deserialize;
 use solid::{LMAX, Poly};
 use std::cell::Cell;
@@ -262,6 +262,32 @@ struct BodyJet {
     x_rot: [Vector<3>; MAX_ROT],
     /// `∂²G̃/∂q_p∂q_q`.
     rot_rot: [RotVec; MAX_ROT],
+}
+
+/// A body's support found in its own frame ([`gap3d::RadialFound`]), read
+/// in the world frame: value and support point at once, the Hessian
+/// `R ∇∇s Rᵀ` when [`gap3d::exact_with`] asks for it.
+#[derive(Clone, Copy, Debug)]
+struct WorldSupport {
+    body: gap3d::RadialFound,
+    columns: [Vector<3>; 3],
+    point: Vector<3>,
+}
+
+impl gap3d::SupportAt for WorldSupport {
+    #[inline(always)]
+    fn value(&self) -> f64 {
+        self.body.value()
+    }
+    #[inline(always)]
+    fn point(&self) -> Vector<3> {
+        self.point
+    }
+    #[inline(always)]
+    fn hess(&self) -> Matrix<3> {
+        let rot = Matrix::<3>::from_columns(&self.columns);
+        rot * self.body.hess() * rot.transpose()
+    }
 }
 
 impl Harmonic {
@@ -646,8 +672,7 @@ impl Harmonic {
         let mut hb = Matrix::<3>::zeros();
         for (l, p) in &self.by_degree {
             let lf = *l as f64;
-            let (v, g) = p.value_grad(y);
-            let h = p.hessian(y);
+            let (v, g, h) = p.jet(y, true);
             value += v;
             grad += g - y * (lf * v);
             let gy = g * y.transpose();
@@ -687,20 +712,44 @@ impl Harmonic {
         u: &Vector<3>,
         start: &Vector<3>,
     ) -> RadialSupport {
+        let found = self.search_from(size, columns, u, start);
+        let rot = Matrix::<3>::from_columns(columns);
+        RadialSupport {
+            jet: gap3d::SupportJet3 {
+                h: found.value(),
+                point: found.point,
+                hess: found.hess(),
+            },
+            y: rot * found.body.y(),
+            iterations: found.body.iterations,
+            converged: found.body.converged,
+        }
+    }
+
+    /// The search of [`Harmonic::support_from`], its Hessian left for
+    /// later ([`WorldSupport`]).
+    #[inline(always)]
+    fn search_from(
+        &self,
+        size: f64,
+        columns: &[Vector<3>; 3],
+        u: &Vector<3>,
+        start: &Vector<3>,
+    ) -> WorldSupport {
         let [c0, c1, c2] = columns;
         let body = |v: &Vector<3>| Vector::<3>::new(c0.dot(v), c1.dot(v), c2.dot(v));
         let ub = body(u);
-        let mut out = gap3d::radial_support(&ub, &body(start), |y| self.radial_jet(size, y));
-        let rot = Matrix::<3>::from_columns(columns);
-        let pb = out.jet.point;
-        out.jet.point = c0 * pb[0] + c1 * pb[1] + c2 * pb[2];
-        out.jet.hess = rot * out.jet.hess * rot.transpose();
-        out.y = rot * out.y;
-        out
+        let found = gap3d::radial_search(&ub, &body(start), |y| self.radial_jet(size, y));
+        let pb = found.point();
+        WorldSupport {
+            body: found,
+            columns: *columns,
+            point: c0 * pb[0] + c1 * pb[1] + c2 * pb[2],
+        }
     }
 
-    /// The support jet at `u`, the search started where the last one
-    /// (`last`: its direction and support unit vector) ended, moved with the
+    /// The support at `u`, the search started where the last one (`last`:
+    /// its direction and support unit vector) ended, moved with the
     /// direction; `last` updated.
     #[inline(always)]
     fn warm_support(
@@ -709,14 +758,15 @@ impl Harmonic {
         columns: &[Vector<3>; 3],
         u: &Vector<3>,
         last: &Cell<Option<(Vector<3>, Vector<3>)>>,
-    ) -> gap3d::SupportJet3 {
+    ) -> WorldSupport {
         let start = match last.get() {
             Some((u0, y0)) => (y0 + (u - u0)).normalize(),
             None => *u,
         };
-        let found = self.support_from(size, columns, u, &start);
-        last.set(Some((*u, found.y)));
-        found.jet
+        let found = self.search_from(size, columns, u, &start);
+        let rot = Matrix::<3>::from_columns(columns);
+        last.set(Some((*u, rot * found.body.y())));
+        found
     }
 
     /// The exact gap of two bodies (crate documentation), or `None` when it
@@ -731,6 +781,24 @@ impl Harmonic {
         r_ij: &Vector<3>,
         max_gap: f64,
     ) -> Option<ExactGap3> {
+        self.exact_gap_with(size_i, o_i, size_j, o_j, r_ij, max_gap, true)
+    }
+
+    /// [`Harmonic::exact_gap`], the support Hessians at the optimum
+    /// computed only when `hessians` ([`gap3d::exact_with`]: the contact
+    /// does not need them; the same bits otherwise).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn exact_gap_with(
+        &self,
+        size_i: f64,
+        o_i: &Quaternion,
+        size_j: f64,
+        o_j: &Quaternion,
+        r_ij: &Vector<3>,
+        max_gap: f64,
+        hessians: bool,
+    ) -> Option<ExactGap3> {
         let r = r_ij.norm();
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return None;
@@ -739,11 +807,12 @@ impl Harmonic {
         // Warm starts: each search begins where the body's last one ended,
         // moved with the direction (`y* − u` changes slowly, by O(Δ|δu|)).
         let (last_i, last_j) = (Cell::new(None), Cell::new(None));
-        gap3d::exact(
+        gap3d::exact_with(
             r_ij,
             |u| self.warm_support(size_i, &ci, u, &last_i),
             |u| self.warm_support(size_j, &cj, u, &last_j),
             max_gap,
+            hessians,
         )
     }
 
@@ -924,7 +993,7 @@ impl Shape<3> for Harmonic {
         mut visit: F,
     ) {
         if self.gap == GapModel::Exact {
-            if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
+            if let Some(e) = self.exact_gap_with(size_i, o_i, size_j, o_j, r_ij, max_gap, false) {
                 let (c_i, c_j) = (o_i.columns(), o_j.columns());
                 visit(e.contact(&self.axes(&c_i), &self.axes(&c_j), self.rot_dof()));
             }

@@ -204,43 +204,63 @@ impl Poly {
         (val, g)
     }
 
-    /// The Hessian at `v`.
-    pub fn hessian(&self, v: &Vector<3>) -> Matrix<3> {
+    /// Value, gradient and Hessian at `v` in one pass over the monomials
+    /// (the powers of `v` computed once): the exact-gap support search's
+    /// path. Each sum is accumulated over the terms in the same order and
+    /// each term written as the separate value/gradient and Hessian sums
+    /// wrote it (`c · ∂^a x^i · ∂^b y^j · ∂^c z^k`, the falling factorials
+    /// `i`, `i (i − 1)` as exact small integers, `0` below the power), so
+    /// the bits are theirs.
+    #[inline(always)]
+    fn value_grad_hessian(&self, v: &Vector<3>) -> (f64, Vector<3>, Matrix<3>) {
         let pw = Self::powers(v, self.top_power());
-        // d^d/dv^d of v^k: k (k−1) … v^{k−d}.
-        let der = |a: usize, k: u8, d: u8| -> f64 {
-            if k < d {
-                return 0.0;
-            }
-            let f: f64 = (0..d).map(|i| (k - i) as f64).product();
-            f * pw[a][(k - d) as usize]
+        // ∂ and ∂² of v_a^k: k v_a^{k−1} and k (k − 1) v_a^{k−2} (0 below).
+        let d1 = |a: usize, k: usize| {
+            if k >= 1 { k as f64 * pw[a][k - 1] } else { 0.0 }
         };
-        let mut h = Matrix::<3>::zeros();
+        let d2 = |a: usize, k: usize| {
+            if k >= 2 {
+                (k * (k - 1)) as f64 * pw[a][k - 2]
+            } else {
+                0.0
+            }
+        };
+        let mut val = 0.0;
+        let mut g = Vector::<3>::zeros();
+        let [mut h00, mut h11, mut h22, mut h01, mut h02, mut h12] = [0.0f64; 6];
         for (c, e) in &self.terms {
-            let (x, y, z) = (der(0, e[0], 0), der(1, e[1], 0), der(2, e[2], 0));
-            let (dx, dy, dz) = (der(0, e[0], 1), der(1, e[1], 1), der(2, e[2], 1));
-            h[(0, 0)] += c * der(0, e[0], 2) * y * z;
-            h[(1, 1)] += c * x * der(1, e[1], 2) * z;
-            h[(2, 2)] += c * x * y * der(2, e[2], 2);
-            h[(0, 1)] += c * dx * dy * z;
-            h[(0, 2)] += c * dx * y * dz;
-            h[(1, 2)] += c * x * dy * dz;
+            let (i, j, k) = (e[0] as usize, e[1] as usize, e[2] as usize);
+            let (x, y, z) = (pw[0][i], pw[1][j], pw[2][k]);
+            let (dx, dy, dz) = (d1(0, i), d1(1, j), d1(2, k));
+            val += c * x * y * z;
+            if i > 0 {
+                g[0] += c * dx * y * z;
+            }
+            if j > 0 {
+                g[1] += c * x * dy * z;
+            }
+            if k > 0 {
+                g[2] += c * x * y * dz;
+            }
+            h00 += c * d2(0, i) * y * z;
+            h11 += c * x * d2(1, j) * z;
+            h22 += c * x * y * d2(2, k);
+            h01 += c * dx * dy * z;
+            h02 += c * dx * y * dz;
+            h12 += c * x * dy * dz;
         }
-        h[(1, 0)] = h[(0, 1)];
-        h[(2, 0)] = h[(0, 2)];
-        h[(2, 1)] = h[(1, 2)];
-        h
+        let h = Matrix::<3>::new(h00, h01, h02, h01, h11, h12, h02, h12, h22);
+        (val, g, h)
     }
 
     /// Value, gradient and (when `hessian`; else zero) Hessian at `v`.
     pub fn jet(&self, v: &Vector<3>, hessian: bool) -> (f64, Vector<3>, Matrix<3>) {
-        let (val, g) = self.value_grad(v);
-        let h = if hessian {
-            self.hessian(v)
+        if hessian {
+            self.value_grad_hessian(v)
         } else {
-            Matrix::<3>::zeros()
-        };
-        (val, g, h)
+            let (val, g) = self.value_grad(v);
+            (val, g, Matrix::<3>::zeros())
+        }
     }
 
     /// Value at `v`.
