@@ -315,5 +315,8 @@ fn the_3d_exact_gap_packing_at_n512_is_jammed_next_to_its_first_order_twin() {
     }
     let (first, exact) = (phi["FirstOrder"], phi["Exact"]);
     assert_eq!(phi.len(), 2, "{phi:?}");
-    assert!((first - exact).abs() < 0.005, "first order {first}, exact {exact}");
+    assert!(
+        (first - exact).abs() < 0.005,
+        "first order {first}, exact {exact}"
+    );
 }
