@@ -1,6 +1,7 @@
 //! `jamkit archive`: a run's measures without the configurations. The
 //! archive must be smaller, keep every measure, leave a packing in flight
-//! out, and give `jamkit report` the same fits as the run itself.
+//! out, hold the tables of the packings it holds (a finished run's own,
+//! byte for byte), and give `jamkit report` the same fits as the run itself.
 
 use jamkit_experiment::Experiment;
 use jamkit_experiment::archive::archive;
@@ -25,6 +26,32 @@ fn archive_keeps_measures_and_gives_the_same_report() {
         .collect();
     ids.sort();
     assert_eq!(ids.len(), 16);
+    let tables = ["results.csv", "summary.csv", "dos.csv", "gaps.csv"];
+    // A finished run's archive holds the run's own tables, byte for byte
+    // (written again from the archived packings, in the run's order).
+    let whole = tempfile::tempdir().unwrap();
+    assert_eq!(archive(run.path(), whole.path()).unwrap().packings, 16);
+    for table in std::iter::once("experiment.ron").chain(tables) {
+        assert_eq!(
+            std::fs::read(run.path().join(table)).unwrap(),
+            std::fs::read(whole.path().join(table)).unwrap(),
+            "{table}"
+        );
+    }
+    // A directory whose experiment.ron is another file of the same grid
+    // without `Gaps` (several files run into one directory, as the
+    // paper-size profile was) keeps its gap table: the packings hold gaps.
+    let own = std::fs::read(run.path().join("experiment.ron")).unwrap();
+    let without_gaps = text.replace(", Gaps(h_min: 1e-8, points_per_decade: 4)", "");
+    assert_ne!(without_gaps, text);
+    std::fs::write(run.path().join("experiment.ron"), &without_gaps).unwrap();
+    let other = tempfile::tempdir().unwrap();
+    archive(run.path(), other.path()).unwrap();
+    assert_eq!(
+        std::fs::read(run.path().join("gaps.csv")).unwrap(),
+        std::fs::read(other.path().join("gaps.csv")).unwrap()
+    );
+    std::fs::write(run.path().join("experiment.ron"), own).unwrap();
     let busy = &ids[0];
     std::fs::write(packings.join(format!("{busy}.lock")), "host=x pid=1").unwrap();
 
@@ -51,19 +78,42 @@ fn archive_keeps_measures_and_gives_the_same_report() {
         assert!(kept.positions.is_empty() && kept.radii.is_empty());
         assert_eq!(kept, without_configuration(&full), "{id}");
     }
-    for table in [
-        "experiment.ron",
-        "results.csv",
-        "summary.csv",
-        "dos.csv",
-        "gaps.csv",
-    ] {
-        assert_eq!(
-            std::fs::read(run.path().join(table)).unwrap(),
-            std::fs::read(out.path().join(table)).unwrap(),
-            "{table}"
-        );
-    }
+    // With a packing left out, the tables are those of the 15 archived
+    // (the run's own still count 16): its point has one sample, not two.
+    let read =
+        |dir: &std::path::Path, table: &str| std::fs::read_to_string(dir.join(table)).unwrap();
+    assert_eq!(
+        read(run.path(), "experiment.ron"),
+        read(out.path(), "experiment.ron")
+    );
+    let results = read(out.path(), "results.csv");
+    assert_eq!(results.lines().count(), 1 + 15, "{results}");
+    assert!(!results.contains(busy.as_str()), "{results}");
+    let summary = read(out.path(), "summary.csv");
+    let column = summary
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|c| c == "samples")
+        .unwrap();
+    let samples: Vec<&str> = summary
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(column).unwrap())
+        .collect();
+    assert_eq!(samples.len(), 8, "{summary}");
+    assert_eq!(
+        samples.iter().filter(|&&n| n == "1").count(),
+        1,
+        "{summary}"
+    );
+    assert_eq!(
+        samples.iter().filter(|&&n| n == "2").count(),
+        7,
+        "{summary}"
+    );
+    assert_ne!(read(run.path(), "summary.csv"), summary);
 
     // The report of the archive is the report of the run, fit for fit
     // (the busy packing left out of both).

@@ -6,17 +6,26 @@
 //! measures that `jamkit report` reads (φ_J, contacts, the binned spectrum,
 //! the gap counts) take 2–5 kB. The archive holds every packing file of the
 //! run with its configuration left out ([`format::without_configuration`]),
-//! the run's `experiment.ron` and its tables (`*.csv`) as they are. A packing
-//! in flight (its lock present) is left out, since a process may be adding
-//! observables to it; an unreadable one is refused by name. The packings a
-//! run has not made yet are simply absent, so a study can be archived stage
-//! by stage while it runs.
+//! the run's `experiment.ron` as it is, and the tables (`results.csv`,
+//! `summary.csv`, and `dos.csv` / `gaps.csv` where measured) of the packings
+//! it holds, written as a finished run writes them: for a finished run they
+//! are the run's own tables, byte for byte. A packing in flight (its lock
+//! present) is left out, since a process may be adding observables to it;
+//! an unreadable one is refused by name. The packings a run has not made yet
+//! are simply absent, so a study can be archived stage by stage while it
+//! runs, and the tables say what the archive holds (a run in the middle of a
+//! stage has rewritten its `results.csv` but not yet its `summary.csv`).
+//!
+//! A directory the experiment file does not describe alone (several files
+//! run into one directory, or a packing outside the file's grid), or whose
+//! `experiment.ron` no longer parses, keeps its tables as they are.
 //!
 //! An archive is read by `jamkit report` like a run directory. It cannot be
 //! resumed (the configurations are gone): the packings of a resumed run are
 //! made again.
 
 use crate::error::ExperimentError;
+use crate::{grid, runner, schema::Experiment};
 use jamkit_format::{self as format, PackingFile};
 use std::path::Path;
 
@@ -57,6 +66,7 @@ pub fn archive(dir: &Path, out: &Path) -> Result<ArchiveReport, ExperimentError>
         in_flight: locked.len(),
         bytes: (0, 0),
     };
+    let mut kept_files = Vec::new();
     for path in paths.iter().filter(|p| is_packing(p)) {
         let file = PackingFile::load_checked(path)?;
         let kept = format::without_configuration(&file);
@@ -65,16 +75,48 @@ pub fn archive(dir: &Path, out: &Path) -> Result<ArchiveReport, ExperimentError>
         report.packings += 1;
         report.bytes.0 += std::fs::metadata(path).map_or(0, |m| m.len());
         report.bytes.1 += std::fs::metadata(&target).map_or(0, |m| m.len());
+        kept_files.push(kept);
     }
-    // The run's own description and tables, byte for byte.
+    let tables_written = match Experiment::from_file(&dir.join("experiment.ron")) {
+        Ok(experiment) => tables(&experiment, kept_files, out)?,
+        Err(_) => false,
+    };
+    // The run's own description (and, where the archive cannot write the
+    // tables itself, its tables), byte for byte.
     let entries = std::fs::read_dir(dir).map_err(|e| ExperimentError::io(dir, e))?;
     for path in entries.filter_map(|e| e.ok().map(|e| e.path())) {
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
         let Some(name) = name else { continue };
-        if name == "experiment.ron" || name.ends_with(".csv") {
+        if name == "experiment.ron" || (!tables_written && name.ends_with(".csv")) {
             let bytes = std::fs::read(&path).map_err(|e| ExperimentError::io(&path, e))?;
             format::write_atomic(&out.join(&name), &bytes)?;
         }
     }
     Ok(report)
+}
+
+/// The tables of the archived `packings`, in the grid's order as a run
+/// writes them, with a spectrum or gap table wherever a packing holds
+/// those measures; `false` (nothing written) when a packing is not one of
+/// `experiment`'s grid.
+fn tables(
+    experiment: &Experiment,
+    mut packings: Vec<PackingFile>,
+    out: &Path,
+) -> Result<bool, ExperimentError> {
+    let points = grid::points(experiment)?;
+    let jobs = grid::jobs(experiment, &points);
+    let place = |f: &PackingFile| jobs.iter().position(|j| j.id == f.id);
+    if packings.iter().any(|f| place(f).is_none()) {
+        return Ok(false);
+    }
+    packings.sort_by_key(|f| place(f));
+    // Several files run into one directory share a grid but not their
+    // observables (the paper-size profile: `Gaps` in one file only).
+    let measured = (
+        experiment.spectrum().is_some() || packings.iter().any(|f| f.measures.spectrum.is_some()),
+        experiment.gaps().is_some() || packings.iter().any(|f| f.measures.gaps.is_some()),
+    );
+    runner::tables_measured(experiment, &packings, measured, out)?;
+    Ok(true)
 }

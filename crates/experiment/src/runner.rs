@@ -432,10 +432,23 @@ pub(crate) fn tables_of(
     packings: &[PackingFile],
     out: &Path,
 ) -> Result<(), ExperimentError> {
+    let measured = (experiment.spectrum().is_some(), experiment.gaps().is_some());
+    tables_measured(experiment, packings, measured, out)
+}
+
+/// [`tables_of`] with what was measured, `(spectrum, gaps)`, given: an
+/// archive's packings may hold measures of other files run into the same
+/// directory.
+pub(crate) fn tables_measured(
+    experiment: &Experiment,
+    packings: &[PackingFile],
+    measured: (bool, bool),
+    out: &Path,
+) -> Result<(), ExperimentError> {
     let points = grid::points(experiment)?;
     let jobs = grid::jobs(experiment, &points);
     let groups = group_by_point(experiment, &points, &jobs, packings);
-    write_tables(experiment, packings, &groups, out)
+    write_table_files(packings, &groups, measured, &experiment.scan_paths(), out)
 }
 
 fn group_by_point<'a>(
