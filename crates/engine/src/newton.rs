@@ -283,18 +283,18 @@ fn solve_shifted(n: usize, g: &[f64], shift: f64, w: &mut NewtonWork) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::fire::{Fire, FireParams, StopReason};
 
     /// `V = Σ_a k_a (x_a − c_a)² / 2 + Σ_a (x_a − x_{a+1})⁴ / 4`: an
     /// anisotropic well (stiffnesses over four decades) with a quartic
     /// coupling, whose Hessian is tridiagonal.
-    struct Well {
-        x: Vec<f64>,
-        k: Vec<f64>,
-        inv_m: Vec<f64>,
-        saved: Vec<f64>,
+    pub(crate) struct Well {
+        pub(crate) x: Vec<f64>,
+        pub(crate) k: Vec<f64>,
+        pub(crate) inv_m: Vec<f64>,
+        pub(crate) saved: Vec<f64>,
     }
 
     impl Objective for Well {
@@ -347,9 +347,19 @@ mod tests {
         fn restore(&mut self) {
             self.x.clone_from(&self.saved);
         }
+        fn stiffness_blocks(&mut self, blocks: &mut Vec<f64>) -> bool {
+            // One body: its block is the harmonic part of the Hessian.
+            let f = self.x.len();
+            blocks.clear();
+            blocks.resize(f * f, 0.0);
+            for a in 0..f {
+                blocks[a * f + a] = self.k[a];
+            }
+            true
+        }
     }
 
-    fn well() -> Well {
+    pub(crate) fn well() -> Well {
         Well {
             x: vec![0.0, 2.0, -1.0, 0.5, 3.0, 1.5],
             k: vec![1e-4, 1e-3, 1e-2, 0.1, 1.0, 3.0],
