@@ -235,7 +235,8 @@ pub enum BenchCommand {
         #[arg(long, value_enum)]
         search: Option<SearchArg>,
         /// Write every minimisation (φ, FIRE steps, Newton iterations, why it
-        /// stopped, V/N, Σ g²) of every packing to this CSV (a step trace).
+        /// stopped, V/N, Σ g², L-BFGS evaluations) of every packing to this
+        /// CSV (a step trace).
         #[arg(long, value_name = "FILE")]
         trace: Option<std::path::PathBuf>,
     },
