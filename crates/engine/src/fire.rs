@@ -846,6 +846,20 @@ impl Fire {
     }
 }
 
+/// `Ok` when `value` is positive and finite, else an error naming
+/// `prefix.name` (the settings' shared range check).
+pub(crate) fn require_positive_finite(prefix: &str, name: &str, value: f64) -> Result<()> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            format!("{prefix}.{name}"),
+            value,
+            "must be positive and finite",
+        ))
+    }
+}
+
 /// `max_a g_a²`.
 #[cold]
 #[inline(never)]
@@ -948,7 +962,7 @@ fn step_sums_portable<const UNIT: bool>(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// V = Σ k_a x_a² / 2 with very different stiffnesses and masses.
@@ -986,14 +1000,19 @@ mod tests {
         }
         fn stiffness_blocks(&mut self, blocks: &mut Vec<f64>) -> bool {
             // One body: its block is the whole (diagonal) Hessian.
-            let f = self.x.len();
-            blocks.clear();
-            blocks.resize(f * f, 0.0);
-            for a in 0..f {
-                blocks[a * f + a] = self.k[a];
-            }
-            true
+            diagonal_block(&self.k, blocks)
         }
+    }
+
+    /// One body whose stiffness block is `diag(k)` (test wells).
+    pub(crate) fn diagonal_block(k: &[f64], blocks: &mut Vec<f64>) -> bool {
+        let f = k.len();
+        blocks.clear();
+        blocks.resize(f * f, 0.0);
+        for a in 0..f {
+            blocks[a * f + a] = k[a];
+        }
+        true
     }
 
     /// Both variants reach the force criterion on an anisotropic quadratic

@@ -98,14 +98,7 @@ impl LbfgsParams {
                 "must be at least 1 (iterations between rebuilds of the blocks)",
             ));
         }
-        if !(self.max_step > 0.0 && self.max_step.is_finite()) {
-            return Err(Error::invalid(
-                format!("{prefix}.max_step"),
-                self.max_step,
-                "must be positive and finite",
-            ));
-        }
-        Ok(())
+        crate::fire::require_positive_finite(prefix, "max_step", self.max_step)
     }
 }
 

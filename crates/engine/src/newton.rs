@@ -104,14 +104,7 @@ impl NewtonParams {
                 "must lie strictly between 0 and 1 (relative to the mean diagonal of the Hessian)",
             ));
         }
-        if !(self.max_step > 0.0 && self.max_step.is_finite()) {
-            return Err(Error::invalid(
-                format!("{prefix}.max_step"),
-                self.max_step,
-                "must be positive and finite",
-            ));
-        }
-        Ok(())
+        crate::fire::require_positive_finite(prefix, "max_step", self.max_step)
     }
 }
 
@@ -349,13 +342,7 @@ pub(crate) mod tests {
         }
         fn stiffness_blocks(&mut self, blocks: &mut Vec<f64>) -> bool {
             // One body: its block is the harmonic part of the Hessian.
-            let f = self.x.len();
-            blocks.clear();
-            blocks.resize(f * f, 0.0);
-            for a in 0..f {
-                blocks[a * f + a] = self.k[a];
-            }
-            true
+            crate::fire::tests::diagonal_block(&self.k, blocks)
         }
     }
 
