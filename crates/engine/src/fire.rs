@@ -727,8 +727,7 @@ impl Fire {
                     g,
                     energy,
                     lb,
-                    &mut self.lbfgs_work,
-                    blocks,
+                    (&mut self.lbfgs_work, blocks),
                     budget,
                     |e, f, g| p.stop(e, f, g, bodies),
                 )?;

@@ -287,15 +287,15 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 /// L-BFGS iterations from the current state of `obj` (energy `energy`,
 /// gradient `g`) until `stop(V, Σ g², g)` holds, the attempt gives up, or
-/// `budget` evaluations are spent. On return `g` holds the gradient of the
-/// state `obj` is left in.
+/// `budget` evaluations are spent; the work buffers and the block masses
+/// (rebuilt with `blocks: true`) are the minimiser's. On return `g` holds
+/// the gradient of the state `obj` is left in.
 pub(crate) fn attempt<O: Objective>(
     obj: &mut O,
     g: &mut [f64],
     mut energy: f64,
     params: &LbfgsParams,
-    w: &mut LbfgsWork,
-    blocks: &mut BlockMasses,
+    (w, blocks): (&mut LbfgsWork, &mut BlockMasses),
     budget: u64,
     stop: impl Fn(f64, f64, &[f64]) -> Option<StopReason>,
 ) -> Result<LbfgsRun> {
@@ -439,8 +439,7 @@ mod tests {
             &mut g,
             energy,
             params,
-            &mut w,
-            &mut BlockMasses::default(),
+            (&mut w, &mut BlockMasses::default()),
             100_000,
             |_, f, _| (f < tol).then_some(StopReason::Force),
         )
