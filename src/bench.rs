@@ -19,8 +19,8 @@ use anyhow::Result;
 use clap::{Subcommand, ValueEnum};
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::{
-    Fire, FireParams, FireVariant, ForceCriterion, JamParams, JamSearch, Masses, Objective,
-    PreconParams, Scene, jam,
+    Fire, FireParams, FireVariant, ForceCriterion, JamParams, JamSearch, LbfgsParams, Masses,
+    Objective, PreconParams, Scene, jam,
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_observe::summarize;
@@ -187,6 +187,30 @@ pub enum BenchCommand {
         /// FIRE steps before the Newton finish [default: the minimiser's].
         #[arg(long)]
         newton_after: Option<u64>,
+        /// No Newton finish (`minimizer.newton: None`), whatever the
+        /// minimiser.
+        #[arg(long)]
+        no_newton: bool,
+        /// L-BFGS (`minimizer.lbfgs`) after this many FIRE steps of a
+        /// minimisation without convergence (`0`: L-BFGS from the start,
+        /// FIRE only where it gives up) [default: no L-BFGS].
+        #[arg(long)]
+        lbfgs_after: Option<u64>,
+        /// Pairs L-BFGS keeps (`minimizer.lbfgs.memory`) [default: 8].
+        #[arg(long, requires = "lbfgs_after")]
+        lbfgs_memory: Option<u32>,
+        /// L-BFGS's largest change of a coordinate per iteration
+        /// (`minimizer.lbfgs.max_step`) [default: 0.05].
+        #[arg(long, requires = "lbfgs_after")]
+        lbfgs_max_step: Option<f64>,
+        /// L-BFGS only in the minimisations that start from a decompressed
+        /// jammed state (`minimizer.lbfgs.jammed_only: true`).
+        #[arg(long, requires = "lbfgs_after")]
+        lbfgs_jammed_only: bool,
+        /// L-BFGS's `H₀` from each body's stiffness block
+        /// (`minimizer.lbfgs.blocks: true`).
+        #[arg(long, requires = "lbfgs_after")]
+        lbfgs_blocks: bool,
         /// FIRE's masses (`minimizer.masses`): the family's default
         /// (`family`), the bodies' own (`plain`, the paper) or each body's
         /// stiffness block (`blocks`: block-preconditioned FIRE) [default:
@@ -211,7 +235,8 @@ pub enum BenchCommand {
         #[arg(long, value_enum)]
         search: Option<SearchArg>,
         /// Write every minimisation (φ, FIRE steps, Newton iterations, why it
-        /// stopped, V/N, Σ g²) of every packing to this CSV (a step trace).
+        /// stopped, V/N, Σ g², L-BFGS evaluations) of every packing to this
+        /// CSV (a step trace).
         #[arg(long, value_name = "FILE")]
         trace: Option<std::path::PathBuf>,
     },
@@ -311,6 +336,12 @@ pub fn run(what: BenchCommand) -> Result<()> {
             minimizer,
             force_criterion,
             newton_after,
+            no_newton,
+            lbfgs_after,
+            lbfgs_memory,
+            lbfgs_max_step,
+            lbfgs_jammed_only,
+            lbfgs_blocks,
             masses,
             precon_floor,
             precon_refresh,
@@ -345,20 +376,34 @@ pub fn run(what: BenchCommand) -> Result<()> {
                 }),
             };
             fire.dt_max = dt_max.or(fire.dt_max);
+            if no_newton {
+                fire.newton = None;
+            }
+            fire.lbfgs = lbfgs_after.map(|after| {
+                let d = LbfgsParams::default();
+                LbfgsParams {
+                    after,
+                    memory: lbfgs_memory.unwrap_or(d.memory),
+                    max_step: lbfgs_max_step.unwrap_or(d.max_step),
+                    jammed_only: lbfgs_jammed_only,
+                    blocks: lbfgs_blocks,
+                    ..d
+                }
+            });
             fire.validate("minimizer")?;
             let mut trace_out = match &trace {
                 Some(path) => {
                     let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
                     writeln!(
                         f,
-                        "seed,phi,fire_steps,newton_iterations,reason,energy_per_particle,force_sq"
+                        "seed,phi,fire_steps,newton_iterations,reason,energy_per_particle,force_sq,lbfgs_evals"
                     )?;
                     Some(f)
                 }
                 None => None,
             };
             out!(
-                "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s"
+                "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s,lbfgs_evals"
             );
             for seed in seeds {
                 // One packing of `shape` in `D` dimensions with this seed.
@@ -493,12 +538,13 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         for (phi, m) in fire.take_trace() {
             writeln!(
                 f,
-                "{seed},{phi:.15},{},{},{:?},{:e},{:e}",
+                "{seed},{phi:.15},{},{},{:?},{:e},{:e},{}",
                 m.steps,
                 m.newton_iterations,
                 m.reason,
                 m.energy / n as f64,
-                m.force_sq
+                m.force_sq,
+                m.lbfgs_evaluations
             )?;
         }
         f.flush()?;
@@ -506,14 +552,16 @@ fn bench_packing<const D: usize, S: Shape<D>>(
     let threshold = scene.packing().shape.rattler_threshold();
     let s = summarize(&mut scene, threshold);
     out!(
-        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2}",
+        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2},{}",
         out.phi,
         s.z_j,
         s.iso_margin,
         out.fire_steps,
-        wall * 1e6 / out.fire_steps.max(1) as f64,
+        // Per energy-and-gradient evaluation: FIRE's steps and L-BFGS's.
+        wall * 1e6 / (out.fire_steps + out.lbfgs_evaluations).max(1) as f64,
         packing_hash(scene.packing()),
-        out.newton_iterations
+        out.newton_iterations,
+        out.lbfgs_evaluations
     );
     Ok(())
 }

@@ -1,14 +1,14 @@
 //! The minimisers against the paper's FIRE: from the same start, on small
 //! scenes of every family above jamming, FIRE with the Newton finish, FIRE
-//! 2.0 and FIRE with block masses must end in the same local minimum as FIRE — the same energy
+//! 2.0, FIRE with block masses and L-BFGS must end in the same local minimum as FIRE — the same energy
 //! and the same contacts — and the paper's FIRE (`FireParams::paper()`)
 //! must still give the packings it gave before the Newton finish existed.
 
 use jamkit_core::Shape;
 use jamkit_engine::hessian::{Hessian, HessianOptions};
 use jamkit_engine::{
-    Fire, FireParams, FireVariant, ForceCriterion, Masses, NewtonParams, Objective, PreconParams,
-    Scene, StopReason,
+    Fire, FireParams, FireVariant, ForceCriterion, LbfgsParams, Masses, NewtonParams, Objective,
+    PreconParams, Scene, StopReason,
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_lobed::{LobedParams, lobed};
@@ -53,8 +53,9 @@ fn minimise<const D: usize, S: Shape<D>>(scene: &Scene<D, S>, params: FireParams
 ///
 /// FIRE (the paper's) minimises a random compressed start; from its
 /// minimum with every coordinate moved by up to 10⁻³, FIRE 2.0, FIRE with
-/// the Newton finish from the first step (`after: 1`) and the default
-/// minimiser come back to it. (From the random start itself the
+/// the Newton finish from the first step (`after: 1`), the default
+/// minimiser, FIRE with block masses and L-BFGS from the first step (with
+/// the bodies' masses and with the blocks as `H₀`) come back to it. (From the random start itself the
 /// minimisers take other paths through the landscape and may end in other
 /// minima, as FIRE with any other parameter would: FIRE 2.0 did on every
 /// family, and so did Newton taking over after 300 FIRE steps on one
@@ -87,6 +88,15 @@ fn same_minimum<const D: usize, S: Shape<D>>(shape: S, n: usize, phi: f64, seeds
         masses: Masses::Blocks(PreconParams::default()),
         ..paper.clone()
     };
+    // L-BFGS from the start, with the bodies' masses and with the blocks
+    // as its `H₀`.
+    let lbfgs = |blocks| FireParams {
+        lbfgs: Some(LbfgsParams {
+            blocks,
+            ..LbfgsParams::default()
+        }),
+        ..paper.clone()
+    };
     let mut newton_used = 0;
     for &seed in seeds {
         let scene = compressed::<D, S>(shape.clone(), n, seed, phi);
@@ -114,6 +124,8 @@ fn same_minimum<const D: usize, S: Shape<D>>(shape: S, n: usize, phi: f64, seeds
             ("newton", newton_first.clone()),
             ("default", default.clone()),
             ("block masses", blocks.clone()),
+            ("lbfgs", lbfgs(false)),
+            ("lbfgs blocks", lbfgs(true)),
         ];
         for (name, params) in runs {
             let other = minimise(&perturbed, params);

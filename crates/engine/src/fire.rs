@@ -22,6 +22,7 @@
 //! `force_tol_per_body` the force sum is divided by `N` first, as in the
 //! paper author's public code.
 
+use crate::lbfgs::{LbfgsEnd, LbfgsParams, LbfgsWork};
 use crate::newton::{NewtonEnd, NewtonParams, NewtonWork};
 use crate::precon::{BlockMasses, PreconParams};
 use jamkit_core::{Error, Result};
@@ -179,6 +180,12 @@ pub struct FireParams {
     /// existed still resume.
     #[serde(skip_serializing_if = "Masses::is_plain")]
     pub masses: Masses,
+    /// L-BFGS ([`crate::lbfgs`]): after `after` FIRE steps without
+    /// convergence (`0`: from the start), L-BFGS iterations until a
+    /// stopping criterion holds; FIRE again where it gives up. `None` (the
+    /// default): no L-BFGS. Left out of the recorded settings when `None`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lbfgs: Option<LbfgsParams>,
 }
 
 /// Which masses FIRE integrates with.
@@ -224,6 +231,7 @@ impl Default for FireParams {
             max_steps: 20_000_000,
             newton: Some(NewtonParams::default()),
             masses: Masses::Family,
+            lbfgs: None,
         }
     }
 }
@@ -404,6 +412,9 @@ impl FireParams {
         if let Some(newton) = &self.newton {
             newton.validate(&format!("{prefix}.newton"))?;
         }
+        if let Some(lbfgs) = &self.lbfgs {
+            lbfgs.validate(&format!("{prefix}.lbfgs"))?;
+        }
         if let Masses::Blocks(precon) = &self.masses {
             precon.validate(&format!("{prefix}.masses"))?;
             if self.variant != FireVariant::Fire {
@@ -440,6 +451,9 @@ pub struct MinimizeOutcome {
     pub reason: StopReason,
     /// Newton iterations of the finish (0 without it).
     pub newton_iterations: u64,
+    /// Energy-and-gradient evaluations of L-BFGS (0 without it), on top of
+    /// `steps`.
+    pub lbfgs_evaluations: u64,
 }
 
 /// A FIRE minimiser with its work buffers (reused across minimisations).
@@ -453,6 +467,7 @@ pub struct Fire {
     inv_mass: Vec<f64>,
     mass: Vec<f64>,
     newton_work: NewtonWork,
+    lbfgs_work: LbfgsWork,
     blocks: BlockMasses,
     /// `M⁻¹ g` of the preconditioned FIRE.
     precon_grad: Vec<f64>,
@@ -614,6 +629,35 @@ impl Fire {
         let mut newton_iterations: u64 = 0;
         let mut newton_interval = p.newton.as_ref().map_or(u64::MAX, |nw| nw.after);
         let mut next_newton = newton_interval;
+        let mut lbfgs_evaluations: u64 = 0;
+        let mut lbfgs_interval = match &p.lbfgs {
+            Some(lb) if self.from_jammed || !lb.jammed_only => lb.after,
+            _ => u64::MAX,
+        };
+        let mut next_lbfgs = lbfgs_interval;
+        // The minimisation's end, with the counts so far.
+        macro_rules! finish {
+            ($energy:expr, $force_sq:expr, $reason:expr) => {
+                return Ok(MinimizeOutcome {
+                    steps,
+                    energy: $energy,
+                    force_sq: $force_sq,
+                    reason: $reason,
+                    newton_iterations,
+                    lbfgs_evaluations,
+                })
+            };
+        }
+        // FIRE again from rest, after a second-order attempt gave up.
+        macro_rules! from_rest {
+            () => {
+                v.fill(0.0);
+                dt = p.dt_init;
+                alpha = alpha_start;
+                positive_steps = 0;
+                continue;
+            };
+        }
         loop {
             if let Some(pc) = precon
                 && steps.is_multiple_of(pc.refresh)
@@ -632,20 +676,14 @@ impl Fire {
                 });
             }
             if let Some(reason) = p.stop(energy, force_sq, g, bodies) {
-                return Ok(MinimizeOutcome {
-                    steps,
-                    energy,
-                    force_sq,
-                    reason,
-                    newton_iterations,
-                });
+                finish!(energy, force_sq, reason);
             }
-            if steps >= p.max_steps {
+            if steps + lbfgs_evaluations >= p.max_steps {
                 let stride = n / obj.bodies().max(1);
                 let (worst_body, worst_share, rotational_share) =
                     residual_shares(g, stride, obj.translations_per_body());
                 return Err(Error::NotConverged {
-                    steps,
+                    steps: steps + lbfgs_evaluations,
                     phi: obj.phi(),
                     energy_per_particle: energy / bodies,
                     force_sq,
@@ -668,13 +706,7 @@ impl Fire {
                 newton_iterations += run.iterations;
                 energy = run.energy;
                 if let NewtonEnd::Converged(reason) = run.end {
-                    return Ok(MinimizeOutcome {
-                        steps,
-                        energy,
-                        force_sq: run.force_sq,
-                        reason,
-                        newton_iterations,
-                    });
+                    finish!(energy, run.force_sq, reason);
                 }
                 if run.end == NewtonEnd::Unavailable {
                     // No Hessian (the state is untouched): FIRE alone.
@@ -684,11 +716,37 @@ impl Fire {
                 // Back to FIRE, from rest; the next attempt comes later.
                 newton_interval = newton_interval.saturating_mul(2);
                 next_newton = steps.saturating_add(newton_interval);
-                v.fill(0.0);
-                dt = p.dt_init;
-                alpha = alpha_start;
-                positive_steps = 0;
-                continue;
+                from_rest!();
+            }
+            if steps >= next_lbfgs
+                && let Some(lb) = &p.lbfgs
+            {
+                let budget = p.max_steps - (steps + lbfgs_evaluations);
+                let run = crate::lbfgs::attempt(
+                    obj,
+                    g,
+                    energy,
+                    lb,
+                    (&mut self.lbfgs_work, blocks),
+                    budget,
+                    |e, f, g| p.stop(e, f, g, bodies),
+                )?;
+                lbfgs_evaluations += run.evaluations;
+                energy = run.energy;
+                if let LbfgsEnd::Converged(reason) = run.end {
+                    finish!(energy, run.force_sq, reason);
+                }
+                // L-BFGS may have rebuilt the blocks with its own settings.
+                if lb.blocks
+                    && let Some(pc) = precon
+                {
+                    blocked = blocks.rebuild(obj, inv_m, pc);
+                }
+                // Back to FIRE, from rest; the next attempt comes after
+                // twice as many FIRE steps (at least 100).
+                lbfgs_interval = lbfgs_interval.max(50).saturating_mul(2);
+                next_lbfgs = steps.saturating_add(lbfgs_interval);
+                from_rest!();
             }
             // Power P = F·v with F = −g.
             let power = -minus_power;
@@ -784,6 +842,20 @@ impl Fire {
             energy = obj.energy_gradient(g);
             steps += 1;
         }
+    }
+}
+
+/// `Ok` when `value` is positive and finite, else an error naming
+/// `prefix.name` (the settings' shared range check).
+pub(crate) fn require_positive_finite(prefix: &str, name: &str, value: f64) -> Result<()> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            format!("{prefix}.{name}"),
+            value,
+            "must be positive and finite",
+        ))
     }
 }
 
@@ -889,7 +961,7 @@ fn step_sums_portable<const UNIT: bool>(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// V = Σ k_a x_a² / 2 with very different stiffnesses and masses.
@@ -927,14 +999,19 @@ mod tests {
         }
         fn stiffness_blocks(&mut self, blocks: &mut Vec<f64>) -> bool {
             // One body: its block is the whole (diagonal) Hessian.
-            let f = self.x.len();
-            blocks.clear();
-            blocks.resize(f * f, 0.0);
-            for a in 0..f {
-                blocks[a * f + a] = self.k[a];
-            }
-            true
+            diagonal_block(&self.k, blocks)
         }
+    }
+
+    /// One body whose stiffness block is `diag(k)` (test wells).
+    pub(crate) fn diagonal_block(k: &[f64], blocks: &mut Vec<f64>) -> bool {
+        let f = k.len();
+        blocks.clear();
+        blocks.resize(f * f, 0.0);
+        for a in 0..f {
+            blocks[a * f + a] = k[a];
+        }
+        true
     }
 
     /// Both variants reach the force criterion on an anisotropic quadratic

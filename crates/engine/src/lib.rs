@@ -24,6 +24,7 @@ pub mod check;
 pub mod fire;
 pub mod hessian;
 mod lanes;
+pub mod lbfgs;
 pub mod neighbors;
 pub mod newton;
 pub mod precon;
@@ -36,6 +37,7 @@ pub use fire::{
     Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Objective, Progress,
     ProgressSnapshot, StopReason,
 };
+pub use lbfgs::LbfgsParams;
 pub use neighbors::NeighborList;
 pub use newton::NewtonParams;
 pub use precon::PreconParams;

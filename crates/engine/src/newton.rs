@@ -104,14 +104,7 @@ impl NewtonParams {
                 "must lie strictly between 0 and 1 (relative to the mean diagonal of the Hessian)",
             ));
         }
-        if !(self.max_step > 0.0 && self.max_step.is_finite()) {
-            return Err(Error::invalid(
-                format!("{prefix}.max_step"),
-                self.max_step,
-                "must be positive and finite",
-            ));
-        }
-        Ok(())
+        crate::fire::require_positive_finite(prefix, "max_step", self.max_step)
     }
 }
 
@@ -283,18 +276,18 @@ fn solve_shifted(n: usize, g: &[f64], shift: f64, w: &mut NewtonWork) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::fire::{Fire, FireParams, StopReason};
 
     /// `V = Σ_a k_a (x_a − c_a)² / 2 + Σ_a (x_a − x_{a+1})⁴ / 4`: an
     /// anisotropic well (stiffnesses over four decades) with a quartic
     /// coupling, whose Hessian is tridiagonal.
-    struct Well {
-        x: Vec<f64>,
-        k: Vec<f64>,
-        inv_m: Vec<f64>,
-        saved: Vec<f64>,
+    pub(crate) struct Well {
+        pub(crate) x: Vec<f64>,
+        pub(crate) k: Vec<f64>,
+        pub(crate) inv_m: Vec<f64>,
+        pub(crate) saved: Vec<f64>,
     }
 
     impl Objective for Well {
@@ -347,9 +340,13 @@ mod tests {
         fn restore(&mut self) {
             self.x.clone_from(&self.saved);
         }
+        fn stiffness_blocks(&mut self, blocks: &mut Vec<f64>) -> bool {
+            // One body: its block is the harmonic part of the Hessian.
+            crate::fire::tests::diagonal_block(&self.k, blocks)
+        }
     }
 
-    fn well() -> Well {
+    pub(crate) fn well() -> Well {
         Well {
             x: vec![0.0, 2.0, -1.0, 0.5, 3.0, 1.5],
             k: vec![1e-4, 1e-3, 1e-2, 0.1, 1.0, 3.0],

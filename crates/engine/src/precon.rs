@@ -211,6 +211,45 @@ impl BlockMasses {
         true
     }
 
+    /// `out = M⁻¹ x` (the preconditioner of L-BFGS, [`crate::lbfgs`]),
+    /// with the block size as a constant where it is one of the families'.
+    #[inline(always)]
+    pub(crate) fn apply_inverse(&self, x: &[f64], out: &mut [f64]) {
+        match self.stride {
+            2 => self.apply_inverse_of::<2>(x, out),
+            3 => self.apply_inverse_of::<3>(x, out),
+            6 => self.apply_inverse_of::<6>(x, out),
+            f => {
+                for ((xb, ob), inv) in x
+                    .chunks_exact(f)
+                    .zip(out.chunks_exact_mut(f))
+                    .zip(self.inverse.chunks_exact(f * f))
+                {
+                    for a in 0..f {
+                        ob[a] = (0..f).map(|c| inv[a * f + c] * xb[c]).sum();
+                    }
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn apply_inverse_of<const F: usize>(&self, x: &[f64], out: &mut [f64]) {
+        for ((xb, ob), inv) in x
+            .chunks_exact(F)
+            .zip(out.chunks_exact_mut(F))
+            .zip(self.inverse.chunks_exact(F * F))
+        {
+            for a in 0..F {
+                let mut sum = 0.0;
+                for c in 0..F {
+                    sum += inv[a * F + c] * xb[c];
+                }
+                ob[a] = sum;
+            }
+        }
+    }
+
     /// `w = M⁻¹ g`, and `[Σ g², Σ g v, vᵀ M v, gᵀ M⁻¹ g]` in one pass over
     /// the bodies (fixed order: deterministic).
     pub(crate) fn sums(&self, g: &[f64], v: &[f64], w: &mut [f64]) -> [f64; 4] {

@@ -147,6 +147,8 @@ pub struct ProtocolOutcome {
     pub minimizations: u64,
     /// Newton iterations of the finish over all minimisations.
     pub newton_iterations: u64,
+    /// L-BFGS evaluations over all minimisations (on top of `fire_steps`).
+    pub lbfgs_evaluations: u64,
 }
 
 /// Bookkeeping shared by the protocols.
@@ -155,6 +157,7 @@ struct Tally {
     fire_steps: u64,
     minimizations: u64,
     newton_iterations: u64,
+    lbfgs_evaluations: u64,
 }
 
 impl Tally {
@@ -168,6 +171,7 @@ impl Tally {
         self.fire_steps += out.steps;
         self.minimizations += 1;
         self.newton_iterations += out.newton_iterations;
+        self.lbfgs_evaluations += out.lbfgs_evaluations;
         Ok(out.energy / scene.bodies() as f64)
     }
 
@@ -178,6 +182,7 @@ impl Tally {
             fire_steps: self.fire_steps,
             minimizations: self.minimizations,
             newton_iterations: self.newton_iterations,
+            lbfgs_evaluations: self.lbfgs_evaluations,
         }
     }
 }

@@ -220,6 +220,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                         fire_steps: jammed.fire_steps + above.fire_steps,
                         minimizations: jammed.minimizations + above.minimizations,
                         newton_iterations: jammed.newton_iterations + above.newton_iterations,
+                        lbfgs_evaluations: jammed.lbfgs_evaluations + above.lbfgs_evaluations,
                     })
                 })
             }
