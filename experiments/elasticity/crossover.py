@@ -15,8 +15,11 @@ packing's own jamming point), each mean +- s.e.m. with the number of
 negative G; then the local slope d ln y / d ln delta_phi between
 neighbouring points, and least-squares slopes of ln(mean y) against
 ln(delta_phi) over each --range and over the two regimes of a near-disk
-family, delta_phi < Delta^2 and delta_phi > Delta^2 (when they hold two
-points or more). Errors: the standard deviation of the slope over --boot
+family on either side of delta_phi = Delta^2 (the issue's crossover) and of
+delta_phi = Delta (the paper's outlook: G ~ Delta^1/2 G~(delta_phi/Delta),
+G~(x) ~ x for x << 1 and x^1/2 for x >> 1), where they hold two points or
+more; for near-disks also the scaling variables x = delta_phi/Delta and
+G_stab/Delta^1/2 per point. Errors: the standard deviation of the slope over --boot
 bootstrap replicas, each resampling every point's packings with
 replacement (a replica with a mean <= 0 in the range is dropped and
 counted), and the 16th-84th percentile range. With few packings per point
@@ -169,6 +172,10 @@ def main():
                 neg = sum(v < 0 for v in vs)
                 cells.append(f"{m:.3e} ± {se:.1e}" + (f" ({neg})" if q.startswith("G") else ""))
             rows.append(row)
+            if delta and row["G_stab"] != "":
+                # The paper's scaling variables: G / Delta^1/2 against
+                # delta_phi / Delta.
+                cells.append(f"x = {x / delta:.3g}, G_stab/Delta^1/2 = {row['G_stab'] / math.sqrt(delta):.3e}")
             print(f"{x:g} | {len(rs)} | " + " | ".join(cells))
         xs = sorted(points)
         for q, name in QUANTITIES[1:]:
@@ -184,14 +191,14 @@ def main():
             if local:
                 print(f"local slopes of {name}: " + ", ".join(local))
         ranges = [tuple(float(v) for v in r.split(":")) for r in args.range]
+        labels = [f"{lo:g} <= delta_phi <= {hi:g}" for lo, hi in ranges]
         if delta:
-            ranges += [(0.0, delta * delta * (1 - 1e-9)), (delta * delta * (1 + 1e-9), math.inf)]
-        for lo, hi in ranges:
-            label = f"{lo:g} <= delta_phi <= {hi:g}"
-            if delta and (lo, hi) == ranges[-2]:
-                label = "delta_phi < Delta^2"
-            if delta and (lo, hi) == ranges[-1]:
-                label = "delta_phi > Delta^2"
+            # The crossover (delta_phi ~ Delta^2) and the paper's
+            # (its outlook: G ~ Delta^1/2 G~(delta_phi / Delta)).
+            for scale, name in ((delta * delta, "Delta^2"), (delta, "Delta")):
+                ranges += [(0.0, scale * (1 - 1e-9)), (scale * (1 + 1e-9), math.inf)]
+                labels += [f"delta_phi < {name}", f"delta_phi > {name}"]
+        for (lo, hi), label in zip(ranges, labels):
             if sum(lo <= x <= hi for x in points) < 2:
                 print(f"fits over {label}: fewer than two points")
                 continue
