@@ -1022,3 +1022,124 @@ fn shear_stabilised_option_through_the_runner() {
         "{err}"
     );
 }
+
+/// A shear stabilisation that fails leaves a trace, as a failed minimisation
+/// does (the runner's `<id>.failed.json`): here forced by a cap of one
+/// strain step (`protocol.stabilise.max_iterations`) on the fixed-box
+/// packing with `G < 0` of `shear_stabilised_option_through_the_runner`,
+/// which needs 5. The failed file holds the fixed-box packing (its
+/// configuration and moduli bit for bit those of the run without the
+/// option) flagged with the error, no `<id>.json` is written (a rerun tries
+/// again), and a rerun with the default cap stabilises it and removes the
+/// failed file. Bad `stabilise` settings are refused, naming the field.
+#[test]
+fn a_failed_shear_stabilisation_keeps_the_fixed_box_packing() {
+    let base = r#"(name: "el", family: "sphere", particles: 32, samples: 1, seed: 1,
+        protocol: Pressure(pressure: 1e-3, tol: 1e-2STAB),
+        observables: [Contacts, Pressure, Moduli()])"#;
+    let experiment = |stab: &str| {
+        let e =
+            jamkit_experiment::Experiment::from_ron(&base.replace("STAB", stab), "inline").unwrap();
+        e.validate().map(|_| e)
+    };
+    let plain_dir = tempfile::tempdir().unwrap();
+    let plain = common::run_ok(&experiment("").unwrap(), plain_dir.path(), 1).packings;
+    let dir = tempfile::tempdir().unwrap();
+    let capped = experiment(", shear_stabilised: true, stabilise: (max_iterations: 1)").unwrap();
+    let report = common::run_into(&capped, dir.path(), 1);
+    assert!(report.packings.is_empty());
+    assert_eq!(report.failures.len(), 1);
+    let packings = dir.path().join("packings");
+    let id = "sphere_d2_N32_s1";
+    let path = jamkit_experiment::runner::failed_path(&packings, id);
+    let message = report.failures[0].to_string();
+    assert!(
+        message.contains("did not converge in 1 strain steps")
+            && message.contains(&path.display().to_string()),
+        "the error says why and names the saved file: {message}"
+    );
+    assert!(!packings.join(format!("{id}.json")).exists());
+    let failed = jamkit_format::PackingFile::load_checked(&path).unwrap();
+    let flag = &failed.measures.flag;
+    assert!(
+        flag.contains("shear stabilisation failed") && flag.contains("fixed-box packing"),
+        "{flag}"
+    );
+    let m = failed.measures.moduli.as_ref().unwrap();
+    assert!(m.stabilisation.is_none());
+    let fixed = plain[0].measures.moduli.as_ref().unwrap();
+    assert_eq!(m.moduli, fixed.moduli);
+    assert!(m.moduli.shear < 0.0, "the fixed box's G < 0: {m:?}");
+    assert_eq!(failed.positions, plain[0].positions);
+    assert_eq!(failed.measures.n_contacts, plain[0].measures.n_contacts);
+    assert_eq!(
+        failed.settings["protocol"]["Pressure"]["stabilise"]["max_iterations"],
+        1
+    );
+    // The default cap: stabilised, and the failed file is gone.
+    let full = common::run_ok(
+        &experiment(", shear_stabilised: true").unwrap(),
+        dir.path(),
+        1,
+    );
+    assert!(!path.exists(), "a successful rerun removes the failed file");
+    let s = full.packings[0].measures.moduli.as_ref().unwrap();
+    assert!(s.stabilisation.as_ref().unwrap().iterations > 1);
+    assert!(
+        full.packings[0].settings["protocol"]["Pressure"]
+            .get("stabilise")
+            .is_none(),
+        "default settings are not written (earlier runs resume)"
+    );
+    // `jamkit plot` draws the fixed box's G beside the stabilised one,
+    // and says that the plain run has none.
+    let fig = tempfile::tempdir().unwrap();
+    let plots = jamkit_report::runplot::plot(&[dir.path().to_path_buf()], fig.path()).unwrap();
+    let name = |f: &std::path::PathBuf| f.file_name().unwrap().to_string_lossy().into_owned();
+    assert!(
+        plots
+            .figures
+            .iter()
+            .any(|f| name(f).starts_with("shear_modulus_fixed_box_vs_")),
+        "{:?}",
+        plots.figures
+    );
+    let plots =
+        jamkit_report::runplot::plot(&[plain_dir.path().to_path_buf()], fig.path()).unwrap();
+    assert!(
+        plots
+            .index
+            .contains("G of the fixed box (before the shear stabilisation) against"),
+        "{}",
+        plots.index
+    );
+    // Bad input.
+    for (stab, field) in [
+        (
+            ", shear_stabilised: true, stabilise: (max_iterations: 0)",
+            "protocol.stabilise.max_iterations",
+        ),
+        (
+            ", shear_stabilised: true, stabilise: (tol: 2.0)",
+            "protocol.stabilise.tol",
+        ),
+        (
+            ", shear_stabilised: true, stabilise: (margin: -0.1)",
+            "protocol.stabilise.margin",
+        ),
+        (", stabilise: (max_iterations: 3)", "protocol.stabilise"),
+    ] {
+        let err = experiment(stab).unwrap_err().to_string();
+        assert!(err.contains(field), "{stab}: {err}");
+    }
+    let err = jamkit_experiment::Experiment::from_ron(
+        &base.replace(
+            "STAB",
+            ", shear_stabilised: true, stabilise: (max_steps: 3)",
+        ),
+        "inline",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("max_steps"), "{err}");
+}

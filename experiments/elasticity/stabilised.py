@@ -5,10 +5,10 @@ packings").
 
     python3 experiments/elasticity/stabilised.py [--csv OUT.csv] DIR...
 
-Reads the packing files of every DIR (`packings/*.json`; the samples that
-unjammed on their way up, `*.failed.json`, are listed with their V/N; a
-sample whose stabilisation failed leaves no file, only its error in the
-run's output) and writes one row per packing (--csv): the fixed-box moduli kept in
+Reads the packing files of every DIR (`packings/*.json`; the failed
+samples, `*.failed.json`, are listed with their V/N and the start of their
+flag: those that unjammed on their way up, and since session 18 those whose
+stabilisation failed, kept as the fixed-box packing it started from) and writes one row per packing (--csv): the fixed-box moduli kept in
 `moduli.stabilisation.fixed_box` beside the stabilised ones, det F, the
 largest entry of |F - I|, strain steps, residuals, V/N before and after.
 Then prints per family parameters and delta_phi (or target pressure): the
@@ -151,10 +151,11 @@ def main():
     print(f"\n{len(rows)} packings; G < 0: fixed box {sum(1 for r in rows if r['G_fixed'] < 0)}, "
           f"stabilised {sum(1 for r in rows if r['G'] < 0)}; G_min < 0: fixed box "
           f"{sum(1 for r in rows if r['Gmin_fixed'] < 0)}, stabilised {sum(1 for r in rows if r['Gmin'] < 0)}")
-    print(f"{len(failed)} samples unjammed on the way up (failed.json):")
+    print(f"{len(failed)} failed samples (failed.json):")
     for f in failed:
         d = json.load(open(f))
-        print(f"  {d['id']}: V/N = {d['energy_per_particle']:.3e}")
+        why = d["measures"]["flag"].split(";")[0][:160]
+        print(f"  {d['id']}: V/N = {d['energy_per_particle']:.3e}: {why}")
 
 
 if __name__ == "__main__":

@@ -258,8 +258,8 @@ impl SceneVisitor for SampleVisitor<'_> {
             }
         };
 
-        let observed = observe(e, &mut scene).map_err(sample_err)?;
-        let measures = observed.measures(
+        let mut observed = observe(e, &mut scene).map_err(sample_err)?;
+        let mut measures = observed.measures(
             e,
             Protocolled {
                 phi: outcome.phi,
@@ -272,6 +272,28 @@ impl SceneVisitor for SampleVisitor<'_> {
             },
             &scene.packing().shape,
         );
+        if let Some(source) = observed.stabilisation_failed.take() {
+            // The packing the stabilisation started from, with its
+            // fixed-box measures, kept as `<id>.failed.json` (the runner's
+            // convention for failed samples): no packing file, so a rerun
+            // tries the sample again.
+            let why = format!(
+                "shear stabilisation failed: {source}; this is the fixed-box packing it started from, with the fixed box's moduli"
+            );
+            measures.flag = if measures.flag.is_empty() {
+                why
+            } else {
+                format!("{}; {why}", measures.flag)
+            };
+            let mut file = self.file(scene.packing(), true, measures);
+            file.rattler = observed.rattler();
+            return Err(ExperimentError::Sample {
+                sample: job.id.clone(),
+                source: Box::new(source),
+                state: Some(Box::new(file)),
+                saved: None,
+            });
+        }
         let mut file = self.file(scene.packing(), e.output.packings, measures);
         file.rattler = observed.rattler();
         Ok((file, observed.eigenvalue_table))
@@ -389,6 +411,9 @@ struct Observed {
     eigenvalue_table: Option<String>,
     gaps: Option<GapCounts>,
     moduli: Option<ModuliMeasures>,
+    /// `protocol.shear_stabilised`: why the stabilisation failed (`moduli`
+    /// then holds the fixed box's, without `stabilisation`).
+    stabilisation_failed: Option<jamkit_core::Error>,
 }
 
 /// The rattler rule of `e` for this packing: an explicit
@@ -409,26 +434,34 @@ fn rattler_rule<const D: usize, S: Shape<D>>(e: &Experiment, p: &Packing<D, S>) 
     }
 }
 
+/// The rattler count rule of a shear stabilisation: the cell has no rank
+/// rule, so a family whose rattlers go by rank needs
+/// `rattlers.min_contacts`.
+fn stabilisation_threshold<const D: usize, S: Shape<D>>(
+    e: &Experiment,
+    p: &Packing<D, S>,
+) -> jamkit_core::Result<usize> {
+    match rattler_rule(e, p) {
+        RattlerRule::Count(t) => Ok(t),
+        RattlerRule::Rank => Err(jamkit_core::Error::Unsupported(
+            "protocol.shear_stabilised = true finds the stabilised cell's rattlers by count; this family's rattlers go by rank: set rattlers.min_contacts".into(),
+        )),
+    }
+}
+
 /// `protocol.shear_stabilised`: the packing of `scene` shear-stabilised
-/// (`jamkit_observe::moduli::stabilise`, default settings, the deformation
-/// check's minimiser) and the moduli of the stabilised cell, with the
-/// fixed box's `fixed_box` kept beside them. Rattlers by count only (the
-/// cell has no rank rule).
+/// (`jamkit_observe::moduli::stabilise` with `protocol.stabilise`, the
+/// deformation check's minimiser) and the moduli of the stabilised cell,
+/// with the fixed box's `fixed_box` kept beside them. Rattlers by count
+/// (`threshold`).
 fn stabilised_moduli<const D: usize, S: Shape<D>>(
     e: &Experiment,
     scene: &mut Scene<D, S>,
+    threshold: usize,
     fixed_box: jamkit_observe::moduli::Moduli,
     params: jamkit_observe::moduli::ModuliParams,
 ) -> jamkit_core::Result<ModuliMeasures> {
     use jamkit_observe::moduli;
-    let threshold = match rattler_rule(e, scene.packing()) {
-        RattlerRule::Count(t) => t,
-        RattlerRule::Rank => {
-            return Err(jamkit_core::Error::Unsupported(
-                "protocol.shear_stabilised = true finds the stabilised cell's rattlers by count; this family's rattlers go by rank: set rattlers.min_contacts".into(),
-            ));
-        }
-    };
     let start = Instant::now();
     // At the packing's own pressure (`Pressure`: its target, to the
     // protocol's tolerance), as Dagois-Bohy et al.: at fixed volume a
@@ -439,7 +472,7 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
         scene,
         threshold,
         ensemble,
-        &moduli::StabiliseParams::default(),
+        &e.protocol.stabilise().cloned().unwrap_or_default(),
         &moduli::deformation_minimizer(),
     )?;
     let stabilise_s = start.elapsed().as_secs_f64();
@@ -488,20 +521,31 @@ fn observe<const D: usize, S: Shape<D>>(
     let gaps = e
         .gaps()
         .map(|params| GapCounts::of_scene(scene, rattler, &params));
+    let mut stabilisation_failed = None;
     let moduli = match e.moduli() {
         Some(params) => {
             let start = Instant::now();
             let moduli = jamkit_observe::moduli::measure(scene, rattler, &params)?;
             let wall_s = start.elapsed().as_secs_f64();
+            let fixed_box = |moduli| ModuliMeasures {
+                moduli,
+                params: params.clone(),
+                wall_s,
+                stabilisation: None,
+            };
             if e.protocol.shear_stabilised() {
-                Some(stabilised_moduli(e, scene, moduli, params)?)
+                let threshold = stabilisation_threshold(e, scene.packing())?;
+                match stabilised_moduli(e, scene, threshold, moduli.clone(), params.clone()) {
+                    Ok(m) => Some(m),
+                    // The fixed box's moduli, and the failure for the
+                    // caller to keep (`Observed::stabilisation_failed`).
+                    Err(failure) => {
+                        stabilisation_failed = Some(failure);
+                        Some(fixed_box(moduli))
+                    }
+                }
             } else {
-                Some(ModuliMeasures {
-                    moduli,
-                    params,
-                    wall_s,
-                    stabilisation: None,
-                })
+                Some(fixed_box(moduli))
             }
         }
         None => None,
@@ -513,6 +557,7 @@ fn observe<const D: usize, S: Shape<D>>(
         eigenvalue_table,
         gaps,
         moduli,
+        stabilisation_failed,
     })
 }
 
@@ -580,8 +625,12 @@ pub(crate) fn remeasure(
         fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> Self::Output {
             let (e, mut file) = (self.e, self.file);
             let start = Instant::now();
-            let observed = observe(e, &mut scene)
+            let mut observed = observe(e, &mut scene)
                 .map_err(|source| ExperimentError::sample(file.id.clone(), source))?;
+            // The saved packing stays as it was.
+            if let Some(source) = observed.stabilisation_failed.take() {
+                return Err(ExperimentError::sample(file.id.clone(), source));
+            }
             let old = &file.measures;
             let run = Protocolled {
                 phi: old.phi,

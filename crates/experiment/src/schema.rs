@@ -26,7 +26,7 @@ use jamkit_core::{Potential, SizeDistribution};
 use jamkit_engine::{FireParams, JamParams, JamSearch, PressureParams};
 use jamkit_observe::gaps::GapParams;
 use jamkit_observe::hessian::HessianOptions;
-use jamkit_observe::moduli::ModuliParams;
+use jamkit_observe::moduli::{ModuliParams, StabiliseParams};
 use jamkit_observe::spectrum::DosParams;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -204,6 +204,13 @@ pub enum Protocol {
         /// of earlier runs are unchanged.
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         shear_stabilised: bool,
+        /// How the shear stabilisation runs (with `shear_stabilised` only):
+        /// `(tol, max_iterations, max_step, margin)`, each left out at its
+        /// default (`jamkit_observe::moduli::StabiliseParams`). Not written
+        /// out when every field has its default, so that settings of
+        /// earlier runs are unchanged.
+        #[serde(default, skip_serializing_if = "StabiliseParams::is_default")]
+        stabilise: StabiliseParams,
     },
     /// Jam (as `Jam`), then compress the jammed packing by `delta_phi`
     /// in steps of at most `compress_eps`, relaxing after each: a packing
@@ -245,6 +252,13 @@ pub enum Protocol {
         /// of earlier runs are unchanged.
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         shear_stabilised: bool,
+        /// How the shear stabilisation runs (with `shear_stabilised` only):
+        /// `(tol, max_iterations, max_step, margin)`, each left out at its
+        /// default (`jamkit_observe::moduli::StabiliseParams`). Not written
+        /// out when every field has its default, so that settings of
+        /// earlier runs are unchanged.
+        #[serde(default, skip_serializing_if = "StabiliseParams::is_default")]
+        stabilise: StabiliseParams,
     },
 }
 
@@ -334,6 +348,17 @@ impl Protocol {
                 shear_stabilised, ..
             } => shear_stabilised,
             Protocol::Jam { .. } | Protocol::Phi { .. } => false,
+        }
+    }
+
+    /// The shear stabilisation's settings (`Pressure` and `AboveJam`;
+    /// `None` for the others).
+    pub fn stabilise(&self) -> Option<&StabiliseParams> {
+        match self {
+            Protocol::Pressure { stabilise, .. } | Protocol::AboveJam { stabilise, .. } => {
+                Some(stabilise)
+            }
+            Protocol::Jam { .. } | Protocol::Phi { .. } => None,
         }
     }
 
@@ -779,6 +804,18 @@ impl Experiment {
                 true,
                 "needs the Moduli observable (only the moduli are measured on the stabilised cell)",
             ));
+        }
+        if let Some(stabilise) = self.protocol.stabilise()
+            && !stabilise.is_default()
+        {
+            if !self.protocol.shear_stabilised() {
+                return Err(ExperimentError::invalid(
+                    "protocol.stabilise",
+                    format!("{stabilise:?}"),
+                    "only applies with protocol.shear_stabilised = true; set it, or leave stabilise out",
+                ));
+            }
+            stabilise.validate("protocol.stabilise")?;
         }
         if !(self.engine.skin > 0.0 && self.engine.skin <= 2.0) {
             return Err(ExperimentError::invalid(

@@ -1188,6 +1188,13 @@ impl Default for StabiliseParams {
 }
 
 impl StabiliseParams {
+    /// Whether every field has its default (an experiment file then
+    /// leaves the settings out, so packings made before they existed
+    /// resume).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
     /// Check ranges; names the offending field.
     pub fn validate(&self, prefix: &str) -> Result<()> {
         if !(self.tol > 0.0 && self.tol < 1.0) {

@@ -8,7 +8,8 @@
 //!
 //! * φ_J, `z_J` (and `z_corr` where rotational rattlers make it differ),
 //!   the rattler fraction, the pressure, the moduli `G`, `B` (where
-//!   `Moduli` was measured) and `z − z_J` (where `AboveJam` recorded its
+//!   `Moduli` was measured; with `shear_stabilised` also the fixed box's
+//!   `G`, before the stabilisation) and `z − z_J` (where `AboveJam` recorded its
 //!   jamming point), as the mean over the point's
 //!   packings with the standard error as error bar; one series per value
 //!   of the other scanned quantities (and per family), with its label;
@@ -217,7 +218,7 @@ const PROTOCOL_TARGETS: [(&str, &str, &str); 3] = [
     ("AboveJam", "delta_phi", "delta_phi"),
 ];
 
-const OBSERVABLES: [(&str, &str, Measure); 8] = [
+const OBSERVABLES: [(&str, &str, Measure); 9] = [
     ("phi_j", "φ_J", |f| Some(f.phi)),
     ("z_j", "z_J", |f| f.measures.z_j),
     ("z_corr", "z_corr", |f| f.z_corr()),
@@ -231,6 +232,16 @@ const OBSERVABLES: [(&str, &str, Measure); 8] = [
     ("bulk_modulus", "bulk modulus B", |f| {
         Some(f.measures.moduli.as_ref()?.moduli.bulk)
     }),
+    // `protocol.shear_stabilised`: `G` above is the stabilised cell's, and
+    // this the fixed box's, measured before the stabilisation.
+    (
+        "shear_modulus_fixed_box",
+        "shear modulus G of the fixed box (before the shear stabilisation)",
+        |f| {
+            let m = f.measures.moduli.as_ref()?;
+            Some(m.stabilisation.as_ref()?.fixed_box.shear)
+        },
+    ),
     (
         "z_above_jam",
         "z − z_J (from its own jamming point)",
@@ -384,7 +395,11 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
             let hi = positive.fold(f64::NEG_INFINITY, f64::max);
             let log_y = matches!(
                 key,
-                "pressure" | "shear_modulus" | "bulk_modulus" | "z_above_jam"
+                "pressure"
+                    | "shear_modulus"
+                    | "shear_modulus_fixed_box"
+                    | "bulk_modulus"
+                    | "z_above_jam"
             ) && ys.iter().all(|&y| y > 0.0 || (zero_ok && y == 0.0))
                 && hi >= 20.0 * lo;
             let left_off = if log_y && zeros > 0 {
