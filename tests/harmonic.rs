@@ -40,6 +40,7 @@ fn mixed(delta: f64) -> Harmonic {
         delta,
         inertia: None,
         gap: Default::default(),
+        exact_solver: Default::default(),
     })
     .unwrap()
 }
