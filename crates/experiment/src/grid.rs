@@ -293,6 +293,8 @@ fn param_axes(
     for spec in info.params {
         let value = match (experiment.params.get(spec.name), spec.default) {
             (Some(v), _) => v.clone(),
+            // Left out of the point: the family reads it as absent.
+            (None, Some(_)) if spec.absent_is_omitted => continue,
             (None, Some(default)) => ron::from_str(default).expect("family defaults are valid RON"),
             (None, None) => {
                 return Err(ExperimentError::invalid(
