@@ -145,6 +145,70 @@
 //! height (the convex hull's support function is the global one): callers
 //! check convexity first.
 //!
+//! ## The joint iteration
+//!
+//! [`exact_with`] on supports found by [`radial_search`] nests two Newton
+//! iterations: at every point `u` of the outer one, both support searches
+//! run to convergence, although only the last point's supports need that
+//! accuracy. [`exact_joint`] instead runs one Newton iteration on the
+//! normal and both support points at once. Since
+//! `s_i(u) = max_y u·x_i(y)`, the gap is the saddle value
+//!
+//! ```text
+//! h = max_u min_{y_i, y_j} L,     L(u, y_i, y_j) = u·d,     d = r − x_i(y_i) + x_j(y_j)
+//! ```
+//!
+//! (`x` the world-frame surface point `R ρ(y) y`, `y` the body-frame unit
+//! vector). Its stationarity conditions are the outer and both inner ones:
+//! `P d = 0` (the support points face each other along `u`) and `t_i = 0`,
+//! `t_j = 0` (each surface's normal at its point is `±u`, `t` as in the
+//! support search, body `j` read in the direction `−u`). With `A`, `B`
+//! and `t` of each body at its current `y`, Newton's step on the three
+//! unit vectors (tangent steps `δu`, `δy_i`, `δy_j`) solves
+//!
+//! ```text
+//! ⎡ −(u·d) P    −P R_i B_i    P R_j B_j ⎤ ⎡ δu  ⎤     ⎡ −P d ⎤
+//! ⎢ −B_iᵀR_iᵀ P    A_i           0      ⎥ ⎢ δy_i⎥  =  ⎢  t_i ⎥
+//! ⎣  B_jᵀR_jᵀ P     0           A_j     ⎦ ⎣ δy_j⎦     ⎣  t_j ⎦
+//! ```
+//!
+//! (`∂t/∂u = Bᵀ`; the `y` blocks are the searches' own Hessians, the `u`
+//! block that of the linear function `u·d` on the sphere). Eliminating
+//! the support steps, `δy_i = A_i⁺ t_i + A_i⁺B_iᵀR_iᵀ δu` and
+//! `δy_j = A_j⁺ t_j − A_j⁺B_jᵀR_jᵀ δu`, leaves on the tangent plane of `u`
+//!
+//! ```text
+//! W δu = P (d − R_i B_i A_i⁺ t_i + R_j B_j A_j⁺ t_j),     W = (u·d) P + P (S̃_i + S̃_j) P,
+//! S̃ = R B A⁺ Bᵀ Rᵀ:
+//! ```
+//!
+//! the outer step of the nested solve, with each support point replaced
+//! by its linearisation after one step of its own search, and `S̃` the
+//! support Hessian's formula read at the current `y` (at converged
+//! supports it is the nested solve's step exactly). One step costs a
+//! radial jet and a 3 × 3 Cholesky factorisation per body (for `A⁺ t`
+//! and `A⁺ Bᵀ`, four right-hand sides) and one of `W`, where the nested
+//! solve runs both searches to convergence (2–3 steps each, with their
+//! line searches) and factorises `A` twice more for the support Hessians.
+//!
+//! The iteration starts as the nested solve does, with both supports
+//! searched to convergence at the line of centres, so that the same
+//! pairs are skipped (`g(r̂) > max_gap`) bit for bit. It has no merit
+//! function (a saddle point), so it is guarded instead: it stops with a
+//! failure where `A_i`, `A_j` or `W` is not positive definite (a surface
+//! not convex at its point, or bodies overlapping by more than their
+//! radii of curvature), where a step is longer than the one before (no
+//! quadratic convergence) or after 30 steps; steps are cut to length 0.3.
+//! [`exact_joint`] then runs the nested solve and counts it
+//! ([`joint_fallbacks`]). Converged after a step below 10⁻⁷ on all three
+//! unit vectors, the same tolerance as the nested solve's: the error left
+//! is `~10⁻¹⁴` in the normal and the support points and `~10⁻²⁸` in `h`
+//! (`L` is stationary). The result carries the supports at the final
+//! point (the support Hessian `R B A⁺ Bᵀ Rᵀ` there with `hessians`), so
+//! [`ExactGap3::contact`] and [`ExactGap3::hessian`] serve both solvers.
+//! It is not the nested solve's result bit for bit: the two stop at
+//! different points within ~10⁻¹⁴ of the optimum.
+//!
 //! [`QuadraticSupport`] is the support function of an ellipsoid,
 //! `s(x) = √(xᵀ M x)`, the body the `ellipsoid` family is made of and the
 //! one the tests here use.

@@ -72,6 +72,18 @@
 //! [`CONVEXITY_GRID`] × 2·[`CONVEXITY_GRID`] directions, and refuses
 //! `"SecondOrder"` (there is none in 3D).
 //!
+//! **Exact solver** (`exact_solver`, read with `gap: "Exact"` only). The
+//! default `"Nested"` is the iteration above, bit for bit. `"Joint"` runs
+//! [`jamkit_gap3d::exact_joint`]: one Newton iteration on the normal and
+//! both support points at once, on the same radial jets, falling back to
+//! the nested solve where it fails (counted by
+//! [`jamkit_gap3d::joint_fallbacks`]). Both converge to the same
+//! tolerance; the results agree to ~10⁻¹⁴, not bit for bit, so a packing
+//! made with `"Joint"` is a different (equally valid) packing. When an
+//! experiment does not give `exact_solver`, it is left out of the packing
+//! file (`ParamSpec::absent_is_omitted`): files made without it are
+//! those of before it existed.
+//!
 //! **Rotational coordinates.** Three (`ω` in the world frame, the nmer
 //! convention: `Q → exp(ω) Q`), or two when `F` is axisymmetric (every mode
 //! with a non-zero coefficient has `m = 0`): then the rotation about the
