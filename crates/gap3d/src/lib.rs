@@ -858,6 +858,10 @@ where
 }
 
 /// How [`exact_joint_alone`] ended.
+// NOTE: `Found` is large (two support jets), the others empty; boxing it
+// would allocate on every gap in the hot path, and the value is only
+// returned and matched at once, never stored.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
 pub enum Joint {
     /// Converged (a Newton step below 10⁻⁷ on the normal and both support
