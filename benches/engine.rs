@@ -5,9 +5,10 @@
 //! * `energy_gradient_near_disks/N`: the same for the paper's near-disks
 //!   (`fourier`, n = 2, Δ = 0.1, φ = 0.86), N = 256 and 1024.
 //! * `jam_disks/256`: one whole N = 256 packing with the paper's protocol.
-//! * `energy_gradient_harmonic/{FirstOrder,Exact}`: one energy-and-gradient
-//!   evaluation of N = 128 `harmonic` near-spheres (`Ŷ_22`, Δ = 0.1,
-//!   φ = 0.66, random, overlapping) with the first-order and the exact gap
+//! * `energy_gradient_harmonic/{FirstOrder,Exact,ExactJoint}`: one
+//!   energy-and-gradient evaluation of N = 128 `harmonic` near-spheres
+//!   (`Ŷ_22`, Δ = 0.1, φ = 0.66, random, overlapping) with the first-order
+//!   and the exact gap, the latter by the nested and the joint solver
 //!   (docs/reproduction-3d.md, "Exact gap").
 //!
 //! The N = 1024 packing benchmark is `jamkit bench packing` (one packing is
@@ -81,7 +82,13 @@ fn energy_gradient_harmonic(c: &mut Criterion) {
     use jamkit_core::gap_model::GapModel;
     use jamkit_harmonic::{Harmonic, HarmonicParams};
     let mut group = c.benchmark_group("energy_gradient_harmonic");
-    for gap in [GapModel::FirstOrder, GapModel::Exact] {
+    use jamkit_harmonic::ExactSolver;
+    let cases = [
+        (GapModel::FirstOrder, ExactSolver::Nested, "FirstOrder"),
+        (GapModel::Exact, ExactSolver::Nested, "Exact"),
+        (GapModel::Exact, ExactSolver::Joint, "ExactJoint"),
+    ];
+    for (gap, exact_solver, name) in cases {
         let shape = Harmonic::new(&HarmonicParams {
             l: Some(2),
             m: Some(2),
@@ -89,6 +96,7 @@ fn energy_gradient_harmonic(c: &mut Criterion) {
             delta: 0.1,
             inertia: None,
             gap,
+            exact_solver,
         })
         .unwrap();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
@@ -96,7 +104,7 @@ fn energy_gradient_harmonic(c: &mut Criterion) {
         let packing = Packing::<3, Harmonic>::random(shape, sizes, 0.66, &mut rng).unwrap();
         let mut scene = Scene::new(packing, Potential::Harmonic, 0.2);
         let mut grad = vec![0.0; scene.dof()];
-        group.bench_function(gap.name(), |b| {
+        group.bench_function(name, |b| {
             b.iter(|| black_box(scene.energy_gradient(&mut grad)))
         });
     }

@@ -13,7 +13,7 @@ mod common;
 
 use jamkit_core::Shape;
 use jamkit_core::gap_model::GapModel;
-use jamkit_harmonic::{Harmonic, HarmonicParams, Mode};
+use jamkit_harmonic::{ExactSolver, Harmonic, HarmonicParams, Mode};
 
 fn single(l: u32, m: i32, delta: f64) -> Harmonic {
     Harmonic::single(l, m, delta).unwrap()
@@ -40,6 +40,7 @@ fn mixed(delta: f64) -> Harmonic {
         delta,
         inertia: None,
         gap: Default::default(),
+        exact_solver: Default::default(),
     })
     .unwrap()
 }
@@ -73,8 +74,9 @@ fn modes_and_sums_pass_the_kit() {
 /// The exact gap (`gap: "Exact"`, read through the registry) in the
 /// engine: the kit's forces and torques, Hessian, `h_ij = h_ji`,
 /// translation and rotation about z (tolerances in `crates/kit`) for a
-/// zonal and a tesseral mode and a mixed sum, and the energy's invariance
-/// under a general rotation. The kit's jamming run is left out: with the
+/// zonal and a tesseral mode and a mixed sum, the last two also with
+/// `exact_solver: "Joint"`, and the energy's invariance under a general
+/// rotation. The kit's jamming run is left out: with the
 /// exact gap it takes ~2 min on one core (~30× the first-order run);
 /// the pair-level checks are the crate's unit tests (`exact_tests.rs`).
 #[test]
@@ -85,12 +87,22 @@ fn the_exact_gap_passes_the_kit() {
         assert_eq!(p.gap, GapModel::Exact);
         Harmonic::new(&p).unwrap()
     };
+    let joint = |h: Harmonic| {
+        assert_eq!(h.exact_solver(), ExactSolver::Joint);
+        h
+    };
     for shape in [
         parse(r#"{"l": 2, "m": 0, "delta": 0.2, "gap": "Exact"}"#),
         parse(r#"{"l": 3, "m": 2, "delta": 0.1, "gap": "exact"}"#),
         parse(
             r#"{"modes": [{"l": 2, "m": 0, "c": 1.0}, {"l": 4, "m": -2, "c": 0.5}], "delta": 0.08, "gap": "Exact"}"#,
         ),
+        joint(parse(
+            r#"{"l": 3, "m": 2, "delta": 0.1, "gap": "Exact", "exact_solver": "Joint"}"#,
+        )),
+        joint(parse(
+            r#"{"modes": [{"l": 2, "m": 0, "c": 1.0}, {"l": 4, "m": -2, "c": 0.5}], "delta": 0.08, "gap": "Exact", "exact_solver": "joint"}"#,
+        )),
     ] {
         jamkit_kit::check_gradient::<3, _>(&shape);
         assert!(jamkit_kit::check_hessian::<3, _>(&shape));
@@ -165,4 +177,39 @@ fn quick_experiment_jams() {
     for p in &report.packings {
         common::assert_in_window(p);
     }
+}
+
+/// `exact_solver` read through the registry: absent is `"Nested"` (the
+/// default path), a string names the solver (case ignored); a wrong name
+/// and a bare RON identifier are refused naming the field or what is
+/// allowed.
+#[test]
+fn the_exact_solver_is_read_and_checked() {
+    let read = |text: &str| {
+        let map = jamkit_registry::params_from_ron(text).unwrap();
+        let p: HarmonicParams = jamkit_registry::parse_params("harmonic", &map).unwrap();
+        Harmonic::new(&p).unwrap().exact_solver()
+    };
+    assert_eq!(
+        read("(l: 2, delta: 0.1, gap: \"Exact\")"),
+        ExactSolver::Nested
+    );
+    assert_eq!(
+        read("(l: 2, delta: 0.1, gap: \"Exact\", exact_solver: \"joint\")"),
+        ExactSolver::Joint
+    );
+    jamkit_kit::check_bad_params(
+        "harmonic",
+        3,
+        &[
+            (
+                "(l: 2, delta: 0.1, gap: \"Exact\", exact_solver: \"Jointly\")",
+                "\"Nested\", \"Joint\"",
+            ),
+            (
+                "(l: 2, delta: 0.1, gap: \"Exact\", exact_solver: Joint)",
+                "exact_solver",
+            ),
+        ],
+    );
 }

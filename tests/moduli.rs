@@ -60,6 +60,7 @@ fn near_sphere(delta: f64) -> Harmonic {
         delta,
         inertia: None,
         gap: Default::default(),
+        exact_solver: Default::default(),
     })
     .unwrap()
 }

@@ -36,6 +36,13 @@ pub struct ParamSpec {
     pub is_list: bool,
     /// Its default, in RON, or `None` when it must be given.
     pub default: Option<&'static str>,
+    /// True for a parameter added after packings were written without it
+    /// (its default `"None"`): when an experiment does not give it, it is
+    /// left out of the grid point, and so of the point's label and of the
+    /// packing file's `params` and `settings`, so that those files, and the
+    /// resumption of runs that wrote them, stay as they were. False: an
+    /// absent parameter is written with its default (`null` for `"None"`).
+    pub absent_is_omitted: bool,
 }
 
 /// Which dimensions a family supports.

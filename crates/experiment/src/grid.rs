@@ -293,6 +293,8 @@ fn param_axes(
     for spec in info.params {
         let value = match (experiment.params.get(spec.name), spec.default) {
             (Some(v), _) => v.clone(),
+            // Left out of the point: the family reads it as absent.
+            (None, Some(_)) if spec.absent_is_omitted => continue,
             (None, Some(default)) => ron::from_str(default).expect("family defaults are valid RON"),
             (None, None) => {
                 return Err(ExperimentError::invalid(
@@ -360,6 +362,38 @@ mod tests {
                 "sphere_d2_N16_s6"
             ]
         );
+    }
+
+    /// A parameter with `absent_is_omitted` (harmonic's `exact_solver`)
+    /// is left out of the point when the file does not give it, so the
+    /// point's parameters (hence the packing file's) are those written
+    /// before it existed; given, it is kept and labelled. Another optional
+    /// parameter left out (`inertia`) is still written as `None`.
+    #[test]
+    fn a_parameter_absent_is_omitted_only_when_its_spec_says_so() {
+        let point = |extra: &str| {
+            let e = Experiment::from_ron(
+                &format!(
+                    r#"(name: "g", dim: 3, family: "harmonic", particles: 8, params: {{"l": 2, "delta": 0.1, "gap": "Exact"{extra}}})"#
+                ),
+                "g",
+            )
+            .unwrap();
+            points(&e).unwrap().remove(0)
+        };
+        let absent = point("");
+        assert!(!absent.params.contains_key("exact_solver"));
+        assert_eq!(
+            absent.params.get("inertia"),
+            Some(&ron::Value::Option(None))
+        );
+        let given = point(r#", "exact_solver": "Joint""#);
+        assert_eq!(
+            given.params.get("exact_solver"),
+            Some(&ron::Value::String("Joint".into()))
+        );
+        assert!(given.label("harmonic").contains("exact_solver"));
+        assert!(!absent.label("harmonic").contains("exact_solver"));
     }
 
     #[test]

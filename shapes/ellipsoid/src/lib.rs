@@ -100,18 +100,21 @@ pub const INFO: FamilyInfo = FamilyInfo {
             about: "spheroid aspect ratio α = a/b > 0 (α > 1 prolate, α < 1 oblate, 1 the sphere family), longest over shortest axis ≤ 10; give alpha or axes",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "axes",
             about: "semi-axis ratios [x, y, z], each > 0, longest over shortest ≤ 10, normalised to unit product; two equal: a spheroid (the distinct axis becomes body z)",
             is_list: true,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "inertia",
             about: "moment of inertia of every rotational coordinate; None: a uniform solid ellipsoid of unit mass ((a² + b²)/5 for a spheroid, 2(a² + b² + c²)/15 triaxial)",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
     ],
 };

@@ -55,18 +55,21 @@ pub const FOURIER_INFO: FamilyInfo = FamilyInfo {
             about: "mode number, an integer ≥ 1",
             is_list: false,
             default: Some("2"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "delta",
             about: "Δ, the amplitude; 0 gives disks (the sphere family)",
             is_list: false,
             default: None,
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "inertia",
             about: "moment of inertia I of the angle θ; None: I = Δ (the paper's choice)",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         GAP_SPEC,
     ],
@@ -78,6 +81,7 @@ const GAP_SPEC: ParamSpec = ParamSpec {
     about: "gap model, a string: \"FirstOrder\" (the paper's, error O(Δ²)), \"SecondOrder\" (error O(Δ³)), \"Exact\" (common normal; convex outlines only); None: FirstOrder",
     is_list: false,
     default: Some("None"),
+    absent_is_omitted: false,
 };
 
 /// The `fourier_sum` family's self-description.
@@ -91,18 +95,21 @@ pub const FOURIER_SUM_INFO: FamilyInfo = FamilyInfo {
             about: "list of (n: integer ≥ 1, a: amplitude, b: phase in radians)",
             is_list: true,
             default: None,
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "delta",
             about: "Δ, the overall amplitude",
             is_list: false,
             default: None,
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "inertia",
             about: "moment of inertia; None: I = Δ",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         GAP_SPEC,
     ],

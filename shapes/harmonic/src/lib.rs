@@ -72,6 +72,18 @@
 //! [`CONVEXITY_GRID`] × 2·[`CONVEXITY_GRID`] directions, and refuses
 //! `"SecondOrder"` (there is none in 3D).
 //!
+//! **Exact solver** (`exact_solver`, read with `gap: "Exact"` only). The
+//! default `"Nested"` is the iteration above, bit for bit. `"Joint"` runs
+//! [`jamkit_gap3d::exact_joint`]: one Newton iteration on the normal and
+//! both support points at once, on the same radial jets, falling back to
+//! the nested solve where it fails (counted by
+//! [`jamkit_gap3d::joint_fallbacks`]). Both converge to the same
+//! tolerance; the results agree to ~10⁻¹⁴, not bit for bit, so a packing
+//! made with `"Joint"` is a different (equally valid) packing. When an
+//! experiment does not give `exact_solver`, it is left out of the packing
+//! file (`ParamSpec::absent_is_omitted`): files made without it are
+//! those of before it existed.
+//!
 //! **Rotational coordinates.** Three (`ω` in the world frame, the nmer
 //! convention: `Q → exp(ω) Q`), or two when `F` is axisymmetric (every mode
 //! with a non-zero coefficient has `m = 0`): then the rotation about the
@@ -107,6 +119,8 @@ use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, Matrix, ParamSpec, Quaternion, RotVec,
     Shape, ShapeVisitor, Vector,
 };
+/// How the exact gap is solved (`exact_solver`).
+pub use jamkit_gap3d::ExactSolver;
 use jamkit_gap3d::{self as gap3d, ExactGap3, RadialSupport, SupportAt};
 use serde::Deserialize;
 use solid::{LMAX, Poly};
@@ -124,36 +138,49 @@ pub const INFO: FamilyInfo = FamilyInfo {
             about: "degree of a single mode Ŷ_lm, an integer in [2, 8]; give l (with m) or modes",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "m",
             about: "order of the single mode, an integer in [−l, l] (m > 0: cos mφ, m < 0: sin |m|φ); None: 0",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "modes",
             about: "list of (l: integer in [2, 8], m: integer in [−l, l], c: coefficient), each (l, m) once: F = Σ c Ŷ_lm",
             is_list: true,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "delta",
             about: "Δ ≥ 0, the amplitude; 0 gives spheres (the sphere family)",
             is_list: false,
             default: None,
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "inertia",
             about: "moment of inertia of every rotational coordinate; None: I = Δ (the paper's 2D choice)",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "gap",
             about: "gap model, a string: \"FirstOrder\" (the paper's, error O(Δ²)) or \"Exact\" (signed distance along the common normal from the support functions; convex bodies only); None: FirstOrder",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
+        },
+        ParamSpec {
+            name: "exact_solver",
+            about: "how the exact gap is solved, a string: \"Nested\" (a Newton iteration on the normal, both support searches converged at each of its steps) or \"Joint\" (one Newton iteration on the normal and both support points, the nested solve where it fails; the same optimum to 1e-14, not the same bits); read with gap \"Exact\" only; None: Nested",
+            is_list: false,
+            default: Some("None"),
+            absent_is_omitted: true,
         },
     ],
 };
@@ -199,6 +226,36 @@ pub struct HarmonicParams {
         deserialize_with = "jamkit_core::gap_model::deserialize_first_or_exact"
     )]
     pub gap: GapModel,
+    /// How the exact gap is solved (default: `Nested`, today's path bit
+    /// for bit); read with `gap: "Exact"` only.
+    #[serde(default, deserialize_with = "deserialize_exact_solver")]
+    pub exact_solver: ExactSolver,
+}
+
+/// Read `exact_solver`: a string, `"Nested"` or `"Joint"` (case ignored),
+/// or `None`/absent for `Nested`. A bare RON identifier reaches a family
+/// without its name and is refused with how to write it.
+fn deserialize_exact_solver<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<ExactSolver, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Raw {
+        Name(String),
+        // Before `Wrapped`: a unit value would read as `None`.
+        Unit(()),
+        Wrapped(Option<String>),
+    }
+    use serde::de::Error;
+    match Raw::deserialize(d)? {
+        Raw::Name(s) | Raw::Wrapped(Some(s)) => s
+            .parse()
+            .map_err(|e: String| D::Error::custom(format!("params.exact_solver: {e}"))),
+        Raw::Wrapped(None) => Ok(ExactSolver::Nested),
+        Raw::Unit(()) => Err(D::Error::custom(
+            "params.exact_solver: write the solver as a string, exact_solver: \"Joint\" (allowed: \"Nested\", \"Joint\")",
+        )),
+    }
 }
 
 /// The `harmonic` family's registration.
@@ -249,6 +306,7 @@ pub struct Harmonic {
     unit_volume: f64,
     inertia: f64,
     gap: GapModel,
+    exact_solver: ExactSolver,
 }
 
 /// The value and derivatives of one body's term `G̃(x) = F(Qᵀx/|x|)` and
@@ -439,6 +497,7 @@ impl Harmonic {
             unit_volume,
             inertia,
             gap: GapModel::FirstOrder,
+            exact_solver: p.exact_solver,
         };
         shape.with_gap(p.gap)
     }
@@ -453,6 +512,7 @@ impl Harmonic {
             delta,
             inertia: None,
             gap: GapModel::FirstOrder,
+            exact_solver: ExactSolver::Nested,
         })
     }
 
@@ -487,6 +547,18 @@ impl Harmonic {
     /// The gap model.
     pub fn gap_model(&self) -> GapModel {
         self.gap
+    }
+
+    /// The same body with the exact gap solved by `solver` (read only with
+    /// the exact gap).
+    pub fn with_exact_solver(mut self, solver: ExactSolver) -> Self {
+        self.exact_solver = solver;
+        self
+    }
+
+    /// How the exact gap is solved.
+    pub fn exact_solver(&self) -> ExactSolver {
+        self.exact_solver
     }
 
     /// `Δ`.
@@ -804,16 +876,36 @@ impl Harmonic {
             return None;
         }
         let (ci, cj) = (o_i.columns(), o_j.columns());
-        // Warm starts: each search begins where the body's last one ended,
-        // moved with the direction (`y* − u` changes slowly, by O(Δ|δu|)).
-        let (last_i, last_j) = (Cell::new(None), Cell::new(None));
-        gap3d::exact_with(
-            r_ij,
-            |u| self.warm_support(size_i, &ci, u, &last_i),
-            |u| self.warm_support(size_j, &cj, u, &last_j),
-            max_gap,
-            hessians,
-        )
+        let nested = || {
+            // Warm starts: each search begins where the body's last one
+            // ended, moved with the direction (`y* − u` changes slowly, by
+            // O(Δ|δu|)).
+            let (last_i, last_j) = (Cell::new(None), Cell::new(None));
+            gap3d::exact_with(
+                r_ij,
+                |u| self.warm_support(size_i, &ci, u, &last_i),
+                |u| self.warm_support(size_j, &cj, u, &last_j),
+                max_gap,
+                hessians,
+            )
+        };
+        match self.exact_solver {
+            ExactSolver::Nested => nested(),
+            ExactSolver::Joint => gap3d::exact_joint(
+                r_ij,
+                &gap3d::RadialBody {
+                    columns: &ci,
+                    radial: |y: &Vector<3>| self.radial_jet(size_i, y),
+                },
+                &gap3d::RadialBody {
+                    columns: &cj,
+                    radial: |y: &Vector<3>| self.radial_jet(size_j, y),
+                },
+                max_gap,
+                hessians,
+                nested,
+            ),
+        }
     }
 
     /// `∂G̃/∂q_p = g · t_p = g · (x × e_p) = e_p · (g × x)`.
@@ -1118,6 +1210,7 @@ mod tests {
             delta,
             inertia: None,
             gap: GapModel::FirstOrder,
+            exact_solver: ExactSolver::Nested,
         })
         .unwrap()
     }
@@ -1404,6 +1497,7 @@ mod tests {
             delta: 0.1,
             inertia: None,
             gap: GapModel::FirstOrder,
+            exact_solver: ExactSolver::Nested,
         };
         let cases: Vec<(HarmonicParams, &str)> = vec![
             (

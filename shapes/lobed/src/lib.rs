@@ -62,18 +62,21 @@ pub const INFO: FamilyInfo = FamilyInfo {
             about: "Δ ≥ 0, the amplitude: the lobes reach R0 (1 + Δ)",
             is_list: false,
             default: None,
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "kappa",
             about: "κ in [0.1, 20], the sharpness of the lobes (width ≈ 1/(2√κ) rad; κ → 0 is cos 2θ)",
             is_list: false,
             default: Some("1.0"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "inertia",
             about: "moment of inertia I of the angle θ; None: I = Δ (the paper's choice)",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
     ],
 };

@@ -79,18 +79,21 @@ pub const INFO: FamilyInfo = FamilyInfo {
             about: "a dimer of aspect ratio α = (ℓ + 2r)/(2r) ≥ 1, sphere radius r = R0 (α = 1 runs as the sphere family); give alpha or spheres",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "spheres",
             about: "a general body: list of (offset: [x, y(, z)], radius: ρ) in units of R0, at least 2 spheres, none inside another",
             is_list: true,
             default: Some("None"),
+            absent_is_omitted: false,
         },
         ParamSpec {
             name: "inertia",
             about: "moment of inertia of every rotational coordinate; None: from the geometry (unit mass, uniform density)",
             is_list: false,
             default: Some("None"),
+            absent_is_omitted: false,
         },
     ],
 };
