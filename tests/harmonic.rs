@@ -181,8 +181,8 @@ fn quick_experiment_jams() {
 
 /// `exact_solver` read through the registry: absent is `"Nested"` (the
 /// default path), a string names the solver (case ignored); a wrong name
-/// and a bare RON identifier are refused naming the field or what is
-/// allowed.
+/// and a bare RON identifier (of the solver or of the gap) are refused
+/// naming the field or what is allowed.
 #[test]
 fn the_exact_solver_is_read_and_checked() {
     let read = |text: &str| {
@@ -209,6 +209,11 @@ fn the_exact_solver_is_read_and_checked() {
             (
                 "(l: 2, delta: 0.1, gap: \"Exact\", exact_solver: Joint)",
                 "exact_solver",
+            ),
+            // The gap's bare identifier goes through the same reader.
+            (
+                "(l: 2, delta: 0.1, gap: Exact)",
+                "write the gap model as a string",
             ),
         ],
     );

@@ -165,6 +165,36 @@ impl FamilyInfo {
     }
 }
 
+/// Read a named choice: a string handed to `parse` (whose error is the
+/// message), or `None`/absent for `default`. A bare RON identifier
+/// (`gap: Exact`) reaches a family as a unit value without its name and is
+/// refused with `unit_message`, which should say how to write it. Shared by
+/// the named family parameters (`gap`, `exact_solver`).
+pub fn deserialize_named<'de, D, T>(
+    deserializer: D,
+    default: T,
+    parse: impl FnOnce(&str) -> Result<T, String>,
+    unit_message: impl FnOnce() -> String,
+) -> Result<T, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    #[derive(serde::Deserialize)]
+    #[serde(untagged)]
+    enum Raw {
+        Name(String),
+        // Before `Wrapped`: a unit value would read as `None`.
+        Unit(()),
+        Wrapped(Option<String>),
+    }
+    use serde::de::Error;
+    match <Raw as serde::Deserialize>::deserialize(deserializer)? {
+        Raw::Name(s) | Raw::Wrapped(Some(s)) => parse(&s).map_err(D::Error::custom),
+        Raw::Wrapped(None) => Ok(default),
+        Raw::Unit(()) => Err(D::Error::custom(unit_message())),
+    }
+}
+
 /// Read an optional parameter written either as `Some(x)`/`None` (RON) or
 /// as a bare `x` (what `--set` and JSON produce, having no `Some`). Use as
 /// `#[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]`.

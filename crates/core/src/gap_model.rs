@@ -91,26 +91,17 @@ fn deserialize_among<'de, D: serde::Deserializer<'de>>(
     d: D,
     allowed: &[GapModel],
 ) -> Result<GapModel, D::Error> {
-    #[derive(serde::Deserialize)]
-    #[serde(untagged)]
-    enum Raw {
-        Name(String),
-        // Before `Wrapped`: a unit value would read as `None`.
-        Unit(()),
-        Wrapped(Option<String>),
-    }
-    use serde::Deserialize;
-    use serde::de::Error;
-    match Raw::deserialize(d)? {
-        Raw::Name(s) | Raw::Wrapped(Some(s)) => {
-            GapModel::parse_among(&s, allowed).map_err(D::Error::custom)
-        }
-        Raw::Wrapped(None) => Ok(GapModel::FirstOrder),
-        Raw::Unit(()) => Err(D::Error::custom(format!(
-            "write the gap model as a string, e.g. gap: \"Exact\" (allowed: {})",
-            GapModel::names(allowed)
-        ))),
-    }
+    crate::family::deserialize_named(
+        d,
+        GapModel::FirstOrder,
+        |s| GapModel::parse_among(s, allowed),
+        || {
+            format!(
+                "write the gap model as a string, e.g. gap: \"Exact\" (allowed: {})",
+                GapModel::names(allowed)
+            )
+        },
+    )
 }
 
 impl GapModel {

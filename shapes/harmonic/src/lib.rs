@@ -238,24 +238,17 @@ pub struct HarmonicParams {
 fn deserialize_exact_solver<'de, D: serde::Deserializer<'de>>(
     d: D,
 ) -> Result<ExactSolver, D::Error> {
-    #[derive(Deserialize)]
-    #[serde(untagged)]
-    enum Raw {
-        Name(String),
-        // Before `Wrapped`: a unit value would read as `None`.
-        Unit(()),
-        Wrapped(Option<String>),
-    }
-    use serde::de::Error;
-    match Raw::deserialize(d)? {
-        Raw::Name(s) | Raw::Wrapped(Some(s)) => s
-            .parse()
-            .map_err(|e: String| D::Error::custom(format!("params.exact_solver: {e}"))),
-        Raw::Wrapped(None) => Ok(ExactSolver::Nested),
-        Raw::Unit(()) => Err(D::Error::custom(
-            "params.exact_solver: write the solver as a string, exact_solver: \"Joint\" (allowed: \"Nested\", \"Joint\")",
-        )),
-    }
+    jamkit_core::family::deserialize_named(
+        d,
+        ExactSolver::Nested,
+        |s| {
+            s.parse()
+                .map_err(|e: String| format!("params.exact_solver: {e}"))
+        },
+        || {
+            "params.exact_solver: write the solver as a string, exact_solver: \"Joint\" (allowed: \"Nested\", \"Joint\")".to_string()
+        },
+    )
 }
 
 /// The `harmonic` family's registration.
