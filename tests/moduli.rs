@@ -559,6 +559,78 @@ fn sparse_moduli_fall_back_to_dense_and_say_why() {
     );
 }
 
+/// The stiffness tensor of the stabilisation's steps
+/// ([`moduli::stiffness_tensor`]: the dilation and every deviatoric
+/// strain, cross terms included) by the sparse path against the dense
+/// one, on disks (with rattlers), near-disks and 3D spheres, to 1e-8 of
+/// its largest entry (the tolerance and its reason as in
+/// `check_sparse_against_dense`). Then a shear stabilisation at fixed
+/// pressure by either path: the sparse one takes no dense step on this
+/// stable packing, and both end in the same cell. Their steps differ by
+/// the round-off of `C` (~10⁻¹³ relative), and each relaxation stops at
+/// `max g² < 10⁻²⁶`, so the deformations may differ by ~10⁻¹³/λ_min; 1e-9
+/// absolute on `F` (entries of order one) is far above that and far below
+/// the strain steps (≥ 10⁻⁶ here).
+#[test]
+fn sparse_stiffness_tensor_and_stabilisation_agree_with_dense() {
+    fn check<const D: usize, S: Shape<D>>(mut scene: Scene<D, S>, rule: RattlerRule) {
+        let name = format!("{} D = {D}", scene.packing().shape.family());
+        let summary = summarize_with(&mut scene, rule);
+        let mut cell = Strained::new(&scene, 0.1).unwrap();
+        let mut basis = moduli::deviatoric_basis::<D>();
+        basis.insert(0, Matrix::<D>::identity() / (D as f64).sqrt());
+        let p = scene.pressure();
+        let tensor = |cell: &mut Strained<D, S>, solver| {
+            let params = ModuliParams {
+                solver,
+                ..Default::default()
+            };
+            moduli::stiffness_tensor(cell, &summary.rattler, &params, &basis, p).unwrap()
+        };
+        let (dense, none) = tensor(&mut cell, ModuliSolver::Dense);
+        let (sparse, fallback) = tensor(&mut cell, ModuliSolver::Sparse);
+        assert_eq!((none, fallback), (None, None), "{name}");
+        let scale = dense.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for (k, (a, b)) in sparse.iter().zip(&dense).enumerate() {
+            for (l, (x, y)) in a.iter().zip(b).enumerate() {
+                assert!(
+                    (x - y).abs() <= 1e-8 * scale,
+                    "{name}: C[{k}][{l}] sparse {x} dense {y}"
+                );
+            }
+        }
+        eprintln!("{name}: C = {dense:?}");
+    }
+    check(relaxed::<2, _>(Sphere, 32, 1, 0.84), RattlerRule::Count(3));
+    check(
+        relaxed::<2, _>(near_disk(2, 0.1), 32, 3, 0.90),
+        RattlerRule::Count(3),
+    );
+    check(relaxed::<3, _>(Sphere, 64, 2, 0.70), RattlerRule::Count(4));
+
+    let mut scene = negative_g_disks();
+    let p = scene.pressure();
+    let run = |solver| {
+        let params = moduli::StabiliseParams {
+            solver,
+            ..Default::default()
+        };
+        let ensemble = moduli::Ensemble::Pressure(p);
+        moduli::stabilise(&scene, 3, ensemble, &params, &deformation_minimizer()).unwrap()
+    };
+    let (dense, sparse) = (run(ModuliSolver::Dense), run(ModuliSolver::Sparse));
+    let difference = (dense.deformation - sparse.deformation).abs().max();
+    eprintln!(
+        "stabilised in {} (dense) and {} (sparse) steps, {} fallbacks; |ΔF| = {difference:e}",
+        dense.iterations, sparse.iterations, sparse.dense_fallbacks
+    );
+    assert_eq!(dense.dense_fallbacks, 0);
+    assert_eq!(sparse.dense_fallbacks, 0);
+    assert_eq!(dense.iterations, sparse.iterations);
+    assert!(difference < 1e-9, "{difference:e}");
+    assert!(sparse.residual < moduli::StabiliseParams::default().tol);
+}
+
 #[test]
 fn bad_inputs_are_named() {
     let scene = jamkit_kit::dense::<2, _>(Sphere, 24, 1);

@@ -1409,7 +1409,7 @@ fn deviatoric_stiffness<const D: usize, S: Shape<D>>(
     solver: ModuliSolver,
     basis: &[Matrix<D>],
     volume_pressure: f64,
-) -> Result<(Vec<Vec<f64>>, bool)> {
+) -> Result<(Vec<Vec<f64>>, Option<String>)> {
     let hessian = cell.full_hessian(rattler)?;
     let n = hessian.size;
     let lambda_zero = omega_zero * omega_zero;
@@ -1475,7 +1475,29 @@ fn deviatoric_stiffness<const D: usize, S: Shape<D>>(
             out[l][k] = v;
         }
     }
-    Ok((out, fallback.is_some()))
+    Ok((out, fallback))
+}
+
+/// The stiffness `C_kl` of a relaxed cell along the strains `basis`, as
+/// [`stabilise`] uses it in each step (`volume_pressure` the `P` there:
+/// the cell's pressure at fixed volume, `p*` at fixed pressure), with the
+/// reason when `params.solver` is `Sparse` and the dense path was taken.
+pub fn stiffness_tensor<const D: usize, S: Shape<D>>(
+    cell: &mut Strained<D, S>,
+    rattler: &[bool],
+    params: &ModuliParams,
+    basis: &[Matrix<D>],
+    volume_pressure: f64,
+) -> Result<(Vec<Vec<f64>>, Option<String>)> {
+    params.validate("moduli")?;
+    deviatoric_stiffness(
+        cell,
+        rattler,
+        params.omega_zero,
+        params.solver,
+        basis,
+        volume_pressure,
+    )
 }
 
 /// Eigenvalues (ascending) and eigenvectors (columns) of a small symmetric
@@ -1599,7 +1621,7 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
             &basis,
             reference,
         )?;
-        dense_fallbacks += u32::from(fell_back);
+        dense_fallbacks += u32::from(fell_back.is_some());
         let (mu, w) = symmetric_eigen(&stiffness)?;
         let residual = largest(&s) / reference;
         let stiffness_min = mu.first().copied().unwrap_or(0.0);
