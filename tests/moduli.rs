@@ -12,8 +12,8 @@ use jamkit_harmonic::{Harmonic, HarmonicParams};
 use jamkit_nmer::{Nmer, NmerParams};
 use jamkit_observe::hessian::{Hessian, HessianOptions};
 use jamkit_observe::moduli::{
-    self, ModuliParams, Strained, by_deformation, deformation_minimizer, shear_planes,
-    simple_shear, strain_derivatives, stress_tensor,
+    self, ModuliParams, ModuliSolver, Strained, by_deformation, deformation_minimizer,
+    shear_planes, simple_shear, strain_derivatives, stress_tensor,
 };
 use jamkit_observe::{RattlerRule, summarize_with};
 use jamkit_sphere::Sphere;
@@ -375,6 +375,262 @@ fn ellipse_and_dimer_moduli_agree_with_deformation() {
     eprintln!("dimers: {lr:?}\n{def:?}");
 }
 
+/// The sparse path (`solver: Sparse`: one body's translations pinned,
+/// sparse Cholesky, Lanczos for the softest mode) against the dense
+/// eigendecomposition on the same packing. Both compute `A − Ξᵀ H⁺ Ξ`
+/// in double precision; the dense one sums `(u·Ξ)²/λ` over modes, the
+/// sparse one `Ξ·x` with `H x = Ξ`, and both are backward stable, so they
+/// differ by round-off amplified by the condition number on the
+/// non-affine term: `~ε λ_max/λ_min ≈ 10⁻¹⁶ · 10⁴…10⁶` here, and the
+/// non-affine term is at most a few times `G`. `1e-8` relative (of the
+/// affine part, which bounds both terms' size) leaves two orders of
+/// margin and still catches a mode left out or counted twice (a share
+/// ≥ 10⁻³ of the non-affine term on these packings). `soft_share` is a
+/// ratio of one mode's term, from the Lanczos eigenvector (residual
+/// 10⁻⁹ relative): `1e-6` absolute. The zero-mode counts must be equal.
+/// When the sparse path falls back (a 2D dimer's free rotation about one
+/// of its spheres is a zero mode besides the translations), its result
+/// must be the dense one, bit for bit, with the reason given.
+fn check_sparse_against_dense<const D: usize, S: Shape<D>>(
+    mut scene: Scene<D, S>,
+    rule: RattlerRule,
+) -> moduli::Moduli {
+    let name = format!("{} D = {D}", scene.packing().shape.family());
+    let summary = summarize_with(&mut scene, rule);
+    let dense = moduli::measure(&mut scene, &summary.rattler, &ModuliParams::default()).unwrap();
+    let params = ModuliParams {
+        solver: ModuliSolver::Sparse,
+        ..Default::default()
+    };
+    let sparse = moduli::measure(&mut scene, &summary.rattler, &params).unwrap();
+    let rattlers = summary.rattler.iter().filter(|&&r| r).count();
+    eprintln!("{name} ({rattlers} rattlers):\n dense  {dense:?}\n sparse {sparse:?}");
+    assert_eq!(dense.dense_fallback, None);
+    if let Some(reason) = &sparse.dense_fallback {
+        assert!(!reason.is_empty());
+        let fallback = moduli::Moduli {
+            dense_fallback: None,
+            ..sparse.clone()
+        };
+        assert_eq!(fallback, dense, "{name}: a fallback is the dense path");
+        return sparse;
+    }
+    let close = |a: f64, b: f64, scale: f64, what: &str| {
+        assert!(
+            (a - b).abs() <= 1e-8 * scale.abs(),
+            "{name}: {what}: sparse {a} dense {b} (scale {scale})"
+        );
+    };
+    for (k, (s, d)) in sparse
+        .shear_planes
+        .iter()
+        .zip(&dense.shear_planes)
+        .enumerate()
+    {
+        close(*s, *d, dense.shear_affine, &format!("G plane {k}"));
+    }
+    close(sparse.shear, dense.shear, dense.shear_affine, "G");
+    close(sparse.bulk, dense.bulk, dense.bulk_affine, "B");
+    assert_eq!(sparse.shear_affine, dense.shear_affine);
+    assert_eq!(sparse.bulk_affine, dense.bulk_affine);
+    assert_eq!(sparse.pressure, dense.pressure);
+    assert_eq!(sparse.coordinates, dense.coordinates);
+    assert_eq!(sparse.zero_modes, dense.zero_modes, "{name}");
+    assert_eq!(sparse.negative_modes, dense.negative_modes, "{name}");
+    // Ξ is orthogonal to the translations: its share on them is round-off
+    // (both paths), far below the 1e-12 the deformation checks allow.
+    assert!(
+        sparse.floppy_share < 1e-20,
+        "{name}: {}",
+        sparse.floppy_share
+    );
+    assert!(dense.floppy_share < 1e-20, "{name}: {}", dense.floppy_share);
+    let (s, d) = (sparse.soft_share.unwrap(), dense.soft_share.unwrap());
+    assert!(
+        (s - d).abs() < 1e-6,
+        "{name}: soft share sparse {s} dense {d}"
+    );
+    sparse
+}
+
+#[test]
+fn sparse_moduli_agree_with_dense_for_every_family() {
+    let mut compared = 0;
+    let mut count = |m: &moduli::Moduli| {
+        assert!(m.dense_fallback.is_none(), "{m:?}");
+        compared += 1;
+    };
+    // Disks (with rattlers: 32 bodies at φ = 0.84 leave some).
+    let mut scene = relaxed::<2, _>(Sphere, 32, 1, 0.84);
+    let rattlers = summarize_with(&mut scene, RattlerRule::Count(3)).rattler;
+    assert!(
+        rattlers.iter().any(|&r| r),
+        "the disk case must have rattlers"
+    );
+    count(&check_sparse_against_dense(scene, RattlerRule::Count(3)));
+    count(&check_sparse_against_dense(
+        relaxed::<2, _>(near_disk(2, 0.1), 32, 3, 0.90),
+        RattlerRule::Count(3),
+    ));
+    count(&check_sparse_against_dense(
+        relaxed::<2, _>(ellipse(1.5), 32, 4, 0.90),
+        RattlerRule::Count(3),
+    ));
+    count(&check_sparse_against_dense(
+        relaxed::<3, _>(Sphere, 64, 2, 0.70),
+        RattlerRule::Count(4),
+    ));
+    count(&check_sparse_against_dense(
+        relaxed::<3, _>(near_sphere(0.1), 64, 6, 0.72),
+        RattlerRule::Count(4),
+    ));
+    count(&check_sparse_against_dense(
+        relaxed::<3, _>(dimer::<3>(1.5), 48, 7, 0.72),
+        RattlerRule::Rank,
+    ));
+    assert_eq!(compared, 6);
+    // 2D dimers: compared, or fallen back to the dense path for a reason.
+    let dimers = check_sparse_against_dense(
+        relaxed::<2, _>(dimer::<2>(1.5), 32, 5, 0.90),
+        RattlerRule::Rank,
+    );
+    eprintln!("2D dimers: fallback {:?}", dimers.dense_fallback);
+}
+
+/// The sparse path falls back to the dense one, and says why: when the
+/// Cholesky factorisation fails (the rattlers kept, with their zero rows
+/// and floppy modes: `H_r` is singular), and when the softest mode is at
+/// the zero-mode threshold (`omega_zero` raised to `(λ_1 λ_2)^{1/4}`: the dense path
+/// leaves that mode out of `H⁺`, so the sparse one must not be taken).
+#[test]
+fn sparse_moduli_fall_back_to_dense_and_say_why() {
+    let mut scene = relaxed::<2, _>(Sphere, 32, 1, 0.84);
+    let sparse = ModuliParams {
+        solver: ModuliSolver::Sparse,
+        ..Default::default()
+    };
+    // No rattler mask: the rattlers' rows stay, with no contact or too few.
+    let dense = moduli::measure(&mut scene, &[], &ModuliParams::default()).unwrap();
+    let m = moduli::measure(&mut scene, &[], &sparse).unwrap();
+    eprintln!("{:?}", m.dense_fallback);
+    assert!(dense.zero_modes.extra > 0, "{dense:?}");
+    let reason = m.dense_fallback.clone().unwrap();
+    assert!(reason.contains("Cholesky"), "{reason}");
+    assert_eq!(
+        moduli::Moduli {
+            dense_fallback: None,
+            ..m
+        },
+        dense
+    );
+    // The softest mode at the threshold.
+    let summary = summarize_with(&mut scene, RattlerRule::Count(3));
+    let first = moduli::measure(&mut scene, &summary.rattler, &sparse).unwrap();
+    assert_eq!(first.dense_fallback, None);
+    let spectrum = jamkit_observe::spectrum::measure(
+        &mut scene,
+        &summary.rattler,
+        HessianOptions {
+            stiffness_only: false,
+            remove_rattlers: true,
+        },
+        false,
+        &Default::default(),
+    )
+    .unwrap();
+    let (lambda_1, lambda_2) = (spectrum.eigenvalues[2], spectrum.eigenvalues[3]);
+    assert!(spectrum.eigenvalues[1] < 1e-10 && lambda_1 > 1e-10);
+    // Between the two softest modes: the dense path counts λ_1 as zero.
+    let omega_zero = (lambda_1 * lambda_2).sqrt().sqrt();
+    let mut at = |omega_zero: f64, solver| {
+        let params = ModuliParams { omega_zero, solver };
+        moduli::measure(&mut scene, &summary.rattler, &params).unwrap()
+    };
+    let raised = at(omega_zero, ModuliSolver::Sparse);
+    let reason = raised.dense_fallback.clone().unwrap();
+    assert!(reason.contains("threshold"), "{reason}");
+    assert_eq!(raised.zero_modes.total, 3);
+    assert_eq!(
+        moduli::Moduli {
+            dense_fallback: None,
+            ..raised
+        },
+        at(omega_zero, ModuliSolver::Dense)
+    );
+}
+
+/// The stiffness tensor of the stabilisation's steps
+/// ([`moduli::stiffness_tensor`]: the dilation and every deviatoric
+/// strain, cross terms included) by the sparse path against the dense
+/// one, on disks (with rattlers), near-disks and 3D spheres, to 1e-8 of
+/// its largest entry (the tolerance and its reason as in
+/// `check_sparse_against_dense`). Then a shear stabilisation at fixed
+/// pressure by either path: the sparse one takes no dense step on this
+/// stable packing, and both end in the same cell. Their steps differ by
+/// the round-off of `C` (~10⁻¹³ relative), and each relaxation stops at
+/// `max g² < 10⁻²⁶`, so the deformations may differ by ~10⁻¹³/λ_min; 1e-9
+/// absolute on `F` (entries of order one) is far above that and far below
+/// the strain steps (≥ 10⁻⁶ here).
+#[test]
+fn sparse_stiffness_tensor_and_stabilisation_agree_with_dense() {
+    fn check<const D: usize, S: Shape<D>>(mut scene: Scene<D, S>, rule: RattlerRule) {
+        let name = format!("{} D = {D}", scene.packing().shape.family());
+        let summary = summarize_with(&mut scene, rule);
+        let mut cell = Strained::new(&scene, 0.1).unwrap();
+        let mut basis = moduli::deviatoric_basis::<D>();
+        basis.insert(0, Matrix::<D>::identity() / (D as f64).sqrt());
+        let p = scene.pressure();
+        let tensor = |cell: &mut Strained<D, S>, solver| {
+            let params = ModuliParams {
+                solver,
+                ..Default::default()
+            };
+            moduli::stiffness_tensor(cell, &summary.rattler, &params, &basis, p).unwrap()
+        };
+        let (dense, none) = tensor(&mut cell, ModuliSolver::Dense);
+        let (sparse, fallback) = tensor(&mut cell, ModuliSolver::Sparse);
+        assert_eq!((none, fallback), (None, None), "{name}");
+        let scale = dense.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for (k, (a, b)) in sparse.iter().zip(&dense).enumerate() {
+            for (l, (x, y)) in a.iter().zip(b).enumerate() {
+                assert!(
+                    (x - y).abs() <= 1e-8 * scale,
+                    "{name}: C[{k}][{l}] sparse {x} dense {y}"
+                );
+            }
+        }
+        eprintln!("{name}: C = {dense:?}");
+    }
+    check(relaxed::<2, _>(Sphere, 32, 1, 0.84), RattlerRule::Count(3));
+    check(
+        relaxed::<2, _>(near_disk(2, 0.1), 32, 3, 0.90),
+        RattlerRule::Count(3),
+    );
+    check(relaxed::<3, _>(Sphere, 64, 2, 0.70), RattlerRule::Count(4));
+
+    let mut scene = negative_g_disks();
+    let p = scene.pressure();
+    let run = |solver| {
+        let params = moduli::StabiliseParams {
+            solver,
+            ..Default::default()
+        };
+        let ensemble = moduli::Ensemble::Pressure(p);
+        moduli::stabilise(&scene, 3, ensemble, &params, &deformation_minimizer()).unwrap()
+    };
+    let (dense, sparse) = (run(ModuliSolver::Dense), run(ModuliSolver::Sparse));
+    let difference = (dense.deformation - sparse.deformation).abs().max();
+    eprintln!(
+        "stabilised in {} (dense) and {} (sparse) steps, {} fallbacks; |ΔF| = {difference:e}",
+        dense.iterations, sparse.iterations, sparse.dense_fallbacks
+    );
+    assert_eq!(dense.dense_fallbacks, 0);
+    assert_eq!(sparse.dense_fallbacks, 0);
+    assert_eq!(dense.iterations, sparse.iterations);
+    assert!(difference < 1e-9, "{difference:e}");
+    assert!(sparse.residual < moduli::StabiliseParams::default().tol);
+}
+
 #[test]
 fn bad_inputs_are_named() {
     let scene = jamkit_kit::dense::<2, _>(Sphere, 24, 1);
@@ -386,6 +642,7 @@ fn bad_inputs_are_named() {
     assert!(e.contains("gamma") && e.contains("0.5"), "{e}");
     let e = ModuliParams {
         omega_zero: f64::NAN,
+        ..Default::default()
     }
     .validate("observables.Moduli")
     .unwrap_err()
@@ -521,8 +778,15 @@ fn negative_shear_modulus_is_confirmed_by_deformation() {
         .filter(|&l| l > 1e-10)
         .collect();
     let omega_zero = (above[0] * above[1]).sqrt().sqrt();
-    let without =
-        moduli::measure(&mut scene, &summary.rattler, &ModuliParams { omega_zero }).unwrap();
+    let without = moduli::measure(
+        &mut scene,
+        &summary.rattler,
+        &ModuliParams {
+            omega_zero,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let share = (without.shear - lr.shear) / (lr.shear_affine - lr.shear);
     let soft = lr.soft_share.unwrap();
     eprintln!(

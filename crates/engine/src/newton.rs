@@ -49,6 +49,7 @@
 //! Hessian factorisations, including the ones that gave up.
 
 use crate::fire::{Objective, StopReason};
+use faer::sparse::linalg::solvers::Llt;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side, linalg::solvers::Solve};
 use jamkit_core::{Error, Result};
@@ -262,10 +263,7 @@ fn solve_shifted(n: usize, g: &[f64], shift: f64, w: &mut NewtonWork) -> bool {
             .map(|&(r, c, v)| Triplet::new(r as usize, c as usize, v)),
     );
     w.triplets.extend((0..n).map(|a| Triplet::new(a, a, mu)));
-    let Ok(m) = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &w.triplets) else {
-        return false;
-    };
-    let Ok(llt) = m.sp_cholesky(Side::Upper) else {
+    let Some(llt) = sparse_cholesky(n, &w.triplets) else {
         return false;
     };
     let mut x = Mat::<f64>::from_fn(n, 1, |a, _| g[a]);
@@ -273,6 +271,17 @@ fn solve_shifted(n: usize, g: &[f64], shift: f64, w: &mut NewtonWork) -> bool {
     w.delta.clear();
     w.delta.extend((0..n).map(|a| x[(a, 0)]));
     w.delta.iter().all(|d| d.is_finite())
+}
+
+/// The sparse Cholesky factorisation `L Lᵀ` of the symmetric `n × n`
+/// matrix whose upper triangle is `upper` (`(row ≤ column, value)`;
+/// repeated index pairs add), by faer's supernodal/simplicial `LLᵀ` with its
+/// fill-reducing ordering; `None` when the matrix is not positive definite
+/// (or the triplets are out of range). Used by the Newton finish and by
+/// the moduli's sparse solve (`jamkit_observe::moduli`).
+pub fn sparse_cholesky(n: usize, upper: &[Triplet<usize, usize, f64>]) -> Option<Llt<usize, f64>> {
+    let m = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, upper).ok()?;
+    m.sp_cholesky(Side::Upper).ok()
 }
 
 #[cfg(test)]

@@ -468,11 +468,15 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
     // packing near jamming can unjam as its cell relaxes (the 2D disks of
     // `tests/moduli.rs`), which fixed pressure rules out.
     let ensemble = moduli::Ensemble::Pressure(scene.pressure());
+    let stabilise = moduli::StabiliseParams {
+        solver: params.solver,
+        ..e.protocol.stabilise().cloned().unwrap_or_default()
+    };
     let mut s = moduli::stabilise(
         scene,
         threshold,
         ensemble,
-        &e.protocol.stabilise().cloned().unwrap_or_default(),
+        &stabilise,
         &moduli::deformation_minimizer(),
     )?;
     let stabilise_s = start.elapsed().as_secs_f64();
@@ -497,6 +501,7 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
             stiffness_min: s.stiffness_min,
             fixed_box,
             wall_s: stabilise_s,
+            dense_fallbacks: (s.dense_fallbacks > 0).then_some(s.dense_fallbacks),
         }),
     })
 }

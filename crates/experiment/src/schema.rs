@@ -26,7 +26,7 @@ use jamkit_core::{Potential, SizeDistribution};
 use jamkit_engine::{FireParams, JamParams, JamSearch, PressureParams};
 use jamkit_observe::gaps::GapParams;
 use jamkit_observe::hessian::HessianOptions;
-use jamkit_observe::moduli::{ModuliParams, StabiliseParams};
+use jamkit_observe::moduli::{ModuliParams, ModuliSolver, StabiliseParams};
 use jamkit_observe::spectrum::DosParams;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -432,6 +432,11 @@ pub enum Observable {
         /// (the spectrum's threshold, 10⁻⁵).
         #[serde(default = "default_moduli_omega_zero")]
         omega_zero: f64,
+        /// How `H⁺` is applied: `Dense` (the default, left out when
+        /// written) or `Sparse` (`jamkit_observe::moduli::ModuliSolver`;
+        /// also each strain step of a shear stabilisation).
+        #[serde(default, skip_serializing_if = "ModuliSolver::is_dense")]
+        solver: ModuliSolver,
     },
 }
 
@@ -514,7 +519,7 @@ impl Experiment {
     /// The moduli asked for, if any.
     pub fn moduli(&self) -> Option<ModuliParams> {
         self.observables.iter().find_map(|o| match *o {
-            Observable::Moduli { omega_zero } => Some(ModuliParams { omega_zero }),
+            Observable::Moduli { omega_zero, solver } => Some(ModuliParams { omega_zero, solver }),
             _ => None,
         })
     }

@@ -124,6 +124,11 @@ pub struct Stabilisation {
     pub fixed_box: Moduli,
     /// Seconds for the stabilisation.
     pub wall_s: f64,
+    /// With the `Moduli` observable's `solver: Sparse`: the strain steps
+    /// whose stiffness fell back to the dense eigendecomposition. Absent
+    /// when none did (and in files written before it existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dense_fallbacks: Option<u32>,
 }
 
 /// The spectrum of one packing, as stored.

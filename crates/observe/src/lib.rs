@@ -19,6 +19,7 @@
 pub mod contacts;
 pub mod gaps;
 pub mod moduli;
+mod pinverse;
 pub use jamkit_engine::hessian;
 pub mod saddle;
 pub mod spectrum;

@@ -60,6 +60,7 @@
 //! more than the pair margin, which is checked.)
 
 use crate::hessian::{Hessian, HessianOptions, add_contact};
+use crate::pinverse::SparseInverse;
 use crate::spectrum::ZeroModes;
 use jamkit_core::{Error, Matrix, Packing, PeriodicBox, Potential, Result, Shape, Vector};
 use jamkit_engine::{Fire, FireParams, Objective, Scene};
@@ -267,6 +268,29 @@ fn first_rows(hessian: &Hessian, bodies: usize) -> Vec<u32> {
     first
 }
 
+/// How `Ξᵀ H⁺ Ξ` is computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ModuliSolver {
+    /// The dense eigendecomposition of the Hessian (`O(n³)` in its `n`
+    /// rows): every mode, the zero modes and negative ones counted. The
+    /// default, bit for bit the moduli measured before the sparse path.
+    #[default]
+    Dense,
+    /// A sparse Cholesky factorisation with one body's translations
+    /// pinned, and Lanczos for the softest mode (`crate::pinverse`): for a
+    /// packing whose only zero modes are the translations and whose
+    /// softest other mode has `λ > 2 ω_zero²`; otherwise the dense path is
+    /// taken, and [`Moduli::dense_fallback`] says why.
+    Sparse,
+}
+
+impl ModuliSolver {
+    /// Whether this is the default (left out of written settings).
+    pub fn is_dense(&self) -> bool {
+        *self == Self::Dense
+    }
+}
+
 /// How the moduli are computed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -274,13 +298,28 @@ pub struct ModuliParams {
     /// Modes with `ω = √λ` at or below this are zero modes, left out of
     /// `H⁺` (the same threshold as the spectrum's `dos.omega_zero`).
     pub omega_zero: f64,
+    /// How `H⁺` is applied (left out of files when `Dense`, so settings
+    /// written before it existed read back the same).
+    #[serde(skip_serializing_if = "ModuliSolver::is_dense")]
+    pub solver: ModuliSolver,
 }
 
 impl Default for ModuliParams {
     fn default() -> Self {
-        Self { omega_zero: 1e-5 }
+        Self {
+            omega_zero: 1e-5,
+            solver: ModuliSolver::Dense,
+        }
     }
 }
+
+/// Relative residual to which Lanczos finds the softest mode for
+/// [`measure`] (its eigenvector gives `soft_share`).
+const LANCZOS_TOL: f64 = 1e-9;
+/// The same in each strain step of [`stabilise`], where only its
+/// eigenvalue is needed (to know that no mode but the translations is at
+/// or below `ω_zero²`).
+const LANCZOS_TOL_STEP: f64 = 1e-4;
 
 impl ModuliParams {
     /// Check ranges; names the offending field.
@@ -332,6 +371,11 @@ pub struct Moduli {
     /// measured, and with no mode above the zero modes.
     #[serde(default)]
     pub soft_share: Option<f64>,
+    /// With `solver: Sparse`, why the dense path was taken instead (the
+    /// Cholesky factorisation failed, the softest mode is at the zero-mode
+    /// threshold, …); absent when the sparse path was taken or not asked.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dense_fallback: Option<String>,
 }
 
 impl Moduli {
@@ -366,6 +410,36 @@ pub fn measure_strained<const D: usize, S: Shape<D>>(
     measure_cell(cell, rattler, params)
 }
 
+/// `H⁺` of a Hessian: its modes, or a sparse factorisation.
+enum PseudoInverse {
+    /// Eigenvalues (ascending) and eigenvectors.
+    Dense(Vec<f64>, faer::Mat<f64>),
+    /// `crate::pinverse`.
+    Sparse(SparseInverse),
+}
+
+impl PseudoInverse {
+    /// By `solver`; with the reason when `Sparse` fell back to the dense
+    /// modes.
+    fn of(
+        hessian: &Hessian,
+        dim: usize,
+        lambda_zero: f64,
+        solver: ModuliSolver,
+        tol: f64,
+    ) -> Result<(Self, Option<String>)> {
+        let fallback = match solver {
+            ModuliSolver::Dense => None,
+            ModuliSolver::Sparse => match SparseInverse::new(hessian, dim, lambda_zero, tol) {
+                Ok(inverse) => return Ok((Self::Sparse(inverse), None)),
+                Err(reason) => Some(reason),
+            },
+        };
+        let (values, vectors) = modes(hessian)?;
+        Ok((Self::Dense(values, vectors), fallback))
+    }
+}
+
 /// The eigenvalues and eigenvectors of a Hessian (ascending).
 fn modes(hessian: &Hessian) -> Result<(Vec<f64>, faer::Mat<f64>)> {
     let n = hessian.size;
@@ -390,31 +464,11 @@ fn measure_cell<const D: usize, C: Cell<D>>(
     let n = hessian.size;
     let volume = scene.cell_volume();
     let lambda_zero = params.omega_zero * params.omega_zero;
-    let (values, vectors) = modes(&hessian)?;
-    // The softest mode above the zero modes (eigenvalues ascend).
-    let softest = values.iter().position(|&l| l > lambda_zero);
-    // `U_min'' = A − Σ_{λ > λ0} (u·Ξ)²/λ`, the share of `|Ξ|²` on the
-    // zero modes (translations carry none: Ξ sums to zero over bodies) and
-    // the share of the non-affine term on the softest mode.
-    let relaxed = |d: &StrainDerivatives| -> (f64, f64, Option<f64>) {
-        let mut non_affine = 0.0;
-        let (mut on_zero, mut total) = (0.0, 0.0);
-        let mut on_softest = 0.0;
-        for m in 0..n {
-            let c: f64 = (0..n).map(|r| vectors[(r, m)] * d.xi[r]).sum();
-            total += c * c;
-            if values[m] > lambda_zero {
-                non_affine += c * c / values[m];
-                if Some(m) == softest {
-                    on_softest = c * c / values[m];
-                }
-            } else {
-                on_zero += c * c;
-            }
-        }
-        let share = if total > 0.0 { on_zero / total } else { 0.0 };
-        let soft = (softest.is_some() && non_affine > 0.0).then(|| on_softest / non_affine);
-        (d.affine - non_affine, share, soft)
+    let (inverse, dense_fallback) =
+        PseudoInverse::of(&hessian, D, lambda_zero, params.solver, LANCZOS_TOL)?;
+    let relaxed = |d: &StrainDerivatives| match &inverse {
+        PseudoInverse::Dense(values, vectors) => relaxed_dense(values, vectors, lambda_zero, d),
+        PseudoInverse::Sparse(s) => relaxed_sparse(s, d),
     };
     let mut floppy_share: f64 = 0.0;
     let planes = shear_planes::<D>();
@@ -438,7 +492,15 @@ fn measure_cell<const D: usize, C: Cell<D>>(
     // `U_γ = Σ v' g·r = −D V p` for `E = I`.
     let pressure = -d.first / (D as f64 * volume);
     let stress_term = (D as f64 - 1.0) * pressure / D as f64;
-    let total = values.iter().filter(|&&l| l <= lambda_zero).count() as u64;
+    // The sparse path is taken only when the translations are the only
+    // zero modes and no mode is negative (`crate::pinverse`).
+    let (total, negative_modes) = match &inverse {
+        PseudoInverse::Dense(values, _) => (
+            values.iter().filter(|&&l| l <= lambda_zero).count() as u64,
+            values.iter().filter(|&&l| l < -lambda_zero).count() as u64,
+        ),
+        PseudoInverse::Sparse(_) => (D as u64, 0),
+    };
     let translations = if n == 0 { 0 } else { D as u64 };
     Ok(Moduli {
         shear: per_plane.iter().sum::<f64>() / planes.len().max(1) as f64,
@@ -454,10 +516,61 @@ fn measure_cell<const D: usize, C: Cell<D>>(
             rattlers: 0,
             extra: total as i64 - translations as i64,
         },
-        negative_modes: values.iter().filter(|&&l| l < -lambda_zero).count() as u64,
+        negative_modes,
         floppy_share,
         soft_share,
+        dense_fallback,
     })
+}
+
+/// `(U_min'', share of |Ξ|² on the zero modes, share of the non-affine
+/// term on the softest mode)` from the dense modes: `U_min'' = A −
+/// Σ_{λ > λ0} (u·Ξ)²/λ`, where translations carry none of `Ξ` (it sums to
+/// zero over bodies).
+fn relaxed_dense(
+    values: &[f64],
+    vectors: &faer::Mat<f64>,
+    lambda_zero: f64,
+    d: &StrainDerivatives,
+) -> (f64, f64, Option<f64>) {
+    let n = values.len();
+    // The softest mode above the zero modes (eigenvalues ascend).
+    let softest = values.iter().position(|&l| l > lambda_zero);
+    let mut non_affine = 0.0;
+    let (mut on_zero, mut total) = (0.0, 0.0);
+    let mut on_softest = 0.0;
+    for m in 0..n {
+        let c: f64 = (0..n).map(|r| vectors[(r, m)] * d.xi[r]).sum();
+        total += c * c;
+        if values[m] > lambda_zero {
+            non_affine += c * c / values[m];
+            if Some(m) == softest {
+                on_softest = c * c / values[m];
+            }
+        } else {
+            on_zero += c * c;
+        }
+    }
+    let share = if total > 0.0 { on_zero / total } else { 0.0 };
+    let soft = (softest.is_some() && non_affine > 0.0).then(|| on_softest / non_affine);
+    (d.affine - non_affine, share, soft)
+}
+
+/// The same as [`relaxed_dense`] by the sparse solve: `Ξ`'s component
+/// along the translations (the only zero modes here) is projected out and
+/// is the share, `Ξᵀ H⁺ Ξ = Ξ_P · x` with `H x = Ξ_P`, and the softest
+/// mode is Lanczos's.
+fn relaxed_sparse(inverse: &SparseInverse, d: &StrainDerivatives) -> (f64, f64, Option<f64>) {
+    let total: f64 = d.xi.iter().map(|x| x * x).sum();
+    let mut xi = d.xi.clone();
+    let on_zero = inverse.project(&mut xi);
+    let x = inverse.solve(&xi);
+    let non_affine: f64 = xi.iter().zip(&x).map(|(a, b)| a * b).sum();
+    let c: f64 = inverse.softest.iter().zip(&xi).map(|(a, b)| a * b).sum();
+    let on_softest = c * c / inverse.lambda_min;
+    let share = if total > 0.0 { on_zero / total } else { 0.0 };
+    let soft = (non_affine > 0.0).then(|| on_softest / non_affine);
+    (d.affine - non_affine, share, soft)
 }
 
 /// A packing in a homogeneously deformed periodic cell, with the pairs and
@@ -1174,6 +1287,10 @@ pub struct StabiliseParams {
     /// The pair list's margin (as for [`by_deformation`]); the pairs are
     /// listed again before every step.
     pub margin: f64,
+    /// How each step's stiffness applies `H⁺` ([`ModuliSolver`]). Not read
+    /// from files: the runner sets it to the `Moduli` observable's.
+    #[serde(skip)]
+    pub solver: ModuliSolver,
 }
 
 impl Default for StabiliseParams {
@@ -1183,6 +1300,7 @@ impl Default for StabiliseParams {
             max_iterations: 200,
             max_step: 1e-2,
             margin: 0.1,
+            solver: ModuliSolver::Dense,
         }
     }
 }
@@ -1270,6 +1388,9 @@ pub struct Stabilised<const D: usize, S: Shape<D>> {
     pub stiffness_min: f64,
     /// Rattlers of the final cell (by count).
     pub rattler: Vec<bool>,
+    /// With `solver: Sparse`, the strain steps whose stiffness fell back to
+    /// the dense eigendecomposition (`Moduli::dense_fallback`).
+    pub dense_fallbacks: u32,
 }
 
 /// The stiffness of a relaxed cell along the strains `basis`: the second
@@ -1285,24 +1406,57 @@ fn deviatoric_stiffness<const D: usize, S: Shape<D>>(
     cell: &mut Strained<D, S>,
     rattler: &[bool],
     omega_zero: f64,
+    solver: ModuliSolver,
     basis: &[Matrix<D>],
     volume_pressure: f64,
-) -> Result<Vec<Vec<f64>>> {
+) -> Result<(Vec<Vec<f64>>, Option<String>)> {
     let hessian = cell.full_hessian(rattler)?;
-    let (values, vectors) = modes(&hessian)?;
     let n = hessian.size;
     let lambda_zero = omega_zero * omega_zero;
+    let (inverse, fallback) =
+        PseudoInverse::of(&hessian, D, lambda_zero, solver, LANCZOS_TOL_STEP)?;
     let kk = basis.len();
     let mut single = Vec::new();
     for e in basis {
         single.push(strain_derivatives_of(cell, rattler, &hessian, e)?);
     }
-    let coefficients = |xi: &[f64]| -> Vec<f64> {
-        (0..n)
-            .map(|m| (0..n).map(|r| vectors[(r, m)] * xi[r]).sum())
-            .collect()
-    };
-    let c: Vec<Vec<f64>> = single.iter().map(|d| coefficients(&d.xi)).collect();
+    // `Ξ_kᵀ H⁺ Ξ_l`.
+    let mut non_affine = vec![vec![0.0; kk]; kk];
+    match &inverse {
+        PseudoInverse::Dense(values, vectors) => {
+            let coefficients = |xi: &[f64]| -> Vec<f64> {
+                (0..n)
+                    .map(|m| (0..n).map(|r| vectors[(r, m)] * xi[r]).sum())
+                    .collect()
+            };
+            let c: Vec<Vec<f64>> = single.iter().map(|d| coefficients(&d.xi)).collect();
+            for k in 0..kk {
+                for l in k..kk {
+                    non_affine[k][l] = (0..n)
+                        .filter(|&m| values[m] > lambda_zero)
+                        .map(|m| c[k][m] * c[l][m] / values[m])
+                        .sum();
+                }
+            }
+        }
+        PseudoInverse::Sparse(s) => {
+            let projected: Vec<Vec<f64>> = (single.iter())
+                .map(|d| {
+                    let mut xi = d.xi.clone();
+                    s.project(&mut xi);
+                    xi
+                })
+                .collect();
+            let solved: Vec<Vec<f64>> = projected.iter().map(|xi| s.solve(xi)).collect();
+            for k in 0..kk {
+                for l in k..kk {
+                    non_affine[k][l] = (projected[k].iter().zip(&solved[l]))
+                        .map(|(a, b)| a * b)
+                        .sum();
+                }
+            }
+        }
+    }
     let volume = cell.volume();
     let mut out = vec![vec![0.0; kk]; kk];
     for k in 0..kk {
@@ -1313,19 +1467,37 @@ fn deviatoric_stiffness<const D: usize, S: Shape<D>>(
                 let both = strain_derivatives_of(cell, rattler, &hessian, &(basis[k] + basis[l]))?;
                 0.5 * (both.affine - single[k].affine - single[l].affine)
             };
-            let non_affine: f64 = (0..n)
-                .filter(|&m| values[m] > lambda_zero)
-                .map(|m| c[k][m] * c[l][m] / values[m])
-                .sum();
             // `P ∂²det(I + Σ δ E)/∂δ_k∂δ_l = P (tr E_k tr E_l − tr E_k E_l)`.
             let volume_term = volume_pressure
                 * (basis[k].trace() * basis[l].trace() - (basis[k] * basis[l]).trace());
-            let v = (affine - non_affine) / volume + volume_term;
+            let v = (affine - non_affine[k][l]) / volume + volume_term;
             out[k][l] = v;
             out[l][k] = v;
         }
     }
-    Ok(out)
+    Ok((out, fallback))
+}
+
+/// The stiffness `C_kl` of a relaxed cell along the strains `basis`, as
+/// [`stabilise`] uses it in each step (`volume_pressure` the `P` there:
+/// the cell's pressure at fixed volume, `p*` at fixed pressure), with the
+/// reason when `params.solver` is `Sparse` and the dense path was taken.
+pub fn stiffness_tensor<const D: usize, S: Shape<D>>(
+    cell: &mut Strained<D, S>,
+    rattler: &[bool],
+    params: &ModuliParams,
+    basis: &[Matrix<D>],
+    volume_pressure: f64,
+) -> Result<(Vec<Vec<f64>>, Option<String>)> {
+    params.validate("moduli")?;
+    deviatoric_stiffness(
+        cell,
+        rattler,
+        params.omega_zero,
+        params.solver,
+        basis,
+        volume_pressure,
+    )
 }
 
 /// Eigenvalues (ascending) and eigenvectors (columns) of a small symmetric
@@ -1434,13 +1606,22 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
     let mut value = objective_before;
     let mut iterations = 0;
     let mut trust = 0.0_f64;
+    let mut dense_fallbacks = 0;
     loop {
         cell.relist()?;
         let rattler = cell.rattlers(threshold);
         let s = stress(&cell);
         let pressure = cell.pressure();
         let reference = external.unwrap_or(pressure);
-        let stiffness = deviatoric_stiffness(&mut cell, &rattler, omega_zero, &basis, reference)?;
+        let (stiffness, fell_back) = deviatoric_stiffness(
+            &mut cell,
+            &rattler,
+            omega_zero,
+            params.solver,
+            &basis,
+            reference,
+        )?;
+        dense_fallbacks += u32::from(fell_back.is_some());
         let (mu, w) = symmetric_eigen(&stiffness)?;
         let residual = largest(&s) / reference;
         let stiffness_min = mu.first().copied().unwrap_or(0.0);
@@ -1471,6 +1652,7 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
                 iterations,
                 stiffness_min,
                 rattler,
+                dense_fallbacks,
             });
         }
         if iterations >= params.max_iterations {
