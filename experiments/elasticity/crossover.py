@@ -19,7 +19,11 @@ family on either side of delta_phi = Delta^2 (the issue's crossover) and of
 delta_phi = Delta (the paper's outlook: G ~ Delta^1/2 G~(delta_phi/Delta),
 G~(x) ~ x for x << 1 and x^1/2 for x >> 1), where they hold two points or
 more; for near-disks also the scaling variables x = delta_phi/Delta and
-G_stab/Delta^1/2 per point. Errors: the standard deviation of the slope over --boot
+G_stab/Delta^1/2 per point, and (session 19) across the near-disk
+families the collapse on G~ = G_stab/Delta^1/2 against x at equal x, and
+z_stab - z_J, the stabilised cell's contacts (`moduli.stabilisation.
+contacts`, where recorded) against the packing's own jamming point.
+Errors: the standard deviation of the slope over --boot
 bootstrap replicas, each resampling every point's packings with
 replacement (a replica with a mean <= 0 in the range is dropped and
 counted), and the 16th-84th percentile range. With few packings per point
@@ -44,6 +48,7 @@ QUANTITIES = [
     ("G_fixed", "G fixed box"),
     ("G_stab", "G stabilised"),
     ("dz", "z - z_J"),
+    ("dz_stab", "z_stab - z_J"),
 ]
 
 
@@ -82,6 +87,14 @@ def read(dirs):
                     "G_fixed": fixed["shear"],
                     "G_stab": moduli["moduli"]["shear"] if stab else None,
                     "dz": m["z_j"] - m["jam_point"]["z"],
+                    # The stabilised cell's contacts (session 19 on;
+                    # None in packings made before).
+                    "dz_stab": (stab["contacts"]["z"] - m["jam_point"]["z"])
+                    if stab and stab.get("contacts") else None,
+                    "stab_rattlers": stab["contacts"]["n_rattlers"]
+                    if stab and stab.get("contacts") else None,
+                    "stab_margin": stab["contacts"]["iso_margin"]
+                    if stab and stab.get("contacts") else None,
                 }
             )
     return groups, failed, deltas
@@ -103,8 +116,10 @@ def fit(points, q, lo, hi, boot, rng):
     sel = sorted(x for x in points if lo <= x <= hi)
     if len(sel) < 2:
         return None
-    values = {x: [r[q] for r in points[x]] for x in sel}
-    if any(v is None for x in sel for v in values[x]):
+    # The packings that have the quantity (the stabilised contacts are
+    # missing from packings made before session 19).
+    values = {x: [r[q] for r in points[x] if r[q] is not None] for x in sel}
+    if any(not values[x] for x in sel):
         return None
     means = [sum(values[x]) / len(values[x]) for x in sel]
     if any(m <= 0 for m in means):
@@ -141,6 +156,67 @@ def show(name, result, boot):
     print(f"  {name}: {best:.3f} ± {sd:.3f} [16-84 %: {lo16:.3f} … {hi84:.3f}] over {span}{extra}")
 
 
+def collapse(groups, deltas):
+    """The paper's scaling form G = Delta^1/2 G~(delta_phi/Delta) across the
+    near-disk families (those with a Delta): per x = delta_phi/Delta of any
+    family, G~ = G_stab/Delta^1/2 of each family, measured at that x or
+    interpolated linearly in ln G~ against ln x between its two nearest
+    points (a decade apart), and the spread (max - min)/mean against the
+    s.e.m.s (relative) of the measured ones."""
+    curves = {}
+    for key, points in groups.items():
+        delta = deltas.get(key)
+        if not delta:
+            continue
+        curve = []
+        for x in sorted(points):
+            vs = [r["G_stab"] for r in points[x] if r["G_stab"] is not None]
+            if len(vs) < 2:
+                continue
+            m, se = mean_sem(vs)
+            if m > 0:
+                curve.append((x / delta, m / math.sqrt(delta), se / m))
+        if curve:
+            curves[delta] = curve
+    if len(curves) < 2:
+        return
+    print("## collapse: G~ = G_stab/Delta^1/2 against x = delta_phi/Delta")
+    deltas_sorted = sorted(curves)
+    print("x | " + " | ".join(f"Delta = {d:g}" for d in deltas_sorted) + " | spread (max-min)/mean | largest s.e.m.")
+    xs = sorted({round(math.log10(x), 6) for c in curves.values() for x, _, _ in c})
+    for lx in xs:
+        x = 10 ** lx
+        cells, vals, sems = [], [], []
+        for d in deltas_sorted:
+            c = curves[d]
+            exact = [(g, r) for cx, g, r in c if abs(math.log10(cx) - lx) < 1e-6]
+            if exact:
+                g, r = exact[0]
+                cells.append(f"{g:.3e} ± {r * 100:.0f} %")
+                vals.append(g)
+                sems.append(r)
+                continue
+            below = [(cx, g) for cx, g, _ in c if cx < x]
+            above = [(cx, g) for cx, g, _ in c if cx > x]
+            if below and above:
+                (x0, g0), (x1, g1) = below[-1], above[0]
+                t = math.log(x / x0) / math.log(x1 / x0)
+                g = math.exp(math.log(g0) + t * math.log(g1 / g0))
+                cells.append(f"({g:.3e})")
+                vals.append(g)
+            else:
+                cells.append("–")
+        if len(vals) >= 2:
+            mean = sum(vals) / len(vals)
+            spread = f"{(max(vals) - min(vals)) / mean * 100:.0f} %"
+        else:
+            spread = "–"
+        worst = f"{max(sems) * 100:.0f} %" if sems else "–"
+        print(f"{x:.3g} | " + " | ".join(cells) + f" | {spread} | {worst}")
+    print("(values in brackets are interpolated)")
+    print()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--boot", type=int, default=4000)
@@ -156,7 +232,7 @@ def main():
         points = groups[key]
         delta = deltas[key]
         print(f"## {key}" + (f" (Delta^2 = {delta * delta:g})" if delta else ""))
-        print("delta_phi | packings | p | G fixed box (G<0) | G stabilised (G<0) | z - z_J")
+        print("delta_phi | packings | p | G fixed box (G<0) | G stabilised (G<0) | z - z_J | z_stab - z_J (packings)")
         for x in sorted(points):
             rs = points[x]
             row = {"family": key, "delta_phi": x, "packings": len(rs)}
@@ -170,7 +246,11 @@ def main():
                 m, se = mean_sem(vs)
                 row[q], row[q + "_sem"] = m, se
                 neg = sum(v < 0 for v in vs)
-                cells.append(f"{m:.3e} ± {se:.1e}" + (f" ({neg})" if q.startswith("G") else ""))
+                note = f" ({neg})" if q.startswith("G") else ""
+                if q == "dz_stab":
+                    margins = [r["stab_margin"] for r in rs if r["stab_margin"] is not None]
+                    note = f" ({len(vs)}; rattlers {sum(r['stab_rattlers'] for r in rs if r['stab_rattlers'] is not None) / len(vs):.1f}, margin >= {min(margins)})"
+                cells.append(f"{m:.3e} ± {se:.1e}" + note)
             rows.append(row)
             if delta and row["G_stab"] != "":
                 # The paper's scaling variables: G / Delta^1/2 against
@@ -206,6 +286,7 @@ def main():
             for q, name in QUANTITIES:
                 show(f"{name} ~ delta_phi^a", fit(points, q, lo, hi, args.boot, rng), args.boot)
         print()
+    collapse(groups, deltas)
     if failed:
         print(f"{len(failed)} failed samples:")
         for sample, why in failed:
