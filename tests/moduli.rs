@@ -841,9 +841,8 @@ fn shear_stabilisation_makes_the_negative_g_packing_stable() {
 }
 
 /// The smallest isostaticity margin `N_c − 2 (N_nr − 1)` of a disk packing
-/// (harmonic, `p > 0`) stable in its cell against every deviatoric strain
-/// (Goodrich, Liu & Nagel, PRE 90, 022138, 2014: `d(d+1)/2`). The
-/// argument: the contact forces are a self-stress of the network with the
+/// (harmonic, `p > 0`) stable in its cell against every deviatoric strain:
+/// `d(d+1)/2`. The argument: the contact forces are a self-stress of the network with the
 /// bodies' coordinates and the `d(d+1)/2 − 1` deviatoric strains as its
 /// degrees of freedom (force balance on every body, and a vanishing
 /// deviatoric stress), so the `N_c × (2 N_nr + 2)` compatibility matrix
