@@ -1075,6 +1075,10 @@ fn shear_stabilisation_makes_the_negative_g_packing_stable() {
             (lr.bulk - def.bulk).abs() < 1e-6 * lr.bulk,
             "{lr:?} {def:?}"
         );
+        assert_eq!(lr.zero_modes.extra, 0, "{lr:?}");
+        let count = s.cell.contact_count(&s.rattler);
+        eprintln!("stabilised cell's contacts: {count:?}");
+        assert!(count.iso_margin >= SHEAR_STABLE_MARGIN_2D, "{count:?}");
         s
     };
     let mut scene = negative_g_disks();
@@ -1098,6 +1102,52 @@ fn shear_stabilisation_makes_the_negative_g_packing_stable() {
     assert!((s.deformation.determinant() - 1.0).abs() < 1e-12);
     assert!((s.cell.volume() / scene.packing().bbox.volume() - 1.0).abs() < 1e-12);
     assert!(s.energy_after <= s.energy_before * (1.0 + 1e-12));
+}
+
+/// The smallest isostaticity margin `N_c − 2 (N_nr − 1)` of a disk packing
+/// (harmonic, `p > 0`) stable in its cell against every deviatoric strain:
+/// `d(d+1)/2`. The argument: the contact forces are a self-stress of the network with the
+/// bodies' coordinates and the `d(d+1)/2 − 1` deviatoric strains as its
+/// degrees of freedom (force balance on every body, and a vanishing
+/// deviatoric stress), so the `N_c × (2 N_nr + 2)` compatibility matrix
+/// has rank `≤ N_c − 1` and at least `2 N_nr + 3 − N_c` floppy modes. On a
+/// floppy mode the Hessian is the pre-stress term, `≤ 0` for disks
+/// (`v' < 0`, `∂²h` positive semi-definite), plus `−p |ε|²` from a
+/// volume-preserving strain `ε`: a mode with `ε ≠ 0` would make the
+/// cell's stiffness `C` negative, and one with `ε = 0` that is not a
+/// translation would be a zero or negative mode of `H` (every contact's
+/// relative displacement would vanish). With `C ≥ 0` and no extra zero
+/// or negative mode only the 2 translations remain, so
+/// `2 N_nr + 3 − N_c ≤ 2`. (In the fixed box the same argument without
+/// the strains gives the familiar `≥ 1`.)
+const SHEAR_STABLE_MARGIN_2D: i64 = 3;
+
+/// The contacts of a `Strained` cell are those `Contacts` counts: in the
+/// undeformed cell of a relaxed packing (disks at φ = 0.88 and n = 2
+/// near-disks, Δ = 0.1, at φ = 0.90; N = 32) the cell's own listing (every
+/// pair within the margin, minimum images) gives the same contacts, the
+/// same rattlers (count rule `d + 1`) and so the same `N_c`, `z`, rattler
+/// count and margin as `summarize` on the engine's neighbour list,
+/// exactly. A contact missed by the cell's pair list (or counted twice)
+/// would show here.
+#[test]
+fn strained_cell_counts_contacts_as_contacts_does() {
+    fn check<S: Shape<2>>(mut scene: Scene<2, S>) {
+        let summary = summarize_with(&mut scene, RattlerRule::Count(3));
+        let cell = Strained::new(&scene, 0.1).unwrap();
+        let rattler = cell.rattlers(3);
+        assert_eq!(rattler, summary.rattler);
+        let count = cell.contact_count(&rattler);
+        eprintln!("{count:?}");
+        assert!(count.n_contacts > 0);
+        assert_eq!(count.n_contacts, summary.n_contacts);
+        assert_eq!(count.n_contacts_all, summary.n_contacts_all);
+        assert_eq!(count.n_rattlers, summary.n_rattlers);
+        assert_eq!(count.z, summary.z_j);
+        assert_eq!(count.iso_margin, summary.iso_margin);
+    }
+    check(relaxed::<2, _>(Sphere, 32, 1, 0.88));
+    check(relaxed::<2, _>(near_disk(2, 0.1), 32, 3, 0.90));
 }
 
 /// The strained cell follows a rearrangement. Disks (N = 32, φ = 0.88),
@@ -1234,7 +1284,8 @@ fn shear_stabilised_option_through_the_runner() {
         }
         v
     };
-    let (plain, _) = run("");
+    let (plain, plain_csv) = run("");
+    assert!(!plain_csv.contains("stab_z"), "{plain_csv}");
     let (off, _) = run(", shear_stabilised: false");
     let (on, csv) = run(", shear_stabilised: true");
     assert_eq!(plain.len(), 2);
@@ -1263,6 +1314,25 @@ fn shear_stabilised_option_through_the_runner() {
         assert!(
             (s.pressure_after / s.pressure_before - 1.0).abs() < 1e-6,
             "{s:?}"
+        );
+        // The stabilised cell's contacts (disks: at least the margin a
+        // cell stable to shear needs), stored with the moduli.
+        let cc = s.contacts.as_ref().expect("stabilised contacts stored");
+        assert!(cc.iso_margin >= SHEAR_STABLE_MARGIN_2D, "{cc:?}");
+        assert_eq!(
+            cc.iso_margin,
+            cc.n_contacts as i64 - 2 * (32 - cc.n_rattlers as i64 - 1)
+        );
+        assert_eq!(
+            cc.z,
+            2.0 * cc.n_contacts as f64 / (32 - cc.n_rattlers) as f64
+        );
+        assert!(
+            csv.contains(&format!(
+                "{},{},{},{}",
+                cc.n_contacts, cc.n_rattlers, cc.z, cc.iso_margin
+            )),
+            "{csv}"
         );
         assert!(c.settings["protocol"]["Pressure"]["shear_stabilised"] == true);
         assert!(

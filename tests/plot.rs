@@ -124,3 +124,43 @@ fn z_above_jam_goes_on_a_log_axis_without_its_exact_zeros() {
         p.index
     );
 }
+
+#[test]
+fn the_stabilised_cells_z_is_plotted_where_it_was_measured() {
+    // Disks (N = 64) at δφ = 1e-4 and 1e-1 above their own jamming point,
+    // shear-stabilised: `z − z_J` of the stabilised cell is drawn beside
+    // the fixed box's, and each cell, stable to shear, has the margin a
+    // disk packing needs for it (at least d(d+1)/2 = 3; tests/moduli.rs,
+    // `SHEAR_STABLE_MARGIN_2D`). A run without the option has no such
+    // figure.
+    let text = r#"(name: "zst", family: "sphere", particles: 64, samples: 1, seed: 1,
+        protocol: AboveJam(delta_phi: [1e-4, 1e-1], shear_stabilised: true),
+        observables: [Contacts, Pressure, Moduli()])"#;
+    let e = Experiment::from_ron(text, "inline").unwrap();
+    let run = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&e, run.path(), 1);
+    assert_eq!(report.packings.len(), 2);
+    for p in &report.packings {
+        let s = p.measures.moduli.as_ref().unwrap().stabilisation.as_ref();
+        let cell = s.unwrap().contacts.as_ref().expect("stabilised contacts");
+        assert!(cell.iso_margin >= 3, "{}: {cell:?}", p.id);
+    }
+    let out = tempfile::tempdir().unwrap();
+    let p = jamkit_report::runplot::plot(&[run.path().to_path_buf()], out.path()).unwrap();
+    for y in ["z_above_jam", "z_stab_above_jam"] {
+        let stem = out.path().join(format!("{y}_vs_delta_phi"));
+        assert!(p.figures.contains(&stem), "{y}: {:?}", p.figures);
+    }
+    let plain = r#"(name: "zpl", family: "sphere", particles: 64, samples: 1, seed: 1,
+        protocol: AboveJam(delta_phi: [1e-4, 1e-1]), observables: [Contacts, Pressure])"#;
+    let e = Experiment::from_ron(plain, "inline").unwrap();
+    let run = tempfile::tempdir().unwrap();
+    common::run_ok(&e, run.path(), 1);
+    let out = tempfile::tempdir().unwrap();
+    let p = jamkit_report::runplot::plot(&[run.path().to_path_buf()], out.path()).unwrap();
+    assert!(
+        !p.figures
+            .iter()
+            .any(|f| f.ends_with("z_stab_above_jam_vs_delta_phi"))
+    );
+}

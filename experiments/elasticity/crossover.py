@@ -19,12 +19,16 @@ family on either side of delta_phi = Delta^2 (the issue's crossover) and of
 delta_phi = Delta (the paper's outlook: G ~ Delta^1/2 G~(delta_phi/Delta),
 G~(x) ~ x for x << 1 and x^1/2 for x >> 1), where they hold two points or
 more; for near-disks also the scaling variables x = delta_phi/Delta and
-G_stab/Delta^1/2 per point. Errors: the standard deviation of the slope over --boot
+G_stab/Delta^1/2 per point, and (session 19) across the near-disk
+families the collapse on G~ = G_stab/Delta^1/2 against x at equal x, and
+z_stab - z_J, the stabilised cell's contacts (`moduli.stabilisation.
+contacts`, where recorded) against the packing's own jamming point.
+Errors: the standard deviation of the slope over --boot
 bootstrap replicas, each resampling every point's packings with
 replacement (a replica with a mean <= 0 in the range is dropped and
 counted), and the 16th-84th percentile range. With few packings per point
 the bootstrap underestimates the spread (by about sqrt((n-1)/n) for n
-packings, 13 % at n = 4). --csv writes the per-point table. Only the
+packings, 13 % at n = 4). --csv writes the per-point table, --svg a figure of the collapse. Only the
 standard library (`mean_sem` from fit.py).
 """
 import argparse
@@ -44,6 +48,7 @@ QUANTITIES = [
     ("G_fixed", "G fixed box"),
     ("G_stab", "G stabilised"),
     ("dz", "z - z_J"),
+    ("dz_stab", "z_stab - z_J"),
 ]
 
 
@@ -82,6 +87,14 @@ def read(dirs):
                     "G_fixed": fixed["shear"],
                     "G_stab": moduli["moduli"]["shear"] if stab else None,
                     "dz": m["z_j"] - m["jam_point"]["z"],
+                    # The stabilised cell's contacts (session 19 on;
+                    # None in packings made before).
+                    "dz_stab": (stab["contacts"]["z"] - m["jam_point"]["z"])
+                    if stab and stab.get("contacts") else None,
+                    "stab_rattlers": stab["contacts"]["n_rattlers"]
+                    if stab and stab.get("contacts") else None,
+                    "stab_margin": stab["contacts"]["iso_margin"]
+                    if stab and stab.get("contacts") else None,
                 }
             )
     return groups, failed, deltas
@@ -103,8 +116,10 @@ def fit(points, q, lo, hi, boot, rng):
     sel = sorted(x for x in points if lo <= x <= hi)
     if len(sel) < 2:
         return None
-    values = {x: [r[q] for r in points[x]] for x in sel}
-    if any(v is None for x in sel for v in values[x]):
+    # The packings that have the quantity (the stabilised contacts are
+    # missing from packings made before session 19).
+    values = {x: [r[q] for r in points[x] if r[q] is not None] for x in sel}
+    if any(not values[x] for x in sel):
         return None
     means = [sum(values[x]) / len(values[x]) for x in sel]
     if any(m <= 0 for m in means):
@@ -141,12 +156,131 @@ def show(name, result, boot):
     print(f"  {name}: {best:.3f} ± {sd:.3f} [16-84 %: {lo16:.3f} … {hi84:.3f}] over {span}{extra}")
 
 
+def collapse_svg(curves, path):
+    """A log-log figure of G~ = G_stab/Delta^1/2 against x = delta_phi/Delta,
+    one series per Delta (mean +- s.e.m.), with the paper's two limits
+    G~ ~ x and G~ ~ x^1/2 as guides through the first and last points of
+    the smallest Delta. SVG only (the standard library has no PNG
+    writer)."""
+    colours = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e"]
+    pts = [(x, g, r) for c in curves.values() for x, g, r in c]
+    lx0 = math.floor(math.log10(min(x for x, _, _ in pts)))
+    lx1 = math.ceil(math.log10(max(x for x, _, _ in pts)))
+    ly0 = math.floor(math.log10(min(g * (1 - r) for _, g, r in pts if r < 1)))
+    ly1 = math.ceil(math.log10(max(g * (1 + r) for _, g, r in pts)))
+    w, h, left, right, top, bottom = 640, 460, 80, 170, 30, 60
+    X = lambda x: left + (math.log10(x) - lx0) / (lx1 - lx0) * (w - left - right)
+    Y = lambda y: h - bottom - (math.log10(y) - ly0) / (ly1 - ly0) * (h - top - bottom)
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">',
+           f'<rect width="{w}" height="{h}" fill="white"/>',
+           f'<rect x="{left}" y="{top}" width="{w - left - right}" height="{h - top - bottom}" fill="none" stroke="black"/>']
+    for k in range(lx0, lx1 + 1):
+        out.append(f'<line x1="{X(10 ** k):.1f}" y1="{h - bottom}" x2="{X(10 ** k):.1f}" y2="{h - bottom + 5}" stroke="black"/>')
+        out.append(f'<text x="{X(10 ** k):.1f}" y="{h - bottom + 18}" text-anchor="middle">1e{k}</text>')
+    for k in range(ly0, ly1 + 1):
+        out.append(f'<line x1="{left - 5}" y1="{Y(10 ** k):.1f}" x2="{left}" y2="{Y(10 ** k):.1f}" stroke="black"/>')
+        out.append(f'<text x="{left - 8}" y="{Y(10 ** k) + 4:.1f}" text-anchor="end">1e{k}</text>')
+    out.append(f'<text x="{(left + w - right) / 2}" y="{h - 15}" text-anchor="middle">x = δφ/Δ</text>')
+    out.append(f'<text x="18" y="{(top + h - bottom) / 2}" text-anchor="middle" transform="rotate(-90 18 {(top + h - bottom) / 2})">G/Δ^(1/2) (stabilised)</text>')
+    first = curves[min(curves)]
+    (xa, ga, _), (xb, gb, _) = first[0], first[-1]
+    # The guides, clipped to the frame.
+    out.append(f'<clipPath id="frame"><rect x="{left}" y="{top}" width="{w - left - right}" height="{h - top - bottom}"/></clipPath>')
+    out.append('<g clip-path="url(#frame)">')
+    for (x0, g0), slope in (((xa, ga), 1.0), ((xb, gb), 0.5)):
+        xs = (10 ** lx0, 10 ** lx1)
+        ys = [g0 * (x / x0) ** slope for x in xs]
+        out.append(f'<line x1="{X(xs[0]):.1f}" y1="{Y(ys[0]):.1f}" x2="{X(xs[1]):.1f}" y2="{Y(ys[1]):.1f}" stroke="gray" stroke-dasharray="4 4"/>')
+    out.append('</g>')
+    for k, d in enumerate(sorted(curves)):
+        col = colours[k % len(colours)]
+        path_d = " ".join(("M" if i == 0 else "L") + f"{X(x):.1f},{Y(g):.1f}" for i, (x, g, _) in enumerate(curves[d]))
+        out.append(f'<path d="{path_d}" fill="none" stroke="{col}"/>')
+        for x, g, r in curves[d]:
+            lo = g * (1 - r) if r < 1 else 10 ** ly0
+            out.append(f'<line x1="{X(x):.1f}" y1="{Y(lo):.1f}" x2="{X(x):.1f}" y2="{Y(g * (1 + r)):.1f}" stroke="{col}"/>')
+            out.append(f'<circle cx="{X(x):.1f}" cy="{Y(g):.1f}" r="4" fill="{col}"/>')
+        ly = top + 20 + 20 * k
+        out.append(f'<circle cx="{w - right + 20}" cy="{ly}" r="4" fill="{col}"/>')
+        out.append(f'<text x="{w - right + 30}" y="{ly + 4}">Δ = {d:g}</text>')
+    ly = top + 20 + 20 * len(curves)
+    out.append(f'<line x1="{w - right + 12}" y1="{ly}" x2="{w - right + 28}" y2="{ly}" stroke="gray" stroke-dasharray="4 4"/>')
+    out.append(f'<text x="{w - right + 30}" y="{ly + 4}">x and x^(1/2)</text>')
+    out.append('</svg>')
+    with open(path, "w") as f:
+        f.write("\n".join(out) + "\n")
+
+
+def collapse(groups, deltas, svg=None):
+    """The paper's scaling form G = Delta^1/2 G~(delta_phi/Delta) across the
+    near-disk families (those with a Delta): per x = delta_phi/Delta of any
+    family, G~ = G_stab/Delta^1/2 of each family, measured at that x or
+    interpolated linearly in ln G~ against ln x between its two nearest
+    points (a decade apart), and the spread (max - min)/mean against the
+    s.e.m.s (relative) of the measured ones."""
+    curves = {}
+    for key, points in groups.items():
+        delta = deltas.get(key)
+        if not delta:
+            continue
+        curve = []
+        for x in sorted(points):
+            vs = [r["G_stab"] for r in points[x] if r["G_stab"] is not None]
+            if len(vs) < 2:
+                continue
+            m, se = mean_sem(vs)
+            if m > 0:
+                curve.append((x / delta, m / math.sqrt(delta), se / m))
+        if curve:
+            curves[delta] = curve
+    if len(curves) < 2:
+        return
+    if svg:
+        collapse_svg(curves, svg)
+    print("## collapse: G~ = G_stab/Delta^1/2 against x = delta_phi/Delta")
+    deltas_sorted = sorted(curves)
+    print("x | " + " | ".join(f"Delta = {d:g}" for d in deltas_sorted) + " | spread (max-min)/mean | largest s.e.m.")
+    xs = sorted({round(math.log10(x), 6) for c in curves.values() for x, _, _ in c})
+    for lx in xs:
+        x = 10 ** lx
+        cells, vals, sems = [], [], []
+        for d in deltas_sorted:
+            c = curves[d]
+            exact = [(g, r) for cx, g, r in c if abs(math.log10(cx) - lx) < 1e-6]
+            if exact:
+                g, r = exact[0]
+                cells.append(f"{g:.3e} ± {r * 100:.0f} %")
+                vals.append(g)
+                sems.append(r)
+                continue
+            below = [(cx, g) for cx, g, _ in c if cx < x]
+            above = [(cx, g) for cx, g, _ in c if cx > x]
+            if below and above:
+                (x0, g0), (x1, g1) = below[-1], above[0]
+                t = math.log(x / x0) / math.log(x1 / x0)
+                g = math.exp(math.log(g0) + t * math.log(g1 / g0))
+                cells.append(f"({g:.3e})")
+                vals.append(g)
+            else:
+                cells.append("–")
+        if len(vals) >= 2:
+            mean = sum(vals) / len(vals)
+            spread = f"{(max(vals) - min(vals)) / mean * 100:.0f} %"
+        else:
+            spread = "–"
+        worst = f"{max(sems) * 100:.0f} %" if sems else "–"
+        print(f"{x:.3g} | " + " | ".join(cells) + f" | {spread} | {worst}")
+    print("(values in brackets are interpolated)")
+    print()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--boot", type=int, default=4000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--range", action="append", default=[], help="LO:HI, delta_phi range of a fit")
     ap.add_argument("--csv", help="write the per-point table here")
+    ap.add_argument("--svg", help="draw the collapse G/Delta^1/2 against delta_phi/Delta here")
     ap.add_argument("dirs", nargs="+")
     args = ap.parse_args()
     rng = random.Random(args.seed)
@@ -156,7 +290,7 @@ def main():
         points = groups[key]
         delta = deltas[key]
         print(f"## {key}" + (f" (Delta^2 = {delta * delta:g})" if delta else ""))
-        print("delta_phi | packings | p | G fixed box (G<0) | G stabilised (G<0) | z - z_J")
+        print("delta_phi | packings | p | G fixed box (G<0) | G stabilised (G<0) | z - z_J | z_stab - z_J (packings)")
         for x in sorted(points):
             rs = points[x]
             row = {"family": key, "delta_phi": x, "packings": len(rs)}
@@ -170,7 +304,11 @@ def main():
                 m, se = mean_sem(vs)
                 row[q], row[q + "_sem"] = m, se
                 neg = sum(v < 0 for v in vs)
-                cells.append(f"{m:.3e} ± {se:.1e}" + (f" ({neg})" if q.startswith("G") else ""))
+                note = f" ({neg})" if q.startswith("G") else ""
+                if q == "dz_stab":
+                    margins = [r["stab_margin"] for r in rs if r["stab_margin"] is not None]
+                    note = f" ({len(vs)}; rattlers {sum(r['stab_rattlers'] for r in rs if r['stab_rattlers'] is not None) / len(vs):.1f}, margin >= {min(margins)})"
+                cells.append(f"{m:.3e} ± {se:.1e}" + note)
             rows.append(row)
             if delta and row["G_stab"] != "":
                 # The paper's scaling variables: G / Delta^1/2 against
@@ -206,6 +344,7 @@ def main():
             for q, name in QUANTITIES:
                 show(f"{name} ~ delta_phi^a", fit(points, q, lo, hi, args.boot, rng), args.boot)
         print()
+    collapse(groups, deltas, args.svg)
     if failed:
         print(f"{len(failed)} failed samples:")
         for sample, why in failed:

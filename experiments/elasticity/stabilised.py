@@ -10,7 +10,10 @@ samples, `*.failed.json`, are listed with their V/N and the start of their
 flag: those that unjammed on their way up, and since session 18 those whose
 stabilisation failed, kept as the fixed-box packing it started from) and writes one row per packing (--csv): the fixed-box moduli kept in
 `moduli.stabilisation.fixed_box` beside the stabilised ones, det F, the
-largest entry of |F - I|, strain steps, residuals, V/N before and after.
+largest entry of |F - I|, strain steps, residuals, V/N before and after,
+z of the fixed box and (since session 19) the stabilised cell's z, rattlers
+and isostaticity margin. A packing found in several DIRs counts once, from
+the first.
 Then prints per family parameters and delta_phi (or target pressure): the
 number of packings, mean p, mean +- s.e.m. of G fixed and stabilised with
 the counts of G < 0 and G_min < 0, mean B fixed and stabilised, the largest
@@ -70,6 +73,7 @@ def rows_of(directory):
         if s is None:
             raise SystemExit(f"{path}: not shear-stabilised")
         fixed, stab = s["fixed_box"], m["moduli"]
+        cell = s.get("contacts")
         f = s["deformation"]
         dim = len(f)
         strain = max(abs(f[a][b] - (1.0 if a == b else 0.0)) for a in range(dim) for b in range(dim))
@@ -98,6 +102,12 @@ def rows_of(directory):
                 "e_before": s["energy_before"],
                 "e_after": s["energy_after"],
                 "stab_s": s["wall_s"],
+                # Contacts: the fixed box's (`Contacts`) and, since session
+                # 19, the stabilised cell's (empty in older files).
+                "z_fixed": d["measures"]["z_j"],
+                "z_stab": cell["z"] if cell else "",
+                "rattlers_stab": cell["n_rattlers"] if cell else "",
+                "margin_stab": cell["iso_margin"] if cell else "",
             }
         )
     failed = sorted(glob.glob(os.path.join(directory, "packings", "*.failed.json")))
@@ -107,7 +117,8 @@ def rows_of(directory):
 COLUMNS = [
     "id", "family", "x", "label", "seed", "p", "G_fixed", "Gmin_fixed", "G", "Gmin",
     "B_fixed", "B", "detF", "strain", "iterations", "residual_before", "residual",
-    "neg_modes", "e_before", "e_after", "stab_s",
+    "neg_modes", "e_before", "e_after", "stab_s", "z_fixed", "z_stab", "rattlers_stab",
+    "margin_stab",
 ]
 
 
@@ -117,9 +128,13 @@ def main():
     ap.add_argument("dirs", nargs="+")
     args = ap.parse_args()
     rows, failed = [], []
+    seen = set()
     for d in args.dirs:
         r, f = rows_of(d)
-        rows += r
+        # A packing in several directories (a re-measured copy first)
+        # counts once, from the first.
+        rows += [x for x in r if x["id"] not in seen]
+        seen.update(x["id"] for x in r)
         failed += f
     if args.csv:
         with open(args.csv, "w") as out:

@@ -483,6 +483,7 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
     let start = Instant::now();
     let stabilised = moduli::measure_strained(&mut s.cell, &s.rattler, &params)?;
     let bodies = scene.packing().len().max(1) as f64;
+    let count = s.cell.contact_count(&s.rattler);
     Ok(ModuliMeasures {
         moduli: stabilised,
         params,
@@ -502,6 +503,12 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
             fixed_box,
             wall_s: stabilise_s,
             dense_fallbacks: (s.dense_fallbacks > 0).then_some(s.dense_fallbacks),
+            contacts: Some(jamkit_format::CellContacts {
+                n_contacts: count.n_contacts,
+                n_rattlers: count.n_rattlers,
+                z: count.z,
+                iso_margin: count.iso_margin,
+            }),
         }),
     })
 }

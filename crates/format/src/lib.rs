@@ -14,7 +14,7 @@ pub mod tables;
 pub use error::FormatError;
 pub use jamkit_core::stats::mean_sem;
 pub use record::{
-    JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures, Stabilisation,
+    CellContacts, JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures, Stabilisation,
     without_configuration, write_atomic,
 };
 pub use tables::{

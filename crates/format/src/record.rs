@@ -129,6 +129,25 @@ pub struct Stabilisation {
     /// when none did (and in files written before it existed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dense_fallbacks: Option<u32>,
+    /// The contacts of the stabilised cell, with the same rattler rule as
+    /// `Contacts` (by count). Absent in files made before they were
+    /// recorded (session 19).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contacts: Option<CellContacts>,
+}
+
+/// The contact numbers of a shear-stabilised (deformed) cell, as
+/// `Contacts` counts them in the fixed box.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CellContacts {
+    /// Contacts among non-rattlers, `N_c`.
+    pub n_contacts: usize,
+    /// Rattlers.
+    pub n_rattlers: usize,
+    /// `z = 2 N_c / N_nr`.
+    pub z: f64,
+    /// `N_c − (f N_nr − d)`.
+    pub iso_margin: i64,
 }
 
 /// The spectrum of one packing, as stored.

@@ -146,6 +146,17 @@ pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
     if with_jam_point {
         head.extend(JAM_POINT_COLUMNS.map(String::from));
     }
+    // Only when some packing was shear-stabilised with its cell's contacts
+    // recorded, so that other tables keep their columns.
+    let cell_contacts = |f: &PackingFile| {
+        (f.measures.moduli.as_ref())
+            .and_then(|m| m.stabilisation.as_ref())
+            .and_then(|s| s.contacts.clone())
+    };
+    let with_cell_contacts = files.iter().any(|f| cell_contacts(f).is_some());
+    if with_cell_contacts {
+        head.extend(CELL_CONTACTS_COLUMNS.map(String::from));
+    }
     let mut rows = Vec::with_capacity(files.len());
     for f in files {
         let m = &f.measures;
@@ -202,10 +213,29 @@ pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
                 None => Default::default(),
             });
         }
+        if with_cell_contacts {
+            row.extend(match cell_contacts(f) {
+                Some(c) => [
+                    c.n_contacts.to_string(),
+                    c.n_rattlers.to_string(),
+                    format!("{}", c.z),
+                    c.iso_margin.to_string(),
+                ],
+                None => Default::default(),
+            });
+        }
         rows.push(row);
     }
     table(&head, rows)
 }
+
+/// The columns of a shear-stabilised cell's contacts (docs/formats.md).
+const CELL_CONTACTS_COLUMNS: [&str; 4] = [
+    "stab_contacts",
+    "stab_rattlers",
+    "stab_z",
+    "stab_iso_margin",
+];
 
 /// The columns of `AboveJam`'s jamming point (docs/formats.md).
 const JAM_POINT_COLUMNS: [&str; 4] = ["jam_phi", "jam_z", "jam_rattlers", "jam_iso_margin"];

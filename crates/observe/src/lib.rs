@@ -26,4 +26,4 @@ pub mod spectrum;
 pub mod summary;
 
 pub use contacts::{ContactNetwork, find_rattlers, find_rattlers_by_rank};
-pub use summary::{JammingSummary, RattlerRule, summarize, summarize_with};
+pub use summary::{ContactCount, JammingSummary, RattlerRule, summarize, summarize_with};

@@ -795,9 +795,8 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
         self.energy_and_gradient(&mut grad)
     }
 
-    /// Rattlers of the cell: bodies with fewer than `threshold` contacts
-    /// (`h < 0`), removed iteratively ([`crate::contacts::find_rattlers`]).
-    pub fn rattlers(&self, threshold: usize) -> Vec<bool> {
+    /// Every contact (`h < 0`) of the cell, in its deformed shape.
+    pub fn contacts(&self) -> crate::contacts::ContactNetwork {
         let mut network = crate::contacts::ContactNetwork {
             bodies: self.sizes.len(),
             contacts: Vec::new(),
@@ -807,7 +806,23 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
                 network.contacts.push((i as u32, j as u32));
             }
         });
-        crate::contacts::find_rattlers(&network, threshold)
+        network
+    }
+
+    /// Rattlers of the cell: bodies with fewer than `threshold` contacts
+    /// (`h < 0`), removed iteratively ([`crate::contacts::find_rattlers`]).
+    pub fn rattlers(&self, threshold: usize) -> Vec<bool> {
+        crate::contacts::find_rattlers(&self.contacts(), threshold)
+    }
+
+    /// The contact numbers of the cell with the rattlers `rattler` (by
+    /// count, as [`Self::rattlers`]; `f = D + rot_dof` coordinates per
+    /// non-rattler): what [`crate::summarize`] gives for a packing in its
+    /// fixed box, here in the deformed cell.
+    pub fn contact_count(&self, rattler: &[bool]) -> crate::ContactCount {
+        let f = (D + self.shape.rot_dof()) as i64;
+        let kept = rattler.iter().filter(|&&r| !r).count() as i64;
+        crate::ContactCount::of(&self.contacts(), rattler, f * kept, D)
     }
 
     /// The cell's volume, `V₀ det F`.

@@ -94,29 +94,60 @@ pub fn summarize_with<const D: usize, S: Shape<D>>(
             (rattler, sum, rotations)
         }
     };
-    let n_contacts = network
-        .contacts
-        .iter()
-        .filter(|&&(i, j)| !rattler[i as usize] && !rattler[j as usize])
-        .count();
-    let n_rattlers = rattler.iter().filter(|&&r| r).count();
-    let n_nr = network.bodies - n_rattlers;
-    let z_j = if n_nr > 0 {
-        2.0 * n_contacts as f64 / n_nr as f64
-    } else {
-        0.0
-    };
-    let iso_margin = n_contacts as i64 - (coordinates - D as i64);
+    let count = ContactCount::of(&network, &rattler, coordinates, D);
     JammingSummary {
-        n_contacts,
-        n_contacts_all: network.contacts.len(),
-        n_rattlers,
-        z_j,
-        iso_margin,
+        n_contacts: count.n_contacts,
+        n_contacts_all: count.n_contacts_all,
+        n_rattlers: count.n_rattlers,
+        z_j: count.z,
+        iso_margin: count.iso_margin,
         n_rot_rattlers: rotations.bodies,
         free_rotations: rotations.coordinates,
         pressure: scene.pressure(),
         rattler,
+    }
+}
+
+/// The contact numbers of a network with its rattlers flagged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactCount {
+    /// Contacts among non-rattlers, `N_c`.
+    pub n_contacts: usize,
+    /// Contacts among all bodies, rattlers included.
+    pub n_contacts_all: usize,
+    /// Number of rattlers.
+    pub n_rattlers: usize,
+    /// `z = 2 N_c / N_nr` (0 when every body rattles).
+    pub z: f64,
+    /// `N_c − (coordinates − D)`.
+    pub iso_margin: i64,
+}
+
+impl ContactCount {
+    /// Count `network`'s contacts among the bodies not flagged in
+    /// `rattler`; `coordinates` is what the non-rattlers' contacts must
+    /// constrain (`f N_nr` by the count rule, `Σ_b r_b` by rank) and `dim`
+    /// the global translations left free.
+    pub fn of(network: &ContactNetwork, rattler: &[bool], coordinates: i64, dim: usize) -> Self {
+        let n_contacts = network
+            .contacts
+            .iter()
+            .filter(|&&(i, j)| !rattler[i as usize] && !rattler[j as usize])
+            .count();
+        let n_rattlers = rattler.iter().filter(|&&r| r).count();
+        let n_nr = network.bodies - n_rattlers;
+        let z = if n_nr > 0 {
+            2.0 * n_contacts as f64 / n_nr as f64
+        } else {
+            0.0
+        };
+        Self {
+            n_contacts,
+            n_contacts_all: network.contacts.len(),
+            n_rattlers,
+            z,
+            iso_margin: n_contacts as i64 - (coordinates - dim as i64),
+        }
     }
 }
 

@@ -218,7 +218,7 @@ const PROTOCOL_TARGETS: [(&str, &str, &str); 3] = [
     ("AboveJam", "delta_phi", "delta_phi"),
 ];
 
-const OBSERVABLES: [(&str, &str, Measure); 9] = [
+const OBSERVABLES: [(&str, &str, Measure); 10] = [
     ("phi_j", "φ_J", |f| Some(f.phi)),
     ("z_j", "z_J", |f| f.measures.z_j),
     ("z_corr", "z_corr", |f| f.z_corr()),
@@ -246,6 +246,17 @@ const OBSERVABLES: [(&str, &str, Measure); 9] = [
         "z_above_jam",
         "z − z_J (from its own jamming point)",
         |f| Some(f.measures.z_j? - f.measures.jam_point.as_ref()?.z?),
+    ),
+    // `protocol.shear_stabilised`: the stabilised cell's contacts against
+    // the fixed box's jamming point.
+    (
+        "z_stab_above_jam",
+        "z − z_J of the shear-stabilised cell (from its own jamming point)",
+        |f| {
+            let m = f.measures.moduli.as_ref()?;
+            let cell = m.stabilisation.as_ref()?.contacts.as_ref()?;
+            Some(cell.z - f.measures.jam_point.as_ref()?.z?)
+        },
     ),
 ];
 
@@ -384,7 +395,7 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
             // compression gained no contact: such points are left off a
             // log axis (the caption counts them), a negative one keeps the
             // axis linear.
-            let zero_ok = key == "z_above_jam";
+            let zero_ok = matches!(key, "z_above_jam" | "z_stab_above_jam");
             let ys: Vec<f64> = groups
                 .iter()
                 .flat_map(|g| g.2.iter().map(|p| p.1))
@@ -400,6 +411,7 @@ pub fn plot(dirs: &[PathBuf], out: &Path) -> Result<Plots, ReportError> {
                     | "shear_modulus_fixed_box"
                     | "bulk_modulus"
                     | "z_above_jam"
+                    | "z_stab_above_jam"
             ) && ys.iter().all(|&y| y > 0.0 || (zero_ok && y == 0.0))
                 && hi >= 20.0 * lo;
             let left_off = if log_y && zeros > 0 {
