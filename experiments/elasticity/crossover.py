@@ -41,7 +41,7 @@ import sys
 from collections import defaultdict
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from fit import mean_sem  # noqa: E402
+from fit import mean_sem, write_csv  # noqa: E402
 
 QUANTITIES = [
     ("p", "p"),
@@ -353,12 +353,7 @@ def main():
         columns = ["family", "delta_phi", "packings"] + [
             c for q, _ in QUANTITIES for c in (q, q + "_sem")
         ]
-        with open(args.csv, "w") as out:
-            out.write(",".join(columns) + "\n")
-            for r in rows:
-                out.write(",".join(
-                    f"{r[c]:.6e}" if isinstance(r[c], float) else str(r[c]) for c in columns
-                ) + "\n")
+        write_csv(args.csv, columns, rows)
 
 
 if __name__ == "__main__":

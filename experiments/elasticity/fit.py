@@ -45,6 +45,16 @@ def mean_sem(xs):
     return m, math.sqrt(sum((x - m) ** 2 for x in xs) / ((n - 1) * n))
 
 
+def write_csv(path, columns, rows):
+    """Write `rows` (dicts) as CSV with `columns`, floats as `%.6e`."""
+    with open(path, "w") as out:
+        out.write(",".join(columns) + "\n")
+        for r in rows:
+            out.write(",".join(
+                f"{r[c]:.6e}" if isinstance(r[c], float) else str(r[c]) for c in columns
+            ) + "\n")
+
+
 def wls(xs, ys, sigmas):
     """Slope, its standard error and chi^2/dof of a weighted line fit."""
     w = [1.0 / s**2 for s in sigmas]

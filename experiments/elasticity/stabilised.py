@@ -26,7 +26,11 @@ import json
 import math
 import os
 import re
+import sys
 from collections import defaultdict
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from fit import write_csv  # noqa: E402
 
 
 def mean_sem(xs):
@@ -137,12 +141,7 @@ def main():
         seen.update(x["id"] for x in r)
         failed += f
     if args.csv:
-        with open(args.csv, "w") as out:
-            out.write(",".join(COLUMNS) + "\n")
-            for r in rows:
-                out.write(",".join(
-                    f"{r[c]:.6e}" if isinstance(r[c], float) else str(r[c]) for c in COLUMNS
-                ) + "\n")
+        write_csv(args.csv, COLUMNS, rows)
     groups = defaultdict(list)
     for r in rows:
         groups[(r["family"], r["label"], r["x"])].append(r)
