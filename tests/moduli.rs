@@ -1247,6 +1247,30 @@ fn dense_3d_spheres_stabilise() {
     }
 }
 
+/// The runner tests' experiment file: disks, N = 32, `samples` samples
+/// from seed 1 at `Pressure` p = 10⁻³, measuring `Contacts`, `Pressure`
+/// and `Moduli()`, with `protocol_extra` (e.g. `", shear_stabilised:
+/// true"`) appended to the protocol's fields.
+fn stabilisation_runner_text(samples: usize, protocol_extra: &str) -> String {
+    format!(
+        r#"(name: "el", family: "sphere", particles: 32, samples: {samples}, seed: 1,
+        protocol: Pressure(pressure: 1e-3, tol: 1e-2{protocol_extra}),
+        observables: [Contacts, Pressure, Moduli()])"#
+    )
+}
+
+/// [`stabilisation_runner_text`], read.
+fn stabilisation_runner_experiment(
+    samples: usize,
+    protocol_extra: &str,
+) -> jamkit_experiment::Experiment {
+    jamkit_experiment::Experiment::from_ron(
+        &stabilisation_runner_text(samples, protocol_extra),
+        "inline",
+    )
+    .unwrap()
+}
+
 /// `protocol.shear_stabilised` through the runner (disks, N = 32,
 /// `Pressure` p = 10⁻³, the runner test's two samples, of which the first
 /// has `G < 0` in its fixed box; `Pressure` stabilises at fixed pressure,
@@ -1262,12 +1286,8 @@ fn dense_3d_spheres_stabilise() {
 /// naming the field.
 #[test]
 fn shear_stabilised_option_through_the_runner() {
-    let base = r#"(name: "el", family: "sphere", particles: 32, samples: 2, seed: 1,
-        protocol: Pressure(pressure: 1e-3, tol: 1e-2STAB),
-        observables: [Contacts, Pressure, Moduli()])"#;
     let run = |stab: &str| {
-        let text = base.replace("STAB", stab);
-        let e = jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap();
+        let e = stabilisation_runner_experiment(2, stab);
         let dir = tempfile::tempdir().unwrap();
         let report = common::run_ok(&e, dir.path(), 1);
         let csv = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
@@ -1344,9 +1364,7 @@ fn shear_stabilised_option_through_the_runner() {
     let first = on[0].measures.moduli.as_ref().unwrap();
     assert!(first.stabilisation.as_ref().unwrap().fixed_box.shear < 0.0);
     assert!(csv.contains(&format!("{:e}", first.moduli.shear)), "{csv}");
-    let text = base
-        .replace("STAB", ", shear_stabilised: true")
-        .replace(", Moduli()", "");
+    let text = stabilisation_runner_text(2, ", shear_stabilised: true").replace(", Moduli()", "");
     let err = jamkit_experiment::Experiment::from_ron(&text, "inline")
         .unwrap()
         .validate()
@@ -1369,12 +1387,8 @@ fn shear_stabilised_option_through_the_runner() {
 /// failed file. Bad `stabilise` settings are refused, naming the field.
 #[test]
 fn a_failed_shear_stabilisation_keeps_the_fixed_box_packing() {
-    let base = r#"(name: "el", family: "sphere", particles: 32, samples: 1, seed: 1,
-        protocol: Pressure(pressure: 1e-3, tol: 1e-2STAB),
-        observables: [Contacts, Pressure, Moduli()])"#;
     let experiment = |stab: &str| {
-        let e =
-            jamkit_experiment::Experiment::from_ron(&base.replace("STAB", stab), "inline").unwrap();
+        let e = stabilisation_runner_experiment(1, stab);
         e.validate().map(|_| e)
     };
     let plain_dir = tempfile::tempdir().unwrap();
@@ -1468,10 +1482,7 @@ fn a_failed_shear_stabilisation_keeps_the_fixed_box_packing() {
         assert!(err.contains(field), "{stab}: {err}");
     }
     let err = jamkit_experiment::Experiment::from_ron(
-        &base.replace(
-            "STAB",
-            ", shear_stabilised: true, stabilise: (max_steps: 3)",
-        ),
+        &stabilisation_runner_text(1, ", shear_stabilised: true, stabilise: (max_steps: 3)"),
         "inline",
     )
     .unwrap_err()
