@@ -103,6 +103,46 @@ fn new_observables_are_measured_on_saved_packings() {
     assert_eq!(third.packings, second.packings);
 }
 
+/// A re-measure of a saved near-disk packing (another observable added, so
+/// the runner reads the packings back) gives the run's own measures bit
+/// for bit: the run measures the configuration as its file records it.
+/// Before that (session 19), the run measured the orientations in memory,
+/// `e^{iθ}` a bit or two from what the stored `θ` gives back, and these
+/// packings' fixed-box G came back 3e-12 and 1e-9 off (N = 32, Δ = 0.03,
+/// δφ = 1e-2, seeds 1 and 2).
+#[test]
+fn remeasured_near_disk_moduli_equal_the_run_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let above = |observables: &str| {
+        let text = format!(
+            r#"(name: "remeasure", family: "fourier", params: {{"n": 2, "delta": 0.03}},
+                sizes: Binary(small: 0.5, large: 0.7), particles: 32, samples: 2, seed: 1,
+                protocol: AboveJam(delta_phi: [1e-2]), observables: {observables})"#
+        );
+        Experiment::from_ron(&text, "inline").unwrap()
+    };
+    let run = common::run_ok(&above("[Contacts, Pressure, Moduli()]"), dir.path(), 1);
+    let again = common::run_ok(
+        &above("[Contacts, Pressure, Moduli(), Gaps()]"),
+        dir.path(),
+        1,
+    );
+    assert_eq!(again.reused, 2);
+    for (a, b) in run.packings.iter().zip(&again.packings) {
+        assert!(b.measures.gaps.is_some(), "{}: measured again", b.id);
+        let (ma, mb) = (a.measures.moduli.as_ref(), b.measures.moduli.as_ref());
+        let (ma, mb) = (&ma.unwrap().moduli, &mb.unwrap().moduli);
+        assert_eq!(ma.shear.to_bits(), mb.shear.to_bits(), "{}: G", a.id);
+        assert_eq!(ma.bulk.to_bits(), mb.bulk.to_bits(), "{}: B", a.id);
+        // Every field (Debug writes each f64 to its last bit).
+        assert_eq!(format!("{ma:?}"), format!("{mb:?}"), "{}", a.id);
+        let (pa, pb) = (a.measures.pressure.unwrap(), b.measures.pressure.unwrap());
+        assert_eq!(pa.to_bits(), pb.to_bits(), "{}: pressure", a.id);
+        assert_eq!(a.measures.n_contacts, b.measures.n_contacts);
+        assert_eq!(a.rattler, b.rattler);
+    }
+}
+
 /// `jamkit spectrum` on a saved packing gives the eigenvalues the run
 /// computed in memory (the same Hessian, K only, rattlers kept), up to the
 /// round-off of storing orientations as angles: 1e-9 of λ_max.

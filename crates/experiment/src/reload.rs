@@ -5,8 +5,10 @@
 //! The file holds the family's parameters, the box edges, every centre,
 //! size and orientation, and the settings it was made with (potential,
 //! Verlet skin). Orientations come back through the family's
-//! `orientation_from_coords`, so they agree with the ones in memory to the
-//! last bit or two (an angle is stored, not its cosine and sine).
+//! `orientation_from_coords`, so they agree with the ones in memory only to
+//! the last bit or two (an angle is stored, not its cosine and sine); the
+//! runner therefore measures a new packing on the scene rebuilt here from
+//! its file (`sample::measure_saved`), so that a re-measure is bit for bit.
 
 use crate::error::ExperimentError;
 use crate::schema::EngineParams;

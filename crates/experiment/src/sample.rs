@@ -2,8 +2,10 @@
 //! random start from its seed, the protocol (`jam`, `compress_to_phi`,
 //! `compress_to_pressure`, with the saddle escape when asked), the
 //! observables (contacts and rattlers, pressure, spectrum, gaps), and the
-//! packing file that records it all. Also the re-measurement of a saved
-//! packing (`remeasure`). The parallel, resumable loop over samples is the
+//! packing file that records it all. The observables are measured on the
+//! configuration as its file records it (`measure_saved`), by the same
+//! code as the re-measurement of a saved packing (`remeasure`), so the
+//! two agree bit for bit. The parallel, resumable loop over samples is the
 //! runner's (`runner`); nothing here knows about threads, locks or other
 //! samples, so a sample is the same bits whoever runs it.
 
@@ -258,20 +260,26 @@ impl SceneVisitor for SampleVisitor<'_> {
             }
         };
 
-        let mut observed = observe(e, &mut scene).map_err(sample_err)?;
-        let mut measures = observed.measures(
-            e,
-            Protocolled {
-                phi: outcome.phi,
-                energy_per_particle: outcome.energy_per_particle,
-                fire_steps: outcome.fire_steps,
-                minimizations: outcome.minimizations,
-                wall_s: start.elapsed().as_secs_f64(),
-                saddle_escapes,
-                jam_point,
-            },
-            &scene.packing().shape,
-        );
+        // The observables are measured on the configuration as the packing
+        // file records it and `reload` gives it back (centres wrapped into
+        // the box, orientations through the family's coordinates), not on
+        // the scene in memory: a planar near-disk's `e^{iθ}` is stored as
+        // `θ` and comes back a bit or two off, which a soft Hessian
+        // amplifies (docs/elasticity.md, "Re-measuring a saved packing (session 19)").
+        // So a re-measure of the saved file gives these measures bit for bit.
+        let run = Protocolled {
+            phi: outcome.phi,
+            energy_per_particle: outcome.energy_per_particle,
+            fire_steps: outcome.fire_steps,
+            minimizations: outcome.minimizations,
+            wall_s: start.elapsed().as_secs_f64(),
+            saddle_escapes,
+            jam_point,
+        };
+        let shape = &scene.packing().shape;
+        let unmeasured = Observed::unmeasured().measures(e, run.clone(), shape);
+        let saved = self.file(scene.packing(), true, unmeasured);
+        let (mut file, mut observed) = measure_saved(e, saved, run)?;
         if let Some(source) = observed.stabilisation_failed.take() {
             // The packing the stabilisation started from, with its
             // fixed-box measures, kept as `<id>.failed.json` (the runner's
@@ -280,13 +288,12 @@ impl SceneVisitor for SampleVisitor<'_> {
             let why = format!(
                 "shear stabilisation failed: {source}; this is the fixed-box packing it started from, with the fixed box's moduli"
             );
+            let measures = &mut file.measures;
             measures.flag = if measures.flag.is_empty() {
                 why
             } else {
                 format!("{}; {why}", measures.flag)
             };
-            let mut file = self.file(scene.packing(), true, measures);
-            file.rattler = observed.rattler();
             return Err(ExperimentError::Sample {
                 sample: job.id.clone(),
                 source: Box::new(source),
@@ -294,8 +301,13 @@ impl SceneVisitor for SampleVisitor<'_> {
                 saved: None,
             });
         }
-        let mut file = self.file(scene.packing(), e.output.packings, measures);
-        file.rattler = observed.rattler();
+        if !e.output.packings {
+            // The rattler flags stay, as in every file.
+            file = PackingFile {
+                rattler: std::mem::take(&mut file.rattler),
+                ..jamkit_format::without_configuration(&file)
+            };
+        }
         Ok((file, observed.eigenvalue_table))
     }
 }
@@ -392,6 +404,7 @@ impl SampleVisitor<'_> {
 }
 
 /// What the protocol ended with, as stored.
+#[derive(Clone)]
 struct Protocolled {
     phi: f64,
     energy_per_particle: f64,
@@ -574,6 +587,19 @@ fn observe<const D: usize, S: Shape<D>>(
 }
 
 impl Observed {
+    /// Nothing measured (the measures of a file before its observables).
+    fn unmeasured() -> Self {
+        Self {
+            contacts: None,
+            pressure: None,
+            spectrum: None,
+            eigenvalue_table: None,
+            gaps: None,
+            moduli: None,
+            stabilisation_failed: None,
+        }
+    }
+
     fn measures<const D: usize, S: Shape<D>>(
         &self,
         e: &Experiment,
@@ -628,39 +654,60 @@ pub(crate) fn remeasure(
     e: &Experiment,
     file: PackingFile,
 ) -> Result<(PackingFile, Option<String>), ExperimentError> {
-    struct Remeasure<'a> {
+    let old = &file.measures;
+    let run = Protocolled {
+        phi: old.phi,
+        energy_per_particle: old.energy_per_particle,
+        fire_steps: old.fire_steps,
+        minimizations: old.minimizations,
+        wall_s: old.wall_s,
+        saddle_escapes: old.saddle_escapes,
+        jam_point: old.jam_point.clone(),
+    };
+    let id = file.id.clone();
+    let (file, observed) = measure_saved(e, file, run)?;
+    // The saved packing stays as it was.
+    if let Some(source) = observed.stabilisation_failed {
+        return Err(ExperimentError::sample(id, source));
+    }
+    Ok((file, observed.eigenvalue_table))
+}
+
+/// The observables of `e` measured on the configuration of `file` as
+/// `reload` gives it back, with the protocol's figures `run` (the
+/// measuring time added to its `wall_s`): `file` with those measures,
+/// its rattler flags and observables, and what was observed. A sample's
+/// own measures and a re-measure of its saved packing both come from
+/// here, so they are the same bits. A failed stabilisation is left in
+/// `Observed::stabilisation_failed` for the caller.
+fn measure_saved(
+    e: &Experiment,
+    file: PackingFile,
+    run: Protocolled,
+) -> Result<(PackingFile, Observed), ExperimentError> {
+    struct Measure<'a> {
         e: &'a Experiment,
         file: PackingFile,
+        run: Protocolled,
     }
-    impl PackingVisitor for Remeasure<'_> {
-        type Output = Result<(PackingFile, Option<String>), ExperimentError>;
+    impl PackingVisitor for Measure<'_> {
+        type Output = Result<(PackingFile, Observed), ExperimentError>;
         fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> Self::Output {
-            let (e, mut file) = (self.e, self.file);
+            let (e, mut file, mut run) = (self.e, self.file, self.run);
             let start = Instant::now();
-            let mut observed = observe(e, &mut scene)
+            let observed = observe(e, &mut scene)
                 .map_err(|source| ExperimentError::sample(file.id.clone(), source))?;
-            // The saved packing stays as it was.
-            if let Some(source) = observed.stabilisation_failed.take() {
-                return Err(ExperimentError::sample(file.id.clone(), source));
-            }
-            let old = &file.measures;
-            let run = Protocolled {
-                phi: old.phi,
-                energy_per_particle: old.energy_per_particle,
-                fire_steps: old.fire_steps,
-                minimizations: old.minimizations,
-                wall_s: old.wall_s + start.elapsed().as_secs_f64(),
-                saddle_escapes: old.saddle_escapes,
-                jam_point: old.jam_point.clone(),
-            };
+            run.wall_s += start.elapsed().as_secs_f64();
             file.measures = observed.measures(e, run, &scene.packing().shape);
+            file.phi = file.measures.phi;
+            file.energy_per_particle = file.measures.energy_per_particle;
             file.rattler = observed.rattler();
             file.observables = observables_value(e);
-            Ok((file, observed.eigenvalue_table))
+            Ok((file, observed))
         }
     }
     let id = file.id.clone();
-    reload(&file.clone(), Remeasure { e, file })
+    reload(&file.clone(), Measure { e, file, run })
         .and_then(|r| r)
         .map_err(|err| match err {
             ExperimentError::Sample { .. } => err,
