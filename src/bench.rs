@@ -19,8 +19,8 @@ use anyhow::Result;
 use clap::{Subcommand, ValueEnum};
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::{
-    Fire, FireParams, FireVariant, ForceCriterion, JamParams, JamSearch, LbfgsParams, Masses,
-    Objective, PreconParams, Scene, jam,
+    Fire, FireParams, FireVariant, ForceCriterion, JamParams, JamSearch, LbfgsChoice, LbfgsParams,
+    Masses, Objective, PreconParams, Scene, jam,
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_observe::summarize;
@@ -193,9 +193,14 @@ pub enum BenchCommand {
         no_newton: bool,
         /// L-BFGS (`minimizer.lbfgs`) after this many FIRE steps of a
         /// minimisation without convergence (`0`: L-BFGS from the start,
-        /// FIRE only where it gives up) [default: no L-BFGS].
-        #[arg(long)]
+        /// FIRE only where it gives up) [default: the family's, as in
+        /// experiment files: `--lbfgs-after 0 --lbfgs-blocks` for n-mers
+        /// in 3D with FIRE, none otherwise; none with `--minimizer paper`].
+        #[arg(long, conflicts_with = "no_lbfgs")]
         lbfgs_after: Option<u64>,
+        /// No L-BFGS (`minimizer.lbfgs: None`), whatever the family.
+        #[arg(long)]
+        no_lbfgs: bool,
         /// Pairs L-BFGS keeps (`minimizer.lbfgs.memory`) [default: 8].
         #[arg(long, requires = "lbfgs_after")]
         lbfgs_memory: Option<u32>,
@@ -338,6 +343,7 @@ pub fn run(what: BenchCommand) -> Result<()> {
             newton_after,
             no_newton,
             lbfgs_after,
+            no_lbfgs,
             lbfgs_memory,
             lbfgs_max_step,
             lbfgs_jammed_only,
@@ -379,17 +385,21 @@ pub fn run(what: BenchCommand) -> Result<()> {
             if no_newton {
                 fire.newton = None;
             }
-            fire.lbfgs = lbfgs_after.map(|after| {
-                let d = LbfgsParams::default();
-                LbfgsParams {
-                    after,
-                    memory: lbfgs_memory.unwrap_or(d.memory),
-                    max_step: lbfgs_max_step.unwrap_or(d.max_step),
-                    jammed_only: lbfgs_jammed_only,
-                    blocks: lbfgs_blocks,
-                    ..d
+            fire.lbfgs = match lbfgs_after {
+                Some(after) => {
+                    let d = LbfgsParams::default();
+                    LbfgsChoice::On(LbfgsParams {
+                        after,
+                        memory: lbfgs_memory.unwrap_or(d.memory),
+                        max_step: lbfgs_max_step.unwrap_or(d.max_step),
+                        jammed_only: lbfgs_jammed_only,
+                        blocks: lbfgs_blocks,
+                        ..d
+                    })
                 }
-            });
+                None if no_lbfgs || minimizer == MinimizerArg::Paper => LbfgsChoice::Off,
+                None => LbfgsChoice::Family,
+            };
             fire.validate("minimizer")?;
             let mut trace_out = match &trace {
                 Some(path) => {

@@ -7,8 +7,8 @@
 use jamkit_core::Shape;
 use jamkit_engine::hessian::{Hessian, HessianOptions};
 use jamkit_engine::{
-    Fire, FireParams, FireVariant, ForceCriterion, LbfgsParams, Masses, NewtonParams, Objective,
-    PreconParams, Scene, StopReason,
+    Fire, FireParams, FireVariant, ForceCriterion, LbfgsChoice, LbfgsParams, Masses, NewtonParams,
+    Objective, PreconParams, Scene, StopReason,
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_lobed::{LobedParams, lobed};
@@ -91,7 +91,7 @@ fn same_minimum<const D: usize, S: Shape<D>>(shape: S, n: usize, phi: f64, seeds
     // L-BFGS from the start, with the bodies' masses and with the blocks
     // as its `H₀`.
     let lbfgs = |blocks| FireParams {
-        lbfgs: Some(LbfgsParams {
+        lbfgs: LbfgsChoice::On(LbfgsParams {
             blocks,
             ..LbfgsParams::default()
         }),
@@ -621,9 +621,11 @@ fn plain_mass_packings_are_refused_under_the_family_default_and_resume_as_plain(
         );
         jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap()
     };
+    // `lbfgs: None` on both sides: the masses are the one difference here
+    // (the L-BFGS default has its own test below).
     common::refused_then_resumed(
-        &experiment(", minimizer: (masses: Plain)"),
-        &experiment(""),
+        &experiment(", minimizer: (masses: Plain, lbfgs: None)"),
+        &experiment(", minimizer: (lbfgs: None)"),
         &[
             "minimizer.masses",
             "\"Blocks\"",
@@ -652,7 +654,17 @@ fn bench_packing_takes_the_familys_masses() {
         hash(&disks),
         hash(&[&disks[..], &["--masses", "plain"]].concat())
     );
-    let dimers = ["--family", "nmer", "--dim", "3", "--particles", "32"];
+    // Without L-BFGS, whose default for 3D n-mers would leave FIRE's
+    // masses unused on this small scene.
+    let dimers = [
+        "--family",
+        "nmer",
+        "--dim",
+        "3",
+        "--particles",
+        "32",
+        "--no-lbfgs",
+    ];
     let family = hash(&dimers);
     assert_eq!(
         family,
@@ -665,5 +677,138 @@ fn bench_packing_takes_the_familys_masses() {
     assert_ne!(
         family,
         hash(&[&dimers[..], &["--masses", "plain"]].concat())
+    );
+}
+
+/// L-BFGS from the start in the block metric is the family's choice for
+/// n-mers in 3D and no other family's: over every registered family in 2D
+/// and 3D (its example parameters), the recorded `minimizer.lbfgs` of an
+/// experiment that leaves the field out is `(after: 0, blocks: true)` for
+/// `nmer` in 3D and absent (no L-BFGS, so the packings and their settings
+/// are those of before) everywhere else; FIRE 2.0, `lbfgs: None` and an
+/// explicit `lbfgs` override the family.
+#[test]
+fn lbfgs_is_the_family_choice_of_3d_nmers_only() {
+    use jamkit_engine::LbfgsChoice;
+    use jamkit_registry::{EXAMPLES, FAMILIES, supports_dim};
+    let recorded = |family: &str, dim: usize, params: &str, minimizer: &str| {
+        let text = format!(
+            r#"(name: "x", family: "{family}", dim: {dim}, params: {params}, particles: 8, samples: 1, seed: 1{minimizer})"#
+        );
+        let e = jamkit_experiment::Experiment::from_ron(&text, "inline")
+            .unwrap_or_else(|err| panic!("{text}: {err}"));
+        let points = jamkit_experiment::grid::points(&e).unwrap();
+        let jobs = jamkit_experiment::grid::jobs(&e, &points);
+        let settings = jamkit_experiment::sample::settings(&e, &points[0], &jobs[0]);
+        settings["minimizer"].get("lbfgs").cloned()
+    };
+    let family_default = serde_json::to_value(LbfgsChoice::family_default()).unwrap();
+    let mut seen = 0;
+    for (info, example) in FAMILIES.iter().zip(EXAMPLES) {
+        let params = jamkit_registry::params_from_ron(example).unwrap();
+        let params = ron::to_string(&params).unwrap();
+        for dim in [2, 3] {
+            if !supports_dim(info, dim) {
+                continue;
+            }
+            seen += 1;
+            let got = recorded(info.name, dim, &params, "");
+            if info.name == "nmer" && dim == 3 {
+                assert_eq!(got.as_ref(), Some(&family_default), "nmer 3D");
+                for off in [
+                    ", minimizer: (lbfgs: None)",
+                    ", minimizer: (variant: Fire2)",
+                ] {
+                    assert_eq!(recorded(info.name, dim, &params, off), None, "{off}");
+                }
+            } else {
+                assert_eq!(got, None, "{} {dim}D records L-BFGS", info.name);
+            }
+            let explicit = recorded(info.name, dim, &params, ", minimizer: (lbfgs: (after: 7))");
+            assert_eq!(
+                explicit.as_ref().and_then(|v| v["after"].as_u64()),
+                Some(7),
+                "{} {dim}D: an explicit lbfgs",
+                info.name
+            );
+        }
+    }
+    assert!(seen >= 10, "only {seen} family/dimension pairs");
+}
+
+/// The default packings of families other than 3D n-mers are those of
+/// commit a8cbafb (before L-BFGS became the 3D n-mers' default), and the
+/// 3D n-mers' previous default is `--no-lbfgs` (experiment files:
+/// `lbfgs: None`) bit for bit: the hashes printed by that commit's
+/// `jamkit bench packing` for these arguments. The new 3D default is
+/// `--lbfgs-after 0 --lbfgs-blocks`, and differs from the old one here.
+#[test]
+fn the_lbfgs_default_leaves_other_families_and_no_lbfgs_as_they_were() {
+    let hash = |args: &[&str]| {
+        let args = [&["bench", "packing", "--seeds", "1"][..], args].concat();
+        let (code, text, err) = common::jamkit(&args);
+        assert_eq!(code, 0, "{err}");
+        let line = text.lines().nth(1).unwrap().to_string();
+        line.split(',').nth(10).unwrap().to_string()
+    };
+    let dimers3 = ["--family", "nmer", "--dim", "3", "--particles", "32"];
+    let cases: [(Vec<&str>, &str); 3] = [
+        (vec!["--particles", "64"], "74b6d0966dd27b6f"),
+        (
+            vec!["--family", "nmer", "--dim", "2", "--particles", "64"],
+            "41f437f54de38418",
+        ),
+        ([&dimers3[..], &["--no-lbfgs"]].concat(), "f9c97aeec4c4ba37"),
+    ];
+    for (args, old) in cases {
+        assert_eq!(hash(&args), old, "{args:?}");
+    }
+    let new = hash(&dimers3);
+    assert_eq!(
+        new,
+        hash(&[&dimers3[..], &["--lbfgs-after", "0", "--lbfgs-blocks"]].concat())
+    );
+    assert_ne!(new, "f9c97aeec4c4ba37");
+}
+
+/// A run directory of 3D n-mer packings made before L-BFGS became their
+/// default (they record no `lbfgs`) is refused under the new default, with
+/// the field named and both fixes said, and resumes under an explicit
+/// `lbfgs: None`.
+#[test]
+fn old_3d_nmer_packings_are_refused_under_the_lbfgs_default_and_resume_with_lbfgs_none() {
+    let experiment = |minimizer: &str| {
+        let text = format!(
+            r#"(name: "old", family: "nmer", dim: 3, params: {{"alpha": 1.1}}, particles: 32, samples: 1, seed: 1{minimizer})"#
+        );
+        jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap()
+    };
+    common::refused_then_resumed(
+        &experiment(", minimizer: (lbfgs: None)"),
+        &experiment(""),
+        &[
+            "minimizer.lbfgs",
+            "\"after\":0",
+            "\"blocks\":true",
+            "None (not written",
+            "add `lbfgs: None`",
+            "--set minimizer.lbfgs=None",
+        ],
+    );
+    // The `--set` the message gives is the file's `lbfgs: None`, and a
+    // `--set` of another field keeps the family's choice (left out, not
+    // turned off).
+    let set = |e: &jamkit_experiment::Experiment, kv: &str| {
+        jamkit_experiment::overrides::apply(e, &[kv.to_string()]).unwrap()
+    };
+    let off = experiment(", minimizer: (lbfgs: None)");
+    assert_eq!(set(&experiment(""), "minimizer.lbfgs=None"), off);
+    assert_eq!(
+        set(&experiment(""), "particles=16").minimizer.lbfgs,
+        jamkit_engine::LbfgsChoice::Family
+    );
+    assert_eq!(
+        set(&off, "particles=16").minimizer.lbfgs,
+        jamkit_engine::LbfgsChoice::Off
     );
 }

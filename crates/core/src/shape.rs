@@ -354,6 +354,18 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         false
     }
 
+    /// Whether FIRE, for this family, hands every minimisation to L-BFGS
+    /// from the start with the block metric (`lbfgs: (after: 0, blocks:
+    /// true)` of `jamkit_engine`) when the experiment leaves
+    /// `minimizer.lbfgs` out and runs FIRE (not FIRE 2.0). A family says
+    /// yes where that was measured faster with the same ensembles
+    /// (docs/performance.md, "L-BFGS as the 3D n-mers' default"); an
+    /// experiment's `minimizer.lbfgs` overrides it (`None`: FIRE alone).
+    /// Default: no (FIRE alone, the paper's).
+    fn lbfgs_blocks_by_default(&self) -> bool {
+        false
+    }
+
     /// Inertia of each rotational coordinate (the mass FIRE gives it).
     fn rot_inertia(&self, _size: f64) -> RotVec {
         [1.0; 3]

@@ -22,7 +22,7 @@
 //! `force_tol_per_body` the force sum is divided by `N` first, as in the
 //! paper author's public code.
 
-use crate::lbfgs::{LbfgsEnd, LbfgsParams, LbfgsWork};
+use crate::lbfgs::{LbfgsChoice, LbfgsEnd, LbfgsWork};
 use crate::newton::{NewtonEnd, NewtonParams, NewtonWork};
 use crate::precon::{BlockMasses, PreconParams};
 use jamkit_core::{Error, Result};
@@ -182,10 +182,14 @@ pub struct FireParams {
     pub masses: Masses,
     /// L-BFGS ([`crate::lbfgs`]): after `after` FIRE steps without
     /// convergence (`0`: from the start), L-BFGS iterations until a
-    /// stopping criterion holds; FIRE again where it gives up. `None` (the
-    /// default): no L-BFGS. Left out of the recorded settings when `None`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub lbfgs: Option<LbfgsParams>,
+    /// stopping criterion holds; FIRE again where it gives up. `Family`
+    /// (the default, the field left out): the family's choice, resolved by
+    /// [`FireParams::for_family`] (L-BFGS from the start in the block
+    /// metric for 3D n-mers, none elsewhere); `Off` (`None` in a file): no
+    /// L-BFGS. A packing's recorded settings leave it out when `Off`, so
+    /// that packings made before it existed still resume.
+    #[serde(skip_serializing_if = "LbfgsChoice::is_family")]
+    pub lbfgs: LbfgsChoice,
 }
 
 /// Which masses FIRE integrates with.
@@ -231,7 +235,7 @@ impl Default for FireParams {
             max_steps: 20_000_000,
             newton: Some(NewtonParams::default()),
             masses: Masses::Family,
-            lbfgs: None,
+            lbfgs: LbfgsChoice::Family,
         }
     }
 }
@@ -255,6 +259,7 @@ impl FireParams {
             force_criterion: ForceCriterion::Sum,
             newton: None,
             masses: Masses::Plain,
+            lbfgs: LbfgsChoice::Off,
             ..Self::default()
         }
     }
@@ -296,11 +301,13 @@ impl FireParams {
         converged.then_some(StopReason::Force)
     }
 
-    /// These parameters with `dt_max` and the masses set: their own, else
-    /// the family's ([`jamkit_core::Shape::fire_dt_max`], 0.5 where the
-    /// family has none; [`jamkit_core::Shape::fire_jammed_block_masses`]
-    /// with FIRE, the plain masses with FIRE 2.0), so that the settings a
-    /// packing records hold the time step and the masses it was made with.
+    /// These parameters with `dt_max`, the masses and L-BFGS set: their
+    /// own, else the family's ([`jamkit_core::Shape::fire_dt_max`], 0.5
+    /// where the family has none; [`jamkit_core::Shape::fire_jammed_block_masses`]
+    /// and [`jamkit_core::Shape::lbfgs_blocks_by_default`] with FIRE, the
+    /// plain masses and no L-BFGS with FIRE 2.0), so that the settings a
+    /// packing records hold the time step, masses and minimiser it was made
+    /// with.
     pub fn for_family<const D: usize, S: jamkit_core::Shape<D>>(&self, shape: &S) -> Self {
         let masses = match &self.masses {
             Masses::Family
@@ -314,6 +321,15 @@ impl FireParams {
             Masses::Family => Masses::Plain,
             chosen => chosen.clone(),
         };
+        let lbfgs = match &self.lbfgs {
+            LbfgsChoice::Family
+                if self.variant == FireVariant::Fire && shape.lbfgs_blocks_by_default() =>
+            {
+                LbfgsChoice::On(LbfgsChoice::family_default())
+            }
+            LbfgsChoice::Family => LbfgsChoice::Off,
+            chosen => chosen.clone(),
+        };
         Self {
             dt_max: Some(
                 self.dt_max
@@ -321,6 +337,7 @@ impl FireParams {
                     .unwrap_or(DEFAULT_DT_MAX),
             ),
             masses,
+            lbfgs,
             ..self.clone()
         }
     }
@@ -412,7 +429,7 @@ impl FireParams {
         if let Some(newton) = &self.newton {
             newton.validate(&format!("{prefix}.newton"))?;
         }
-        if let Some(lbfgs) = &self.lbfgs {
+        if let Some(lbfgs) = self.lbfgs.params() {
             lbfgs.validate(&format!("{prefix}.lbfgs"))?;
         }
         if let Masses::Blocks(precon) = &self.masses {
@@ -630,7 +647,7 @@ impl Fire {
         let mut newton_interval = p.newton.as_ref().map_or(u64::MAX, |nw| nw.after);
         let mut next_newton = newton_interval;
         let mut lbfgs_evaluations: u64 = 0;
-        let mut lbfgs_interval = match &p.lbfgs {
+        let mut lbfgs_interval = match p.lbfgs.params() {
             Some(lb) if self.from_jammed || !lb.jammed_only => lb.after,
             _ => u64::MAX,
         };
@@ -719,7 +736,7 @@ impl Fire {
                 from_rest!();
             }
             if steps >= next_lbfgs
-                && let Some(lb) = &p.lbfgs
+                && let Some(lb) = p.lbfgs.params()
             {
                 let budget = p.max_steps - (steps + lbfgs_evaluations);
                 let run = crate::lbfgs::attempt(

@@ -81,6 +81,84 @@ impl Default for LbfgsParams {
     }
 }
 
+/// Whether FIRE hands its minimisations to L-BFGS (`minimizer.lbfgs`).
+///
+/// Three states, so that an experiment that leaves the field out can get
+/// its family's choice and one that writes `lbfgs: None` gets FIRE alone:
+///
+/// | in the file | state |
+/// |---|---|
+/// | left out | `Family` |
+/// | `None` | `Off` |
+/// | `(…)` or `Some((…))` | `On(…)` |
+///
+/// [`crate::FireParams::for_family`] resolves `Family` to `On((after: 0,
+/// blocks: true))` where the family says so
+/// ([`jamkit_core::Shape::lbfgs_blocks_by_default`], with FIRE) and to
+/// `Off` elsewhere; FIRE runs an unresolved `Family` as `Off`. Written
+/// back as read (`Family` left out, `Off` as `None`), so that an
+/// experiment round-trips through `--set`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum LbfgsChoice {
+    /// The family's choice (the field left out).
+    #[default]
+    Family,
+    /// No L-BFGS: FIRE alone (`lbfgs: None`).
+    Off,
+    /// L-BFGS with these settings.
+    On(LbfgsParams),
+}
+
+impl LbfgsChoice {
+    /// The settings L-BFGS runs with, if it runs (`Family` and `Off`: none).
+    pub fn params(&self) -> Option<&LbfgsParams> {
+        match self {
+            LbfgsChoice::On(p) => Some(p),
+            LbfgsChoice::Family | LbfgsChoice::Off => None,
+        }
+    }
+
+    /// `Family` (left out of written settings).
+    pub fn is_family(&self) -> bool {
+        *self == LbfgsChoice::Family
+    }
+
+    /// The family's default where it asks for L-BFGS: from the start, in
+    /// the block metric, the other settings at their defaults.
+    pub fn family_default() -> LbfgsParams {
+        LbfgsParams {
+            after: 0,
+            blocks: true,
+            ..LbfgsParams::default()
+        }
+    }
+}
+
+impl From<Option<LbfgsParams>> for LbfgsChoice {
+    fn from(o: Option<LbfgsParams>) -> Self {
+        o.map_or(LbfgsChoice::Off, LbfgsChoice::On)
+    }
+}
+
+impl Serialize for LbfgsChoice {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        // `Family` is skipped by the field's `skip_serializing_if`; were it
+        // written, `None` would read back as `Off`, so it is written as
+        // the unit `()`, which no `Option` reads: an error, not a change.
+        match self {
+            LbfgsChoice::Family => s.serialize_unit(),
+            LbfgsChoice::Off => s.serialize_none(),
+            LbfgsChoice::On(p) => s.serialize_some(p),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for LbfgsChoice {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        Option::<LbfgsParams>::deserialize(d).map(LbfgsChoice::from)
+    }
+}
+
 impl LbfgsParams {
     /// Check ranges; names the offending field.
     pub fn validate(&self, prefix: &str) -> Result<()> {
@@ -512,7 +590,7 @@ mod tests {
             energy_tol: 1e-300,
             force_tol: 1e-24,
             newton: None,
-            lbfgs: Some(LbfgsParams::default()),
+            lbfgs: LbfgsChoice::On(LbfgsParams::default()),
             ..FireParams::paper()
         };
         let mut w = well();
@@ -559,7 +637,7 @@ mod tests {
         ];
         for (params, field) in bad {
             let fire = FireParams {
-                lbfgs: Some(params),
+                lbfgs: LbfgsChoice::On(params),
                 ..FireParams::default()
             };
             let e = fire.validate("minimizer").unwrap_err().to_string();

@@ -37,7 +37,7 @@ pub use fire::{
     Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Objective, Progress,
     ProgressSnapshot, StopReason,
 };
-pub use lbfgs::LbfgsParams;
+pub use lbfgs::{LbfgsChoice, LbfgsParams};
 pub use neighbors::NeighborList;
 pub use newton::NewtonParams;
 pub use precon::PreconParams;

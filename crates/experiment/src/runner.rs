@@ -269,6 +269,12 @@ fn unwritten_setting(key: &str) -> Option<&'static str> {
             "\"Plain\" (not written; the default before the family's: \
              add `masses: Plain` to the minimizer to resume them)",
         ),
+        // Packings without L-BFGS record none (`sample::minimizer_settings`).
+        "minimizer.lbfgs" => Some(
+            "None (not written; the default before the family's: \
+             add `lbfgs: None` to the minimizer, or \
+             `--set minimizer.lbfgs=None`, to resume them)",
+        ),
         _ => None,
     }
 }

@@ -15,7 +15,8 @@ use crate::reload::{PackingVisitor, reload};
 use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
 use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
-    Fire, JamParams, PressureParams, Progress, Scene, compress_to_phi, compress_to_pressure, jam,
+    Fire, FireParams, JamParams, PressureParams, Progress, Scene, compress_to_phi,
+    compress_to_pressure, jam,
 };
 use jamkit_format::{JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures};
 use jamkit_observe::gaps::GapCounts;
@@ -39,7 +40,7 @@ pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json
         "seed": job.seed,
         "sizes": e.sizes,
         "protocol": protocol_settings(&point.protocol),
-        "minimizer": minimizer,
+        "minimizer": minimizer_settings(minimizer),
         "potential": e.potential,
         "rattlers": e.rattlers,
         "engine": e.engine,
@@ -58,6 +59,22 @@ fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
         && jam.get("search") == Some(&serde_json::json!("Bisection"))
     {
         jam.remove("search");
+    }
+    value
+}
+
+/// The minimiser as a packing records it: as resolved for the family
+/// (`FireParams::for_family`), except that `lbfgs: None` is left out.
+/// Packings made before the field existed ran without L-BFGS and record
+/// none, so they still resume under an explicit `lbfgs: None`; where the
+/// family's default is L-BFGS it is always written, so no packing of one
+/// minimiser is ever taken for the other's.
+fn minimizer_settings(minimizer: &FireParams) -> serde_json::Value {
+    let mut value = serde_json::to_value(minimizer).expect("minimizer serialises");
+    if let Some(m) = value.as_object_mut()
+        && m.get("lbfgs") == Some(&serde_json::Value::Null)
+    {
+        m.remove("lbfgs");
     }
     value
 }
