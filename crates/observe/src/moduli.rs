@@ -1123,7 +1123,10 @@ pub struct Deformation {
 
 /// The minimiser settings [`by_deformation`] suggests: FIRE with the Newton
 /// finish after 100 steps, an energy criterion that never stops it (above jamming `V/N` is not
-/// small) and `max_i (∂V/∂q_i)² < 10⁻²⁶`.
+/// small) and `max_i (∂V/∂q_i)² < 10⁻²⁶`. No L-BFGS, whatever the family
+/// (`lbfgs: None`): the 3D n-mers' L-BFGS default (session 20) is a
+/// jamming-search measurement; these relaxations of a strained packing
+/// and its stabilisation keep the minimiser they were measured with.
 pub fn deformation_minimizer() -> FireParams {
     FireParams {
         energy_tol: 1e-300,
@@ -1133,6 +1136,7 @@ pub fn deformation_minimizer() -> FireParams {
             after: 100,
             ..Default::default()
         }),
+        lbfgs: jamkit_engine::LbfgsChoice::Off,
         ..FireParams::default()
     }
 }
