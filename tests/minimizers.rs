@@ -812,3 +812,56 @@ fn old_3d_nmer_packings_are_refused_under_the_lbfgs_default_and_resume_with_lbfg
         jamkit_engine::LbfgsChoice::Off
     );
 }
+
+/// A packing made with L-BFGS records its evaluations (FIRE steps alone
+/// would say 0 for a 3D n-mer), the same count `bench packing` prints for
+/// the same packing, and results.csv gains an `lbfgs_evals` column; a
+/// packing made without L-BFGS records none, and its table keeps its
+/// columns.
+#[test]
+fn lbfgs_evaluations_are_recorded_where_lbfgs_ran() {
+    let experiment = |family: &str, dim: usize, params: &str| {
+        let text = format!(
+            r#"(name: "x", family: "{family}", dim: {dim}, params: {params}, particles: 32, samples: 1, seed: 1)"#
+        );
+        jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap()
+    };
+    let bench = |args: &[&str]| {
+        let args = [
+            &["bench", "packing", "--seeds", "1", "--particles", "32"][..],
+            args,
+        ]
+        .concat();
+        let (code, text, err) = common::jamkit(&args);
+        assert_eq!(code, 0, "{err}");
+        let line = text.lines().nth(1).unwrap().to_string();
+        let cells: Vec<String> = line.split(',').map(String::from).collect();
+        (cells[4].clone(), cells[13].parse::<u64>().unwrap())
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&experiment("nmer", 3, r#"{"alpha": 1.1}"#), dir.path(), 1);
+    let m = &report.packings[0].measures;
+    let (phi, evals) = bench(&["--family", "nmer", "--dim", "3", "--alpha", "1.1"]);
+    assert_eq!(format!("{:.6}", m.phi), phi, "the same packing");
+    assert!(evals > 0);
+    assert_eq!(m.lbfgs_evaluations, Some(evals));
+    assert_eq!(m.fire_steps, 0, "L-BFGS from the start: no FIRE step");
+    let table = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
+    assert!(
+        table.lines().next().unwrap().ends_with(",lbfgs_evals"),
+        "{table}"
+    );
+    assert!(
+        table
+            .lines()
+            .nth(1)
+            .unwrap()
+            .ends_with(&format!(",{evals}"))
+    );
+
+    let dir = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&experiment("sphere", 2, "{}"), dir.path(), 1);
+    assert_eq!(report.packings[0].measures.lbfgs_evaluations, None);
+    let table = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
+    assert!(!table.contains("lbfgs_evals"), "{table}");
+}

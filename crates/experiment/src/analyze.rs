@@ -108,6 +108,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<PackingFile, Experimen
             iso_margin: None,
             pressure: None,
             fire_steps: 0,
+            lbfgs_evaluations: None,
             minimizations: 0,
             wall_s: 0.0,
             flag: String::new(),

@@ -148,8 +148,11 @@ impl BatchLog {
             Ok(Outcome::Done(f, false)) => {
                 let m = &f.measures;
                 let z = m.z_j.map_or("–".into(), |z| format!("{z:.4}"));
+                let lbfgs = m
+                    .lbfgs_evaluations
+                    .map_or(String::new(), |n| format!(" + {n} L-BFGS evaluations"));
                 format!(
-                    "φ {:.6}, z {z}, {} FIRE steps, {:.1} s",
+                    "φ {:.6}, z {z}, {} FIRE steps{lbfgs}, {:.1} s",
                     f.phi, m.fire_steps, m.wall_s
                 )
             }

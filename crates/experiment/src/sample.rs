@@ -177,6 +177,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                         outcome.phi = s.phi;
                         outcome.energy_per_particle = s.energy_per_particle;
                         outcome.fire_steps += s.fire_steps;
+                        outcome.lbfgs_evaluations += s.lbfgs_evaluations;
                         outcome.minimizations += s.minimizations;
                         saddle_escapes = Some(s.rounds);
                     }
@@ -288,6 +289,12 @@ impl SceneVisitor for SampleVisitor<'_> {
             phi: outcome.phi,
             energy_per_particle: outcome.energy_per_particle,
             fire_steps: outcome.fire_steps,
+            lbfgs_evaluations: self
+                .point
+                .minimizer
+                .lbfgs
+                .params()
+                .map(|_| outcome.lbfgs_evaluations),
             minimizations: outcome.minimizations,
             wall_s: start.elapsed().as_secs_f64(),
             saddle_escapes,
@@ -407,6 +414,7 @@ impl SampleVisitor<'_> {
             free_rotations: None,
             pressure: None,
             fire_steps: steps,
+            lbfgs_evaluations: None,
             minimizations: 0,
             wall_s: start.elapsed().as_secs_f64(),
             flag: error.to_string(),
@@ -426,6 +434,8 @@ struct Protocolled {
     phi: f64,
     energy_per_particle: f64,
     fire_steps: u64,
+    /// L-BFGS evaluations, when the minimiser ran L-BFGS.
+    lbfgs_evaluations: Option<u64>,
     minimizations: u64,
     wall_s: f64,
     saddle_escapes: Option<u32>,
@@ -643,6 +653,7 @@ impl Observed {
             iso_margin: contacts.map(|s| s.iso_margin),
             pressure: self.pressure,
             fire_steps: run.fire_steps,
+            lbfgs_evaluations: run.lbfgs_evaluations,
             minimizations: run.minimizations,
             wall_s: run.wall_s,
             flag: flags.join("; "),
@@ -676,6 +687,7 @@ pub(crate) fn remeasure(
         phi: old.phi,
         energy_per_particle: old.energy_per_particle,
         fire_steps: old.fire_steps,
+        lbfgs_evaluations: old.lbfgs_evaluations,
         minimizations: old.minimizations,
         wall_s: old.wall_s,
         saddle_escapes: old.saddle_escapes,

@@ -30,6 +30,11 @@ pub struct Measures {
     pub pressure: Option<f64>,
     /// FIRE steps over the whole protocol.
     pub fire_steps: u64,
+    /// L-BFGS energy-and-gradient evaluations over the whole protocol,
+    /// when the minimiser ran L-BFGS (`minimizer.lbfgs`; absent otherwise,
+    /// so files without it are unchanged).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lbfgs_evaluations: Option<u64>,
     /// Minimisations (density changes + 1).
     pub minimizations: u64,
     /// Wall-clock seconds for the protocol and the observables.

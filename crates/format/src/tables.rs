@@ -133,6 +133,11 @@ pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
     if with_escapes {
         head.push("saddle_escapes".into());
     }
+    // Likewise only when some packing ran L-BFGS.
+    let with_lbfgs = files.iter().any(|f| f.measures.lbfgs_evaluations.is_some());
+    if with_lbfgs {
+        head.push("lbfgs_evals".into());
+    }
     if with_spectrum {
         head.extend(SPECTRUM_COLUMNS.map(String::from));
     }
@@ -187,6 +192,9 @@ pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
         ]);
         if with_escapes {
             row.push(opt(&m.saddle_escapes));
+        }
+        if with_lbfgs {
+            row.push(opt(&m.lbfgs_evaluations));
         }
         if with_spectrum {
             row.extend(spectrum_cells(m.spectrum.as_ref()));

@@ -84,6 +84,8 @@ pub struct SaddleOutcome {
     pub lambda_min_rel: f64,
     /// FIRE steps of the re-run bisections.
     pub fire_steps: u64,
+    /// L-BFGS evaluations of the re-run bisections.
+    pub lbfgs_evaluations: u64,
     /// Minimisations of the re-run bisections.
     pub minimizations: u64,
     /// Final packing fraction.
@@ -170,6 +172,7 @@ pub fn escape_saddles<const D: usize, S: Shape<D>>(
         let o = jam(scene, fire, &rejam)?;
         out.rounds += 1;
         out.fire_steps += o.fire_steps;
+        out.lbfgs_evaluations += o.lbfgs_evaluations;
         out.minimizations += o.minimizations;
         out.phi = o.phi;
         out.energy_per_particle = o.energy_per_particle;
