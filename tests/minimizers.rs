@@ -654,7 +654,7 @@ fn bench_packing_takes_the_familys_masses() {
         hash(&disks),
         hash(&[&disks[..], &["--masses", "plain"]].concat())
     );
-    // Without L-BFGS, whose default for 3D n-mers would leave FIRE's
+    // Without L-BFGS, whose default for 3D dimers would leave FIRE's
     // masses unused on this small scene.
     let dimers = [
         "--family",
@@ -681,14 +681,15 @@ fn bench_packing_takes_the_familys_masses() {
 }
 
 /// L-BFGS from the start in the block metric is the family's choice for
-/// n-mers in 3D and no other family's: over every registered family in 2D
-/// and 3D (its example parameters), the recorded `minimizer.lbfgs` of an
-/// experiment that leaves the field out is `(after: 0, blocks: true)` for
-/// `nmer` in 3D and absent (no L-BFGS, so the packings and their settings
-/// are those of before) everywhere else; FIRE 2.0, `lbfgs: None` and an
+/// dimers in 3D and no other family's: over every registered family in 2D
+/// and 3D (its example parameters; `nmer`'s is a dimer), the recorded
+/// `minimizer.lbfgs` of an experiment that leaves the field out is
+/// `(after: 0, blocks: true)` for `nmer` in 3D and absent (no L-BFGS, so
+/// the packings and their settings are those of before) everywhere else,
+/// and for a 3D body of three spheres; FIRE 2.0, `lbfgs: None` and an
 /// explicit `lbfgs` override the family.
 #[test]
-fn lbfgs_is_the_family_choice_of_3d_nmers_only() {
+fn lbfgs_is_the_family_choice_of_3d_dimers_only() {
     use jamkit_engine::LbfgsChoice;
     use jamkit_registry::{EXAMPLES, FAMILIES, supports_dim};
     let recorded = |family: &str, dim: usize, params: &str, minimizer: &str| {
@@ -734,11 +735,19 @@ fn lbfgs_is_the_family_choice_of_3d_nmers_only() {
         }
     }
     assert!(seen >= 10, "only {seen} family/dimension pairs");
+    let two = r#"{"spheres": [(offset: [0.0, 0.0, 0.0], radius: 0.5), (offset: [0.6, 0.0, 0.0], radius: 0.4)]}"#;
+    let three = r#"{"spheres": [(offset: [0.0, 0.0, 0.0], radius: 0.5), (offset: [0.5, 0.0, 0.0], radius: 0.4), (offset: [0.0, 0.5, 0.0], radius: 0.4)]}"#;
+    assert_eq!(
+        recorded("nmer", 3, two, ""),
+        Some(family_default),
+        "two spheres"
+    );
+    assert_eq!(recorded("nmer", 3, three, ""), None, "a bent trimer");
 }
 
-/// The default packings of families other than 3D n-mers are those of
-/// commit a8cbafb (before L-BFGS became the 3D n-mers' default), and the
-/// 3D n-mers' previous default is `--no-lbfgs` (experiment files:
+/// The default packings of families other than 3D dimers are those of
+/// commit a8cbafb (before L-BFGS became the 3D dimers' default), and the
+/// 3D dimers' previous default is `--no-lbfgs` (experiment files:
 /// `lbfgs: None`) bit for bit: the hashes printed by that commit's
 /// `jamkit bench packing` for these arguments. The new 3D default is
 /// `--lbfgs-after 0 --lbfgs-blocks`, and differs from the old one here.

@@ -359,7 +359,7 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     /// true)` of `jamkit_engine`) when the experiment leaves
     /// `minimizer.lbfgs` out and runs FIRE (not FIRE 2.0). A family says
     /// yes where that was measured faster with the same ensembles
-    /// (docs/performance.md, "L-BFGS as the 3D n-mers' default"); an
+    /// (docs/performance.md, "L-BFGS as the 3D dimers' default"); an
     /// experiment's `minimizer.lbfgs` overrides it (`None`: FIRE alone).
     /// Default: no (FIRE alone, the paper's).
     fn lbfgs_blocks_by_default(&self) -> bool {

@@ -185,7 +185,7 @@ pub struct FireParams {
     /// stopping criterion holds; FIRE again where it gives up. `Family`
     /// (the default, the field left out): the family's choice, resolved by
     /// [`FireParams::for_family`] (L-BFGS from the start in the block
-    /// metric for 3D n-mers, none elsewhere); `Off` (`None` in a file): no
+    /// metric for 3D dimers, none elsewhere); `Off` (`None` in a file): no
     /// L-BFGS. A packing's recorded settings leave it out when `Off`, so
     /// that packings made before it existed still resume.
     #[serde(skip_serializing_if = "LbfgsChoice::is_family")]

@@ -1124,7 +1124,7 @@ pub struct Deformation {
 /// The minimiser settings [`by_deformation`] suggests: FIRE with the Newton
 /// finish after 100 steps, an energy criterion that never stops it (above jamming `V/N` is not
 /// small) and `max_i (∂V/∂q_i)² < 10⁻²⁶`. No L-BFGS, whatever the family
-/// (`lbfgs: None`): the 3D n-mers' L-BFGS default (session 20) is a
+/// (`lbfgs: None`): the 3D dimers' L-BFGS default (session 20) is a
 /// jamming-search measurement; these relaxations of a strained packing
 /// and its stabilisation keep the minimiser they were measured with.
 pub fn deformation_minimizer() -> FireParams {

@@ -453,14 +453,17 @@ impl Shape<3> for Nmer<3> {
         true
     }
 
-    /// Yes: with L-BFGS from the start in the block metric (and FIRE's
-    /// jammed-only block masses where L-BFGS gives up), 3D dimers jam into
-    /// the ensembles of FIRE with those masses (N = 512, 20 seeds each at
-    /// α = 1.1 and 1.5: φ_J and z_J within 1.6 standard errors, KS p ≥
-    /// 0.14) in 2.2–3.1× less CPU time (docs/performance.md, "L-BFGS as the
-    /// 3D n-mers' default").
+    /// Yes for dimers (bodies of two spheres): with L-BFGS from the start
+    /// in the block metric (and FIRE's jammed-only block masses where
+    /// L-BFGS gives up), 3D dimers jam into the ensembles of FIRE with those
+    /// masses (N = 512, 20 seeds each at α = 1.1 and 1.5: φ_J and z_J within
+    /// 1.6 standard errors, KS p ≥ 0.14, the same spread of φ_J) in 2.2–3.1×
+    /// less CPU time. No for bodies of three or more spheres: bent trimers
+    /// (N = 128, 40 seeds) kept the means but jammed with a wider spread of
+    /// φ_J (s.d. 0.0050 against 0.0034, F-test p = 0.02); docs/performance.md,
+    /// "L-BFGS as the 3D dimers' default".
     fn lbfgs_blocks_by_default(&self) -> bool {
-        true
+        self.offsets.len() == 2
     }
 
     /// `o → exp(ω) ∘ o` with `ω = (dq₀, dq₁, dq₂)` in the world frame, or
