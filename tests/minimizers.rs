@@ -585,28 +585,17 @@ fn the_family_chooses_fires_masses_and_the_settings_record_its_choice() {
         Masses::Plain
     );
 
-    let recorded = |text: &str| {
-        let e = jamkit_experiment::Experiment::from_ron(text, "inline").unwrap();
-        let points = jamkit_experiment::grid::points(&e).unwrap();
-        let jobs = jamkit_experiment::grid::jobs(&e, &points);
-        let settings = jamkit_experiment::sample::settings(&e, &points[0], &jobs[0]);
-        settings["minimizer"].get("masses").cloned()
-    };
+    let recorded = |e: jamkit_experiment::Experiment| recorded_minimizer(&e).get("masses").cloned();
     let nmer = |dim: usize, minimizer: &str| {
-        format!(
-            r#"(name: "m", family: "nmer", dim: {dim}, params: {{"alpha": 1.1}}, particles: 32, samples: 1, seed: 1{minimizer})"#
-        )
+        small_experiment("nmer", dim, r#"{"alpha": 1.1}"#, 32, minimizer)
     };
     assert_eq!(
-        recorded(&nmer(3, "")),
+        recorded(nmer(3, "")),
         Some(serde_json::to_value(&jammed_only).unwrap())
     );
-    assert_eq!(recorded(&nmer(2, "")), None);
-    assert_eq!(recorded(&nmer(3, ", minimizer: (masses: Plain)")), None);
-    assert_eq!(
-        recorded(r#"(name: "s", family: "sphere", dim: 2, particles: 8, samples: 1, seed: 1)"#),
-        None
-    );
+    assert_eq!(recorded(nmer(2, "")), None);
+    assert_eq!(recorded(nmer(3, ", minimizer: (masses: Plain)")), None);
+    assert_eq!(recorded(small_experiment("sphere", 2, "{}", 8, "")), None);
 }
 
 /// A run directory of plain-mass dimer packings (as every run made before
@@ -615,17 +604,11 @@ fn the_family_chooses_fires_masses_and_the_settings_record_its_choice() {
 /// resumed under an explicit `masses: Plain`.
 #[test]
 fn plain_mass_packings_are_refused_under_the_family_default_and_resume_as_plain() {
-    let experiment = |minimizer: &str| {
-        let text = format!(
-            r#"(name: "old", family: "nmer", dim: 3, params: {{"alpha": 1.1}}, particles: 32, samples: 1, seed: 1{minimizer})"#
-        );
-        jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap()
-    };
     // `lbfgs: None` on both sides: the masses are the one difference here
     // (the L-BFGS default has its own test below).
     common::refused_then_resumed(
-        &experiment(", minimizer: (masses: Plain, lbfgs: None)"),
-        &experiment(", minimizer: (lbfgs: None)"),
+        &dimers3(", minimizer: (masses: Plain, lbfgs: None)"),
+        &dimers3(", minimizer: (lbfgs: None)"),
         &[
             "minimizer.masses",
             "\"Blocks\"",
@@ -642,13 +625,7 @@ fn plain_mass_packings_are_refused_under_the_family_default_and_resume_as_plain(
 /// here, else the check would be empty).
 #[test]
 fn bench_packing_takes_the_familys_masses() {
-    let hash = |args: &[&str]| {
-        let args = [&["bench", "packing", "--seeds", "1"][..], args].concat();
-        let (code, text, err) = common::jamkit(&args);
-        assert_eq!(code, 0, "{err}");
-        let line = text.lines().nth(1).unwrap().to_string();
-        line.split(',').nth(10).unwrap().to_string()
-    };
+    let hash = bench_hash;
     let disks = ["--particles", "64"];
     assert_eq!(
         hash(&disks),
@@ -693,15 +670,8 @@ fn lbfgs_is_the_family_choice_of_3d_dimers_only() {
     use jamkit_engine::LbfgsChoice;
     use jamkit_registry::{EXAMPLES, FAMILIES, supports_dim};
     let recorded = |family: &str, dim: usize, params: &str, minimizer: &str| {
-        let text = format!(
-            r#"(name: "x", family: "{family}", dim: {dim}, params: {params}, particles: 8, samples: 1, seed: 1{minimizer})"#
-        );
-        let e = jamkit_experiment::Experiment::from_ron(&text, "inline")
-            .unwrap_or_else(|err| panic!("{text}: {err}"));
-        let points = jamkit_experiment::grid::points(&e).unwrap();
-        let jobs = jamkit_experiment::grid::jobs(&e, &points);
-        let settings = jamkit_experiment::sample::settings(&e, &points[0], &jobs[0]);
-        settings["minimizer"].get("lbfgs").cloned()
+        let e = small_experiment(family, dim, params, 8, minimizer);
+        recorded_minimizer(&e).get("lbfgs").cloned()
     };
     let family_default = serde_json::to_value(LbfgsChoice::family_default()).unwrap();
     let mut seen = 0;
@@ -753,13 +723,7 @@ fn lbfgs_is_the_family_choice_of_3d_dimers_only() {
 /// `--lbfgs-after 0 --lbfgs-blocks`, and differs from the old one here.
 #[test]
 fn the_lbfgs_default_leaves_other_families_and_no_lbfgs_as_they_were() {
-    let hash = |args: &[&str]| {
-        let args = [&["bench", "packing", "--seeds", "1"][..], args].concat();
-        let (code, text, err) = common::jamkit(&args);
-        assert_eq!(code, 0, "{err}");
-        let line = text.lines().nth(1).unwrap().to_string();
-        line.split(',').nth(10).unwrap().to_string()
-    };
+    let hash = bench_hash;
     let dimers3 = ["--family", "nmer", "--dim", "3", "--particles", "32"];
     let cases: [(Vec<&str>, &str); 3] = [
         (vec!["--particles", "64"], "74b6d0966dd27b6f"),
@@ -786,12 +750,7 @@ fn the_lbfgs_default_leaves_other_families_and_no_lbfgs_as_they_were() {
 /// `lbfgs: None`.
 #[test]
 fn old_3d_nmer_packings_are_refused_under_the_lbfgs_default_and_resume_with_lbfgs_none() {
-    let experiment = |minimizer: &str| {
-        let text = format!(
-            r#"(name: "old", family: "nmer", dim: 3, params: {{"alpha": 1.1}}, particles: 32, samples: 1, seed: 1{minimizer})"#
-        );
-        jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap()
-    };
+    let experiment = dimers3;
     common::refused_then_resumed(
         &experiment(", minimizer: (lbfgs: None)"),
         &experiment(""),
@@ -829,22 +788,10 @@ fn old_3d_nmer_packings_are_refused_under_the_lbfgs_default_and_resume_with_lbfg
 /// columns.
 #[test]
 fn lbfgs_evaluations_are_recorded_where_lbfgs_ran() {
-    let experiment = |family: &str, dim: usize, params: &str| {
-        let text = format!(
-            r#"(name: "x", family: "{family}", dim: {dim}, params: {params}, particles: 32, samples: 1, seed: 1)"#
-        );
-        jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap()
-    };
+    let experiment =
+        |family: &str, dim: usize, params: &str| small_experiment(family, dim, params, 32, "");
     let bench = |args: &[&str]| {
-        let args = [
-            &["bench", "packing", "--seeds", "1", "--particles", "32"][..],
-            args,
-        ]
-        .concat();
-        let (code, text, err) = common::jamkit(&args);
-        assert_eq!(code, 0, "{err}");
-        let line = text.lines().nth(1).unwrap().to_string();
-        let cells: Vec<String> = line.split(',').map(String::from).collect();
+        let cells = bench_row(&[&["--particles", "32"][..], args].concat());
         (cells[4].clone(), cells[13].parse::<u64>().unwrap())
     };
     let dir = tempfile::tempdir().unwrap();
@@ -873,4 +820,48 @@ fn lbfgs_evaluations_are_recorded_where_lbfgs_ran() {
     assert_eq!(report.packings[0].measures.lbfgs_evaluations, None);
     let table = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
     assert!(!table.contains("lbfgs_evals"), "{table}");
+}
+
+/// The cells of `jamkit bench packing --seeds 1 ARGS`' one packing row
+/// (`seed,phi_j,…,packing_hash (10),…,lbfgs_evals (13)`).
+fn bench_row(args: &[&str]) -> Vec<String> {
+    let args = [&["bench", "packing", "--seeds", "1"][..], args].concat();
+    let (code, text, err) = common::jamkit(&args);
+    assert_eq!(code, 0, "{err}");
+    let line = text.lines().nth(1).unwrap();
+    line.split(',').map(String::from).collect()
+}
+
+/// The packing hash `jamkit bench packing --seeds 1 ARGS` prints.
+fn bench_hash(args: &[&str]) -> String {
+    bench_row(args)[10].clone()
+}
+
+/// One packing of `family` in `dim` dimensions with `params` (a RON map)
+/// and `rest` after the seed (`, minimizer: (…)`, or empty).
+fn small_experiment(
+    family: &str,
+    dim: usize,
+    params: &str,
+    particles: usize,
+    rest: &str,
+) -> jamkit_experiment::Experiment {
+    let text = format!(
+        r#"(name: "x", family: "{family}", dim: {dim}, params: {params}, particles: {particles}, samples: 1, seed: 1{rest})"#
+    );
+    jamkit_experiment::Experiment::from_ron(&text, "inline")
+        .unwrap_or_else(|err| panic!("{text}: {err}"))
+}
+
+/// 32 dimers of α = 1.1 in 3D, `minimizer` after the seed.
+fn dimers3(minimizer: &str) -> jamkit_experiment::Experiment {
+    small_experiment("nmer", 3, r#"{"alpha": 1.1}"#, 32, minimizer)
+}
+
+/// The minimiser as the first packing of `e` records it (its settings).
+fn recorded_minimizer(e: &jamkit_experiment::Experiment) -> serde_json::Value {
+    let points = jamkit_experiment::grid::points(e).unwrap();
+    let jobs = jamkit_experiment::grid::jobs(e, &points);
+    let settings = jamkit_experiment::sample::settings(e, &points[0], &jobs[0]);
+    settings["minimizer"].clone()
 }
