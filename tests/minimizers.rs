@@ -667,7 +667,6 @@ fn bench_packing_takes_the_familys_masses() {
 /// explicit `lbfgs` override the family.
 #[test]
 fn lbfgs_is_the_family_choice_of_3d_dimers_only() {
-    use jamkit_engine::LbfgsChoice;
     use jamkit_registry::{EXAMPLES, FAMILIES, supports_dim};
     let recorded = |family: &str, dim: usize, params: &str, minimizer: &str| {
         let e = small_experiment(family, dim, params, 8, minimizer);
@@ -773,12 +772,9 @@ fn old_3d_nmer_packings_are_refused_under_the_lbfgs_default_and_resume_with_lbfg
     assert_eq!(set(&experiment(""), "minimizer.lbfgs=None"), off);
     assert_eq!(
         set(&experiment(""), "particles=16").minimizer.lbfgs,
-        jamkit_engine::LbfgsChoice::Family
+        LbfgsChoice::Family
     );
-    assert_eq!(
-        set(&off, "particles=16").minimizer.lbfgs,
-        jamkit_engine::LbfgsChoice::Off
-    );
+    assert_eq!(set(&off, "particles=16").minimizer.lbfgs, LbfgsChoice::Off);
 }
 
 /// A packing made with L-BFGS records its evaluations (FIRE steps alone
@@ -864,4 +860,37 @@ fn recorded_minimizer(e: &jamkit_experiment::Experiment) -> serde_json::Value {
     let jobs = jamkit_experiment::grid::jobs(e, &points);
     let settings = jamkit_experiment::sample::settings(e, &points[0], &jobs[0]);
     settings["minimizer"].clone()
+}
+
+/// `minimizer.lbfgs`' three states read and write back as they are:
+/// left out is `Family` (and is left out again), `None` is `Off`, a
+/// value is `On`; `Family` written alone is an error, since any value
+/// would read back as another state.
+#[test]
+fn lbfgs_choice_reads_and_writes_its_three_states() {
+    let read = |json: &str| serde_json::from_str::<FireParams>(json).unwrap().lbfgs;
+    assert_eq!(read("{}"), LbfgsChoice::Family);
+    assert_eq!(read(r#"{"lbfgs": null}"#), LbfgsChoice::Off);
+    assert_eq!(
+        read(r#"{"lbfgs": {"after": 7}}"#),
+        LbfgsChoice::On(LbfgsParams {
+            after: 7,
+            ..LbfgsParams::default()
+        })
+    );
+    for choice in [
+        LbfgsChoice::Family,
+        LbfgsChoice::Off,
+        LbfgsChoice::On(LbfgsChoice::family_default()),
+    ] {
+        let params = FireParams {
+            lbfgs: choice.clone(),
+            ..FireParams::default()
+        };
+        let json = serde_json::to_value(&params).unwrap();
+        assert_eq!(json.get("lbfgs").is_none(), choice.is_family());
+        let back: FireParams = serde_json::from_value(json).unwrap();
+        assert_eq!(back.lbfgs, choice);
+    }
+    assert!(serde_json::to_value(LbfgsChoice::Family).is_err());
 }

@@ -142,11 +142,13 @@ impl From<Option<LbfgsParams>> for LbfgsChoice {
 
 impl Serialize for LbfgsChoice {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        // `Family` is skipped by the field's `skip_serializing_if`; were it
-        // written, `None` would read back as `Off`, so it is written as
-        // the unit `()`, which no `Option` reads: an error, not a change.
+        // `Family` is written by leaving the field out (`FireParams`'
+        // `skip_serializing_if`); any value written for it would read back
+        // as `Off` or `On`, so writing it alone is an error, not a change.
         match self {
-            LbfgsChoice::Family => s.serialize_unit(),
+            LbfgsChoice::Family => Err(serde::ser::Error::custom(
+                "minimizer.lbfgs: the family's choice is written by leaving the field out",
+            )),
             LbfgsChoice::Off => s.serialize_none(),
             LbfgsChoice::On(p) => s.serialize_some(p),
         }
