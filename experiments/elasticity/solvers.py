@@ -22,8 +22,10 @@ Prints, per point (family, delta_phi):
 * the paired one, packing by packing (same id): how many have the same
   fixed box, how many took the same path (stabilised G, B and z_stab equal
   to the tables' precision, relative 1e-5, and the same number of strain
-  steps), the largest |G_S/G_D - 1| of the others, and the mean paired
-  difference of G +- its s.e. (in units of it);
+  steps), how many more ended in the same state by another number of steps
+  (G to 1e-3 relative, z_stab exactly), the largest |G_S/G_D - 1| of the
+  others (another state), and the mean paired difference of G +- its s.e.
+  (in units of it);
 * slopes d ln G_stab / d ln delta_phi (least squares on the log of the
   means, as crossover.py) over each --range for both solvers, +- the s.d.
   over --boot bootstrap replicas resampling each point's packings, and the
@@ -44,8 +46,12 @@ from fit import mean_sem, write_csv  # noqa: E402
 
 # A packing "took the same path" if these agree to SAME relative (the
 # tables are written to 7 significant digits, so 1e-5 is well above their
-# rounding and far below any difference of a path).
+# rounding and far below any difference of a path) in the same number of
+# strain steps; it "ended in the same state" if G agrees to NEAR and the
+# cell's contacts exactly (one strain step more or less near convergence
+# moves G by 1e-6..1e-5).
 SAME = 1e-5
+NEAR = 1e-3
 # Session 19's ranges of the slope table (docs/elasticity.md, "Three Δ").
 RANGES = [
     "0.003:1e-5:1e-3", "0.003:1e-2:1e-1", "0.003:1e-5:1e-1",
@@ -209,10 +215,10 @@ def main():
         out.append(row)
 
     print("\n## Paired, packing by packing (same id)")
-    print("| family | δφ | pairs | same path | max abs(G_S/G_D − 1) of the others "
+    print("| family | δφ | pairs | same path | same state | other state: max abs(G_S/G_D − 1) "
           "| mean G_S − G_D ± s.e. (in s.e.) | steps S − D (range) | z_stab S − D (range) |")
-    print("|---|---|---|---|---|---|---|---|")
-    total_same, total = 0, 0
+    print("|---|---|---|---|---|---|---|---|---|")
+    total_same, total_near, total = 0, 0, 0
     all_rel = []
     for k, row in zip(sorted(groups, key=lambda k: (k[1] is None, k[1] or 0, k[2])), out):
         fam, delta, x = k
@@ -223,19 +229,25 @@ def main():
             and dense[i]["z_stab"] == sparse[i]["z_stab"]
             and dense[i]["iterations"] == sparse[i]["iterations"]
         ]
-        others = [rel(dense[i]["G"], sparse[i]["G"]) for i in ids if i not in same]
+        near = [
+            i for i in ids
+            if i not in same and rel(dense[i]["G"], sparse[i]["G"]) < NEAR
+            and dense[i]["z_stab"] == sparse[i]["z_stab"]
+        ]
+        others = [rel(dense[i]["G"], sparse[i]["G"]) for i in ids if i not in same + near]
         all_rel += others
         diffs = [sparse[i]["G"] - dense[i]["G"] for i in ids]
         md, ed = mean_sem(diffs)
         t = md / ed if ed > 0 else 0.0
         steps = [sparse[i]["iterations"] - dense[i]["iterations"] for i in ids]
         dz = [sparse[i]["z_stab"] - dense[i]["z_stab"] for i in ids]
-        row.update({"pairs": len(ids), "same_path": len(same),
+        row.update({"pairs": len(ids), "same_path": len(same), "same_state": len(near),
                     "max_rel_dG_others": max(others) if others else 0.0,
                     "paired_dG": md, "paired_dG_sem": ed, "paired_dG_t": t})
         total_same += len(same)
+        total_near += len(near)
         total += len(ids)
-        print(f"| {fam} | {x:g} | {len(ids)} | {len(same)} | "
+        print(f"| {fam} | {x:g} | {len(ids)} | {len(same)} | {len(near)} | "
               + (f"{max(others):.3f}" if others else "–")
               + f" | {md:+.2e} ± {ed:.1e} ({t:+.2f}) | {sum(steps) / len(steps):+.1f} "
               f"({min(steps):+.0f} … {max(steps):+.0f}) | {sum(dz) / len(dz):+.4f} "
@@ -243,10 +255,11 @@ def main():
     all_rel.sort()
     if all_rel:
         med = all_rel[len(all_rel) // 2]
-        print(f"\nsame path: {total_same} of {total}; the other {len(all_rel)}: |G_S/G_D − 1| "
+        print(f"\nsame path: {total_same} of {total}; same state by another number of steps: "
+              f"{total_near}; another state: {len(all_rel)}, |G_S/G_D − 1| "
               f"median {med:.3f}, largest {all_rel[-1]:.3f}")
     else:
-        print(f"\nsame path: {total_same} of {total}")
+        print(f"\nsame path: {total_same} of {total}; same state: {total_near}")
 
     print("\n## Slopes d ln G_stab / d ln δφ (least squares on the log of the means; "
           f"± bootstrap s.d., {args.boot} replicas)")
@@ -266,7 +279,7 @@ def main():
         columns = ["family", "delta_phi", "n_dense", "n_sparse"]
         for q in [q for q, _ in quantities] + ["dz_stab"]:
             columns += [f"{q}_dense", f"{q}_dense_sem", f"{q}_sparse", f"{q}_sparse_sem", f"{q}_t"]
-        columns += ["pairs", "same_path", "max_rel_dG_others", "paired_dG", "paired_dG_sem",
+        columns += ["pairs", "same_path", "same_state", "max_rel_dG_others", "paired_dG", "paired_dG_sem",
                     "paired_dG_t"]
         write_csv(args.csv, columns, out)
 
