@@ -234,7 +234,7 @@ def main():
             if i not in same and rel(dense[i]["G"], sparse[i]["G"]) < NEAR
             and dense[i]["z_stab"] == sparse[i]["z_stab"]
         ]
-        others = [rel(dense[i]["G"], sparse[i]["G"]) for i in ids if i not in same + near]
+        others = [abs(sparse[i]["G"] / dense[i]["G"] - 1) for i in ids if i not in same + near]
         all_rel += others
         diffs = [sparse[i]["G"] - dense[i]["G"] for i in ids]
         md, ed = mean_sem(diffs)
