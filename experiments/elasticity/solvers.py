@@ -43,6 +43,7 @@ from collections import defaultdict
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from fit import mean_sem, write_csv  # noqa: E402
+from crossover import slope  # noqa: E402  (crossover.py's fit, so the slopes are its own)
 
 # A packing "took the same path" if these agree to SAME relative (the
 # tables are written to 7 significant digits, so 1e-5 is well above their
@@ -92,15 +93,6 @@ def read_points(path):
 
 def rel(a, b):
     return abs(a - b) / max(abs(a), abs(b), 1e-300)
-
-
-def slope(xs, ys):
-    """Least-squares slope of ln y against ln x."""
-    lx = [math.log(x) for x in xs]
-    ly = [math.log(y) for y in ys]
-    mx, my = sum(lx) / len(lx), sum(ly) / len(ly)
-    sxx = sum((a - mx) ** 2 for a in lx)
-    return sum((a - mx) * (b - my) for a, b in zip(lx, ly)) / sxx
 
 
 def sd(xs):
