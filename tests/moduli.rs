@@ -612,7 +612,10 @@ fn sparse_stiffness_tensor_and_stabilisation_agree_with_dense() {
     let p = scene.pressure();
     let run = |solver| {
         let params = moduli::StabiliseParams {
-            solver,
+            moduli: ModuliParams {
+                solver,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let ensemble = moduli::Ensemble::Pressure(p);
@@ -622,13 +625,94 @@ fn sparse_stiffness_tensor_and_stabilisation_agree_with_dense() {
     let difference = (dense.deformation - sparse.deformation).abs().max();
     eprintln!(
         "stabilised in {} (dense) and {} (sparse) steps, {} fallbacks; |ΔF| = {difference:e}",
-        dense.iterations, sparse.iterations, sparse.dense_fallbacks
+        dense.iterations,
+        sparse.iterations,
+        sparse.dense_fallbacks.len()
     );
-    assert_eq!(dense.dense_fallbacks, 0);
-    assert_eq!(sparse.dense_fallbacks, 0);
+    assert_eq!(dense.dense_fallbacks, []);
+    assert_eq!(sparse.dense_fallbacks, []);
     assert_eq!(dense.iterations, sparse.iterations);
     assert!(difference < 1e-9, "{difference:e}");
     assert!(sparse.residual < moduli::StabiliseParams::default().tol);
+}
+
+/// The stabilisation counts zero modes with the `Moduli` observable's
+/// `omega_zero` (`StabiliseParams::moduli`; before session 21 it used the
+/// default whatever the observable said). With `λ_zero = 0.9 λ_1` (`λ_1`
+/// the softest mode of the fixed box's Hessian, rattlers removed) the
+/// dense path still inverts that mode, but the sparse one needs
+/// `λ_1 > 2 λ_zero` and so falls back at the first step (and at the next
+/// ones while the cell's `λ_1` stays below `2 λ_zero`), each recorded with
+/// its step and its reason, and ends in the dense path's cell. With the
+/// default threshold the sparse path takes no dense step on this packing
+/// (the test above), so the fallbacks could not come from elsewhere.
+#[test]
+fn stabilisation_takes_the_observables_omega_zero_and_records_its_fallbacks() {
+    let mut scene = negative_g_disks();
+    let summary = summarize_with(&mut scene, RattlerRule::Count(3));
+    let spectrum = jamkit_observe::spectrum::measure(
+        &mut scene,
+        &summary.rattler,
+        HessianOptions {
+            stiffness_only: false,
+            remove_rattlers: true,
+        },
+        false,
+        &Default::default(),
+    )
+    .unwrap();
+    let lambda_1 = spectrum.eigenvalues[2];
+    assert!(spectrum.eigenvalues[1] < 1e-10 && lambda_1 > 1e-10);
+    let omega_zero = (0.9 * lambda_1).sqrt();
+    let p = scene.pressure();
+    let run = |solver| {
+        let params = moduli::StabiliseParams {
+            moduli: ModuliParams { omega_zero, solver },
+            ..Default::default()
+        };
+        let ensemble = moduli::Ensemble::Pressure(p);
+        moduli::stabilise(&scene, 3, ensemble, &params, &deformation_minimizer()).unwrap()
+    };
+    let (dense, sparse) = (run(ModuliSolver::Dense), run(ModuliSolver::Sparse));
+    assert_eq!(dense.dense_fallbacks, []);
+    let steps: Vec<u32> = sparse.dense_fallbacks.iter().map(|(k, _)| *k).collect();
+    eprintln!(
+        "λ_1 = {lambda_1:e}: fell back at steps {steps:?} of {}",
+        sparse.iterations
+    );
+    // The fixed box falls back by construction; the cell stiffens as it
+    // relaxes, so later steps may pass the rule. Steps recorded once each,
+    // in order, within the run.
+    assert_eq!(steps.first(), Some(&0));
+    assert!(steps.windows(2).all(|w| w[0] < w[1]));
+    assert!(steps.iter().all(|&k| k <= sparse.iterations));
+    for (k, why) in &sparse.dense_fallbacks {
+        assert!(why.contains("threshold"), "step {k}: {why}");
+    }
+    // The same cell as the dense path's, to the tolerance (and its reason)
+    // of `sparse_stiffness_tensor_and_stabilisation_agree_with_dense`.
+    assert_eq!(sparse.iterations, dense.iterations);
+    let difference = (dense.deformation - sparse.deformation).abs().max();
+    assert!(difference < 1e-9, "{difference:e}");
+    // A threshold that is not a number is named as the observable's.
+    let params = moduli::StabiliseParams {
+        moduli: ModuliParams {
+            omega_zero: -1.0,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let e = moduli::stabilise(
+        &scene,
+        3,
+        moduli::Ensemble::Pressure(p),
+        &params,
+        &deformation_minimizer(),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("observables.Moduli.omega_zero"), "{e}");
 }
 
 #[test]

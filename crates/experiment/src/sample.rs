@@ -509,7 +509,7 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
     // `tests/moduli.rs`), which fixed pressure rules out.
     let ensemble = moduli::Ensemble::Pressure(scene.pressure());
     let stabilise = moduli::StabiliseParams {
-        solver: params.solver,
+        moduli: params.clone(),
         ..e.protocol.stabilise().cloned().unwrap_or_default()
     };
     let mut s = moduli::stabilise(
@@ -542,7 +542,10 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
             stiffness_min: s.stiffness_min,
             fixed_box,
             wall_s: stabilise_s,
-            dense_fallbacks: (s.dense_fallbacks > 0).then_some(s.dense_fallbacks),
+            dense_fallbacks: (!s.dense_fallbacks.is_empty())
+                .then_some(s.dense_fallbacks.len() as u32),
+            dense_fallback_reasons: (!s.dense_fallbacks.is_empty())
+                .then(|| std::mem::take(&mut s.dense_fallbacks)),
             contacts: Some(jamkit_format::CellContacts {
                 n_contacts: count.n_contacts,
                 n_rattlers: count.n_rattlers,

@@ -134,6 +134,13 @@ pub struct Stabilisation {
     /// when none did (and in files written before it existed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dense_fallbacks: Option<u32>,
+    /// The same steps, each with why its stiffness could not take the
+    /// sparse path (step `0`: the relaxed fixed box; the reasons of
+    /// `Moduli::dense_fallback`, e.g. the softest mode within twice the
+    /// zero-mode threshold). Absent when none fell back (and in files
+    /// written before session 21).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dense_fallback_reasons: Option<Vec<(u32, String)>>,
     /// The contacts of the stabilised cell, with the same rattler rule as
     /// `Contacts` (by count). Absent in files made before they were
     /// recorded (session 19).

@@ -1306,10 +1306,13 @@ pub struct StabiliseParams {
     /// The pair list's margin (as for [`by_deformation`]); the pairs are
     /// listed again before every step.
     pub margin: f64,
-    /// How each step's stiffness applies `H⁺` ([`ModuliSolver`]). Not read
-    /// from files: the runner sets it to the `Moduli` observable's.
+    /// How each step's stiffness applies `H⁺` (`solver`) and which modes
+    /// it leaves out as zero modes (`omega_zero`). Not read from files:
+    /// the runner sets them to the `Moduli` observable's, so that the
+    /// stabilisation's steps and the moduli of the stabilised cell count
+    /// zero modes alike.
     #[serde(skip)]
-    pub solver: ModuliSolver,
+    pub moduli: ModuliParams,
 }
 
 impl Default for StabiliseParams {
@@ -1319,7 +1322,7 @@ impl Default for StabiliseParams {
             max_iterations: 200,
             max_step: 1e-2,
             margin: 0.1,
-            solver: ModuliSolver::Dense,
+            moduli: ModuliParams::default(),
         }
     }
 }
@@ -1362,7 +1365,7 @@ impl StabiliseParams {
                 "must be positive and finite",
             ));
         }
-        Ok(())
+        self.moduli.validate("observables.Moduli")
     }
 }
 
@@ -1408,8 +1411,9 @@ pub struct Stabilised<const D: usize, S: Shape<D>> {
     /// Rattlers of the final cell (by count).
     pub rattler: Vec<bool>,
     /// With `solver: Sparse`, the strain steps whose stiffness fell back to
-    /// the dense eigendecomposition (`Moduli::dense_fallback`).
-    pub dense_fallbacks: u32,
+    /// the dense eigendecomposition: the step (`0`: the stiffness of the
+    /// relaxed fixed box) and why (`Moduli::dense_fallback`).
+    pub dense_fallbacks: Vec<(u32, String)>,
 }
 
 /// The stiffness of a relaxed cell along the strains `basis`: the second
@@ -1584,7 +1588,6 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
     params.validate("stabilise")?;
     let fire = fire.for_family(&scene.packing().shape);
     fire.validate("minimizer")?;
-    let omega_zero = ModuliParams::default().omega_zero;
     let mut basis = deviatoric_basis::<D>();
     let external = match ensemble {
         Ensemble::Volume => None,
@@ -1625,7 +1628,7 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
     let mut value = objective_before;
     let mut iterations = 0;
     let mut trust = 0.0_f64;
-    let mut dense_fallbacks = 0;
+    let mut dense_fallbacks = Vec::new();
     loop {
         cell.relist()?;
         let rattler = cell.rattlers(threshold);
@@ -1635,12 +1638,12 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
         let (stiffness, fell_back) = deviatoric_stiffness(
             &mut cell,
             &rattler,
-            omega_zero,
-            params.solver,
+            params.moduli.omega_zero,
+            params.moduli.solver,
             &basis,
             reference,
         )?;
-        dense_fallbacks += u32::from(fell_back.is_some());
+        dense_fallbacks.extend(fell_back.map(|why| (iterations, why)));
         let (mu, w) = symmetric_eigen(&stiffness)?;
         let residual = largest(&s) / reference;
         let stiffness_min = mu.first().copied().unwrap_or(0.0);
