@@ -527,17 +527,7 @@ fn sparse_moduli_fall_back_to_dense_and_say_why() {
     let summary = summarize_with(&mut scene, RattlerRule::Count(3));
     let first = moduli::measure(&mut scene, &summary.rattler, &sparse).unwrap();
     assert_eq!(first.dense_fallback, None);
-    let spectrum = jamkit_observe::spectrum::measure(
-        &mut scene,
-        &summary.rattler,
-        HessianOptions {
-            stiffness_only: false,
-            remove_rattlers: true,
-        },
-        false,
-        &Default::default(),
-    )
-    .unwrap();
+    let spectrum = spectrum_without_rattlers(&mut scene, &summary.rattler);
     let (lambda_1, lambda_2) = (spectrum.eigenvalues[2], spectrum.eigenvalues[3]);
     assert!(spectrum.eigenvalues[1] < 1e-10 && lambda_1 > 1e-10);
     // Between the two softest modes: the dense path counts λ_1 as zero.
@@ -650,17 +640,7 @@ fn sparse_stiffness_tensor_and_stabilisation_agree_with_dense() {
 fn stabilisation_takes_the_observables_omega_zero_and_records_its_fallbacks() {
     let mut scene = negative_g_disks();
     let summary = summarize_with(&mut scene, RattlerRule::Count(3));
-    let spectrum = jamkit_observe::spectrum::measure(
-        &mut scene,
-        &summary.rattler,
-        HessianOptions {
-            stiffness_only: false,
-            remove_rattlers: true,
-        },
-        false,
-        &Default::default(),
-    )
-    .unwrap();
+    let spectrum = spectrum_without_rattlers(&mut scene, &summary.rattler);
     let lambda_1 = spectrum.eigenvalues[2];
     assert!(spectrum.eigenvalues[1] < 1e-10 && lambda_1 > 1e-10);
     let omega_zero = (0.9 * lambda_1).sqrt();
@@ -795,6 +775,19 @@ fn moduli_observable_options_are_checked() {
 /// The packing of the runner test's first sample (disks, N = 32, seed 1,
 /// `Pressure` p = 10⁻³ to 1 %), made through the engine: `G < 0` in its
 /// fixed box.
+/// The full spectrum (rotations included) of `scene` with the rattlers'
+/// rows removed, as `Moduli` counts its modes.
+fn spectrum_without_rattlers<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    rattler: &[bool],
+) -> jamkit_observe::spectrum::Spectrum {
+    let options = HessianOptions {
+        stiffness_only: false,
+        remove_rattlers: true,
+    };
+    jamkit_observe::spectrum::measure(scene, rattler, options, false, &Default::default()).unwrap()
+}
+
 fn negative_g_disks() -> Scene<2, Sphere> {
     pressure_disks(1, 1e-3)
 }
@@ -846,18 +839,7 @@ fn negative_shear_modulus_is_confirmed_by_deformation() {
     // through the code: 1e-9 relative allows the round-off of the
     // differences.
     assert_eq!(lr.shear_min(), lr.shear);
-    let options = HessianOptions {
-        stiffness_only: false,
-        remove_rattlers: true,
-    };
-    let spectrum = jamkit_observe::spectrum::measure(
-        &mut scene,
-        &summary.rattler,
-        options,
-        false,
-        &Default::default(),
-    )
-    .unwrap();
+    let spectrum = spectrum_without_rattlers(&mut scene, &summary.rattler);
     let above: Vec<f64> = (spectrum.eigenvalues.iter().copied())
         .filter(|&l| l > 1e-10)
         .collect();
