@@ -674,7 +674,7 @@ fn stabilisation_takes_the_observables_omega_zero_and_records_its_fallbacks() {
     assert_eq!(sparse.iterations, dense.iterations);
     let difference = (dense.deformation - sparse.deformation).abs().max();
     assert!(difference < 1e-9, "{difference:e}");
-    // A threshold that is not a number is named as the observable's.
+    // A threshold that is not positive is named as the observable's.
     let params = moduli::StabiliseParams {
         moduli: ModuliParams {
             omega_zero: -1.0,

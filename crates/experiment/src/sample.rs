@@ -524,6 +524,7 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
     let stabilised = moduli::measure_strained(&mut s.cell, &s.rattler, &params)?;
     let bodies = scene.packing().len().max(1) as f64;
     let count = s.cell.contact_count(&s.rattler);
+    let fallbacks = std::mem::take(&mut s.dense_fallbacks);
     Ok(ModuliMeasures {
         moduli: stabilised,
         params,
@@ -542,10 +543,8 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
             stiffness_min: s.stiffness_min,
             fixed_box,
             wall_s: stabilise_s,
-            dense_fallbacks: (!s.dense_fallbacks.is_empty())
-                .then_some(s.dense_fallbacks.len() as u32),
-            dense_fallback_reasons: (!s.dense_fallbacks.is_empty())
-                .then(|| std::mem::take(&mut s.dense_fallbacks)),
+            dense_fallbacks: (!fallbacks.is_empty()).then_some(fallbacks.len() as u32),
+            dense_fallback_reasons: (!fallbacks.is_empty()).then_some(fallbacks),
             contacts: Some(jamkit_format::CellContacts {
                 n_contacts: count.n_contacts,
                 n_rattlers: count.n_rattlers,
