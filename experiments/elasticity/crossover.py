@@ -296,6 +296,10 @@ def against(rows, path):
     print("| family | δφ | packings here/there | " + " | ".join(
         f"{name} here | there | ratio | (h−t)/se" for _, name in quantities) + " |")
     print("|---|---|---|" + "---|---|---|---|" * len(quantities))
+    # Per quantity, over the matched points: ln(here/there) with its error
+    # (relative s.e.m.s in quadrature), the t values, and the relative
+    # s.e.m. here over there.
+    totals = {q: {"ln": [], "t": [], "sem": []} for q, _ in quantities}
     for row in rows:
         r = ref.get((without_n(row["family"]), round(math.log10(row["delta_phi"]), 6)))
         if r is None:
@@ -310,8 +314,27 @@ def against(rows, path):
             ratio = f"{mh / mt:.2f}" if mt != 0 else "–"
             t = f"{(mh - mt) / se:+.2f}" if se > 0 else "–"
             cells.append(f"{mh:.3e} ± {eh:.1e} | {mt:.3e} ± {et:.1e} | {ratio} | {t}")
+            if se > 0:
+                totals[q]["t"].append((mh - mt) / se)
+            if mh > 0 and mt > 0 and eh > 0 and et > 0:
+                totals[q]["ln"].append((math.log(mh / mt), math.hypot(eh / mh, et / mt)))
+                totals[q]["sem"].append((eh / mh) / (et / mt))
         print(f"| {without_n(row['family'])} | {row['delta_phi']:g} | {row['packings']}/{r['packings']} | "
               + " | ".join(cells) + " |")
+    for q, name in quantities:
+        ts, lns, sems = totals[q]["t"], totals[q]["ln"], sorted(totals[q]["sem"])
+        if not ts:
+            continue
+        line = (f"{name}: {len(ts)} points, {sum(t < 0 for t in ts)} below; "
+                f"sum t / sqrt(n) = {sum(ts) / math.sqrt(len(ts)):+.2f}")
+        if lns:
+            w = [1 / e ** 2 for _, e in lns]
+            mean = sum(wi * l for wi, (l, _) in zip(w, lns)) / sum(w)
+            line += (f"; here/there (weighted mean of ln over {len(lns)} positive points) "
+                     f"{math.exp(mean):.3f} ± {math.exp(mean) / math.sqrt(sum(w)):.3f}; "
+                     f"relative s.e.m. here/there median {sems[len(sems) // 2]:.2f} "
+                     f"(range {sems[0]:.2f} … {sems[-1]:.2f})")
+        print(line)
     print()
 
 
