@@ -28,10 +28,13 @@ bootstrap replicas, each resampling every point's packings with
 replacement (a replica with a mean <= 0 in the range is dropped and
 counted), and the 16th-84th percentile range. With few packings per point
 the bootstrap underestimates the spread (by about sqrt((n-1)/n) for n
-packings, 13 % at n = 4). --csv writes the per-point table, --svg a figure of the collapse. Only the
+packings, 13 % at n = 4). --csv writes the per-point table, --svg a figure of the collapse,
+--against (session 21) compares the points with another run's --csv table
+(another N: matched by family parameters without N and delta_phi). Only the
 standard library (`mean_sem` from fit.py).
 """
 import argparse
+import csv
 import glob
 import json
 import math
@@ -274,6 +277,67 @@ def collapse(groups, deltas, svg=None):
     print()
 
 
+def without_n(family):
+    """A family key without its `N=` word (to match one N against another)."""
+    return " ".join(w for w in family.split() if not w.startswith("N="))
+
+
+def against(rows, path):
+    """This run's points against another's per-point table (--csv of an
+    earlier run, e.g. another N), matched by family parameters without N and
+    by delta_phi: mean +- s.e.m. of each, the ratio here/there and the
+    difference in units of sqrt(se_here^2 + se_there^2) (independent
+    ensembles)."""
+    ref = {}
+    for r in csv.DictReader(open(path)):
+        ref[(without_n(r["family"]), round(math.log10(float(r["delta_phi"])), 6))] = r
+    quantities = [("G_stab", "G stab."), ("dz_stab", "z_stab − z_J"), ("G_fixed", "G fixed box")]
+    print(f"## against {path}: here / there, (here − there)/se")
+    print("| family | δφ | packings here/there | " + " | ".join(
+        f"{name} here | there | ratio | (h−t)/se" for _, name in quantities) + " |")
+    print("|---|---|---|" + "---|---|---|---|" * len(quantities))
+    # Per quantity, over the matched points: ln(here/there) with its error
+    # (relative s.e.m.s in quadrature), the t values, and the relative
+    # s.e.m. here over there.
+    totals = {q: {"ln": [], "t": [], "sem": []} for q, _ in quantities}
+    for row in rows:
+        r = ref.get((without_n(row["family"]), round(math.log10(row["delta_phi"]), 6)))
+        if r is None:
+            continue
+        cells = []
+        for q, _ in quantities:
+            if row[q] == "" or r[q] == "":
+                cells.append("– | – | – | –")
+                continue
+            mh, eh, mt, et = row[q], row[q + "_sem"], float(r[q]), float(r[q + "_sem"])
+            se = math.hypot(eh, et)
+            ratio = f"{mh / mt:.2f}" if mt != 0 else "–"
+            t = f"{(mh - mt) / se:+.2f}" if se > 0 else "–"
+            cells.append(f"{mh:.3e} ± {eh:.1e} | {mt:.3e} ± {et:.1e} | {ratio} | {t}")
+            if se > 0:
+                totals[q]["t"].append((mh - mt) / se)
+            if mh > 0 and mt > 0 and eh > 0 and et > 0:
+                totals[q]["ln"].append((math.log(mh / mt), math.hypot(eh / mh, et / mt)))
+                totals[q]["sem"].append((eh / mh) / (et / mt))
+        print(f"| {without_n(row['family'])} | {row['delta_phi']:g} | {row['packings']}/{r['packings']} | "
+              + " | ".join(cells) + " |")
+    for q, name in quantities:
+        ts, lns, sems = totals[q]["t"], totals[q]["ln"], sorted(totals[q]["sem"])
+        if not ts:
+            continue
+        line = (f"{name}: {len(ts)} points, {sum(t < 0 for t in ts)} below; "
+                f"sum t / sqrt(n) = {sum(ts) / math.sqrt(len(ts)):+.2f}")
+        if lns:
+            w = [1 / e ** 2 for _, e in lns]
+            mean = sum(wi * l for wi, (l, _) in zip(w, lns)) / sum(w)
+            line += (f"; here/there (weighted mean of ln over {len(lns)} positive points) "
+                     f"{math.exp(mean):.3f} ± {math.exp(mean) / math.sqrt(sum(w)):.3f}; "
+                     f"relative s.e.m. here/there median {sems[len(sems) // 2]:.2f} "
+                     f"(range {sems[0]:.2f} … {sems[-1]:.2f})")
+        print(line)
+    print()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--boot", type=int, default=4000)
@@ -281,6 +345,8 @@ def main():
     ap.add_argument("--range", action="append", default=[], help="LO:HI, delta_phi range of a fit")
     ap.add_argument("--csv", help="write the per-point table here")
     ap.add_argument("--svg", help="draw the collapse G/Delta^1/2 against delta_phi/Delta here")
+    ap.add_argument("--against", action="append", default=[], metavar="POINTS.csv",
+                    help="compare the points with another run's --csv table (e.g. another N)")
     ap.add_argument("dirs", nargs="+")
     args = ap.parse_args()
     rng = random.Random(args.seed)
@@ -345,6 +411,8 @@ def main():
                 show(f"{name} ~ delta_phi^a", fit(points, q, lo, hi, args.boot, rng), args.boot)
         print()
     collapse(groups, deltas, args.svg)
+    for path in args.against:
+        against(rows, path)
     if failed:
         print(f"{len(failed)} failed samples:")
         for sample, why in failed:

@@ -12,13 +12,18 @@ stabilisation failed, kept as the fixed-box packing it started from) and writes 
 `moduli.stabilisation.fixed_box` beside the stabilised ones, det F, the
 largest entry of |F - I|, strain steps, residuals, V/N before and after,
 z of the fixed box and (since session 19) the stabilised cell's z, rattlers
-and isostaticity margin. A packing found in several DIRs counts once, from
+and isostaticity margin, and (session 21) the dense fallbacks of a
+`Moduli(solver: Sparse)` run (strain steps whose stiffness fell back, and
+whether the fixed box's and the stabilised cell's moduli did) and the
+packing's wall time. A packing found in several DIRs counts once, from
 the first.
 Then prints per family parameters and delta_phi (or target pressure): the
 number of packings, mean p, mean +- s.e.m. of G fixed and stabilised with
 the counts of G < 0 and G_min < 0, mean B fixed and stabilised, the largest
 |F - I| and |det F - 1|, the range of strain steps, the largest residual
-and the largest number of negative modes. Only the standard library.
+and the largest number of negative modes, the dense fallbacks against
+the stiffness evaluations (strain steps + 1) and the summed wall time
+(of it the stabilisations'). Only the standard library.
 """
 import argparse
 import glob
@@ -112,6 +117,16 @@ def rows_of(directory):
                 "z_stab": cell["z"] if cell else "",
                 "rattlers_stab": cell["n_rattlers"] if cell else "",
                 "margin_stab": cell["iso_margin"] if cell else "",
+                # With `Moduli(solver: Sparse)` (session 20 on): the strain
+                # steps whose stiffness fell back to the dense solver (of
+                # `iterations + 1` evaluations), and whether the fixed box's
+                # and the stabilised cell's measured moduli did
+                # (`dense_fallback`, the zero-mode rule); the packing's wall
+                # time (jamming, compression, moduli and stabilisation).
+                "fallbacks": s.get("dense_fallbacks", 0),
+                "fallback_fixed": int("dense_fallback" in fixed),
+                "fallback_stab": int("dense_fallback" in stab),
+                "wall_s": d["measures"]["wall_s"],
             }
         )
     failed = sorted(glob.glob(os.path.join(directory, "packings", "*.failed.json")))
@@ -122,7 +137,7 @@ COLUMNS = [
     "id", "family", "x", "label", "seed", "p", "G_fixed", "Gmin_fixed", "G", "Gmin",
     "B_fixed", "B", "detF", "strain", "iterations", "residual_before", "residual",
     "neg_modes", "e_before", "e_after", "stab_s", "z_fixed", "z_stab", "rattlers_stab",
-    "margin_stab",
+    "margin_stab", "fallbacks", "fallback_fixed", "fallback_stab", "wall_s",
 ]
 
 
@@ -146,8 +161,9 @@ def main():
     for r in rows:
         groups[(r["family"], r["label"], r["x"])].append(r)
     print("| family | x | packings | p | G fixed (G<0; G_min<0) | G stabilised (G<0; G_min<0) "
-          "| B fixed | B stab. | max abs(F-I) | max abs(detF-1) | steps | max residual | neg. modes |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "| B fixed | B stab. | max abs(F-I) | max abs(detF-1) | steps | max residual | neg. modes "
+          "| dense fallbacks / evaluations (moduli: fixed, stab.) | wall s (stab. s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for (fam, label, x), g in sorted(groups.items(), key=lambda kv: (kv[0][0], -kv[0][2])):
         def ms(key):
             m, e = mean_sem([r[key] for r in g])
@@ -160,11 +176,18 @@ def main():
             f"| {sum(r['B_fixed'] for r in g) / len(g):.3f} | {sum(r['B'] for r in g) / len(g):.3f} "
             f"| {max(r['strain'] for r in g):.3f} | {max(abs(r['detF'] - 1) for r in g):.3f} "
             f"| {min(r['iterations'] for r in g)}–{max(r['iterations'] for r in g)} "
-            f"| {max(r['residual'] for r in g):.1e} | {max(r['neg_modes'] for r in g)} |"
+            f"| {max(r['residual'] for r in g):.1e} | {max(r['neg_modes'] for r in g)} "
+            f"| {sum(r['fallbacks'] for r in g)}/{sum(r['iterations'] + 1 for r in g)} "
+            f"({sum(r['fallback_fixed'] for r in g)}, {sum(r['fallback_stab'] for r in g)}) "
+            f"| {sum(r['wall_s'] for r in g):.0f} ({sum(r['stab_s'] for r in g):.0f}) |"
         )
     print(f"\n{len(rows)} packings; G < 0: fixed box {sum(1 for r in rows if r['G_fixed'] < 0)}, "
           f"stabilised {sum(1 for r in rows if r['G'] < 0)}; G_min < 0: fixed box "
           f"{sum(1 for r in rows if r['Gmin_fixed'] < 0)}, stabilised {sum(1 for r in rows if r['Gmin'] < 0)}")
+    print(f"dense fallbacks: {sum(r['fallbacks'] for r in rows)} of "
+          f"{sum(r['iterations'] + 1 for r in rows)} stiffness evaluations; measured moduli: fixed box "
+          f"{sum(r['fallback_fixed'] for r in rows)}, stabilised {sum(r['fallback_stab'] for r in rows)}; "
+          f"wall time {sum(r['wall_s'] for r in rows):.0f} s (stabilisations {sum(r['stab_s'] for r in rows):.0f} s)")
     print(f"{len(failed)} failed samples (failed.json):")
     for f in failed:
         d = json.load(open(f))
