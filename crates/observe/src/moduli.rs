@@ -1428,16 +1428,15 @@ pub struct Stabilised<const D: usize, S: Shape<D>> {
 fn deviatoric_stiffness<const D: usize, S: Shape<D>>(
     cell: &mut Strained<D, S>,
     rattler: &[bool],
-    omega_zero: f64,
-    solver: ModuliSolver,
+    params: &ModuliParams,
     basis: &[Matrix<D>],
     volume_pressure: f64,
 ) -> Result<(Vec<Vec<f64>>, Option<String>)> {
     let hessian = cell.full_hessian(rattler)?;
     let n = hessian.size;
-    let lambda_zero = omega_zero * omega_zero;
+    let lambda_zero = params.omega_zero * params.omega_zero;
     let (inverse, fallback) =
-        PseudoInverse::of(&hessian, D, lambda_zero, solver, LANCZOS_TOL_STEP)?;
+        PseudoInverse::of(&hessian, D, lambda_zero, params.solver, LANCZOS_TOL_STEP)?;
     let kk = basis.len();
     let mut single = Vec::new();
     for e in basis {
@@ -1513,14 +1512,7 @@ pub fn stiffness_tensor<const D: usize, S: Shape<D>>(
     volume_pressure: f64,
 ) -> Result<(Vec<Vec<f64>>, Option<String>)> {
     params.validate("moduli")?;
-    deviatoric_stiffness(
-        cell,
-        rattler,
-        params.omega_zero,
-        params.solver,
-        basis,
-        volume_pressure,
-    )
+    deviatoric_stiffness(cell, rattler, params, basis, volume_pressure)
 }
 
 /// Eigenvalues (ascending) and eigenvectors (columns) of a small symmetric
@@ -1635,14 +1627,8 @@ pub fn stabilise<const D: usize, S: Shape<D>>(
         let s = stress(&cell);
         let pressure = cell.pressure();
         let reference = external.unwrap_or(pressure);
-        let (stiffness, fell_back) = deviatoric_stiffness(
-            &mut cell,
-            &rattler,
-            params.moduli.omega_zero,
-            params.moduli.solver,
-            &basis,
-            reference,
-        )?;
+        let (stiffness, fell_back) =
+            deviatoric_stiffness(&mut cell, &rattler, &params.moduli, &basis, reference)?;
         dense_fallbacks.extend(fell_back.map(|why| (iterations, why)));
         let (mu, w) = symmetric_eigen(&stiffness)?;
         let residual = largest(&s) / reference;
