@@ -3,7 +3,7 @@
 bootstrap errors over packings (docs/elasticity.md, "At N = 512: G against
 δφ across Δ² (session 18)").
 
-    python3 experiments/elasticity/crossover.py [--boot 4000] [--range LO:HI]... [--csv OUT.csv] DIR...
+    python3 experiments/elasticity/crossover.py [--boot 4000] [--range LO:HI]... [--vs-p] [--csv OUT.csv] DIR...
 
 Reads the packing files of `AboveJam` runs (`packings/*.json`; a
 `*.failed.json` is counted with the first line of its flag), groups them
@@ -30,7 +30,10 @@ counted), and the 16th-84th percentile range. With few packings per point
 the bootstrap underestimates the spread (by about sqrt((n-1)/n) for n
 packings, 13 % at n = 4). --csv writes the per-point table, --svg a figure of the collapse,
 --against (session 21) compares the points with another run's --csv table
-(another N: matched by family parameters without N and delta_phi). Only the
+(another N: matched by family parameters without N and delta_phi), --vs-p
+(session 22) adds, in every range, the slopes against the mean pressure of
+the same packings (G ~ p^a: the disks' law is a = 1/2 whether or not p is
+linear in delta_phi). Only the
 standard library (`mean_sem` from fit.py).
 """
 import argparse
@@ -112,32 +115,44 @@ def slope(xs, ys):
     return sum((a - mx) * (b - my) for a, b in zip(lx, ly)) / sxx
 
 
-def fit(points, q, lo, hi, boot, rng):
+def fit(points, q, lo, hi, boot, rng, abscissa=None):
     """Slope over lo <= x <= hi of quantity q; bootstrap s.d., 16-84 %
     range and the number of dropped replicas. None if fewer than two
-    points or a mean <= 0."""
+    points or a mean <= 0. With abscissa = "p" (--vs-p) the slope is of
+    ln(mean q) against ln(mean p) of the same packings, the points still
+    chosen by delta_phi; a replica resamples each point's packings once
+    for both means."""
     sel = sorted(x for x in points if lo <= x <= hi)
     if len(sel) < 2:
         return None
     # The packings that have the quantity (the stabilised contacts are
     # missing from packings made before session 19).
-    values = {x: [r[q] for r in points[x] if r[q] is not None] for x in sel}
+    rows = {x: [r for r in points[x] if r[q] is not None] for x in sel}
+    values = {x: [r[q] for r in rows[x]] for x in sel}
     if any(not values[x] for x in sel):
         return None
     means = [sum(values[x]) / len(values[x]) for x in sel]
     if any(m <= 0 for m in means):
         return ("mean <= 0", sel)
-    best = slope(sel, means)
+    if abscissa is None:
+        best = slope(sel, means)
+    else:
+        best = slope([sum(r[abscissa] for r in rows[x]) / len(rows[x]) for x in sel], means)
     reps, dropped = [], 0
     for _ in range(boot):
-        ms = []
+        ms, xs = [], []
         for x in sel:
-            v = values[x]
-            ms.append(sum(rng.choice(v) for _ in v) / len(v))
-        if any(m <= 0 for m in ms):
+            if abscissa is None:
+                v = values[x]
+                ms.append(sum(rng.choice(v) for _ in v) / len(v))
+                continue
+            draw = [rng.choice(rows[x]) for _ in rows[x]]
+            ms.append(sum(r[q] for r in draw) / len(draw))
+            xs.append(sum(r[abscissa] for r in draw) / len(draw))
+        if any(m <= 0 for m in ms + xs):
             dropped += 1
             continue
-        reps.append(slope(sel, ms))
+        reps.append(slope(sel if abscissa is None else xs, ms))
     reps.sort()
     if len(reps) < 2:
         return (best, math.nan, math.nan, math.nan, dropped, sel)
@@ -347,9 +362,12 @@ def main():
     ap.add_argument("--svg", help="draw the collapse G/Delta^1/2 against delta_phi/Delta here")
     ap.add_argument("--against", action="append", default=[], metavar="POINTS.csv",
                     help="compare the points with another run's --csv table (e.g. another N)")
+    ap.add_argument("--vs-p", action="store_true",
+                    help="also fit each quantity against the mean pressure of its points")
     ap.add_argument("dirs", nargs="+")
     args = ap.parse_args()
     rng = random.Random(args.seed)
+    rng_p = random.Random(f"{args.seed} vs p")
     groups, failed, deltas = read(args.dirs)
     rows = []
     for key in sorted(groups):
@@ -409,6 +427,11 @@ def main():
             print(f"fits over {label}:")
             for q, name in QUANTITIES:
                 show(f"{name} ~ delta_phi^a", fit(points, q, lo, hi, args.boot, rng), args.boot)
+            if args.vs_p:
+                # Its own random stream, so that the fits against
+                # delta_phi stay those of a run without --vs-p.
+                for q, name in QUANTITIES[1:]:
+                    show(f"{name} ~ p^a", fit(points, q, lo, hi, args.boot, rng_p, "p"), args.boot)
         print()
     collapse(groups, deltas, args.svg)
     for path in args.against:
