@@ -951,12 +951,97 @@ fn above_jam_refuses_a_packing_that_unjammed() {
     assert_eq!(report.failures.len(), 1);
     let message = report.failures[0].to_string();
     assert!(
-        message.contains("unjammed while compressed by delta_phi = 3e-3"),
+        message.contains("unjammed while compressed by delta_phi = 3e-3")
+            && message.contains("protocol.rejams"),
         "{message}"
     );
     let dir = tempfile::tempdir().unwrap();
     let report = common::run_ok(&parse(&text("1e-3")), dir.path(), 1);
     assert!(report.packings[0].measures.energy_per_particle > 1e-10);
+}
+
+/// With `rejams`, the packing of `above_jam_refuses_a_packing_that_unjammed`
+/// is jammed again from where it unjammed and compressed by δφ from its new
+/// jamming point: the sample succeeds, its first φ_J (recorded in
+/// `jam_point.left`) is bit for bit that of `Jam` on the same seed, the new
+/// φ_J lies at least δφ above it (the state at φ_J + δφ had V/N below the
+/// window, so its own jamming point is higher; 1e-12 for the round-off of
+/// φ from the box), the packing sits δφ above the new one (to 1e-12, as in
+/// `protocol_targets_given_as_lists_scan`) with V/N above the window, and
+/// `results.csv` counts the re-jams. A packing that goes up at the first
+/// try writes no `left` and no `rejams` setting, so files of earlier runs
+/// are unchanged.
+#[test]
+fn above_jam_jams_again_a_packing_that_unjammed() {
+    let parse = |t: &str| jamkit_experiment::Experiment::from_ron(t, "inline").unwrap();
+    let above = |dphi: &str, rejams: &str| {
+        parse(&format!(
+            r#"(name: "a", family: "sphere", particles: 64, samples: 1, seed: 1,
+            protocol: AboveJam(delta_phi: {dphi}{rejams}), observables: [Contacts])"#
+        ))
+    };
+    let jam = parse(
+        r#"(name: "a", family: "sphere", particles: 64, samples: 1, seed: 1,
+        protocol: Jam(), observables: [Contacts])"#,
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let phi_j = common::run_ok(&jam, dir.path(), 1).packings[0].measures.phi;
+
+    let dir = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&above("3e-3", ", rejams: 2"), dir.path(), 1);
+    let m = &report.packings[0].measures;
+    let point = m.jam_point.as_ref().unwrap();
+    assert!(
+        !point.left.is_empty() && point.left.len() <= 2,
+        "{:?}",
+        point.left
+    );
+    assert_eq!(point.left[0].to_bits(), phi_j.to_bits(), "{:?}", point.left);
+    for pair in point.left.windows(2) {
+        assert!(pair[1] >= pair[0] + 3e-3 - 1e-12, "{:?}", point.left);
+    }
+    let last = *point.left.last().unwrap();
+    assert!(point.phi >= last + 3e-3 - 1e-12, "{} {last}", point.phi);
+    assert!(
+        (m.phi - point.phi - 3e-3).abs() < 1e-12,
+        "{} {}",
+        m.phi,
+        point.phi
+    );
+    assert!(m.energy_per_particle > 2e-16, "{}", m.energy_per_particle);
+    let results = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
+    let mut lines = results.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = head.iter().position(|c| *c == "jam_rejams").unwrap();
+    assert_eq!(row[column], point.left.len().to_string());
+
+    // Went up at the first try: nothing new in the file or the table.
+    let dir = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&above("1e-3", ", rejams: 2"), dir.path(), 1);
+    assert!(
+        report.packings[0]
+            .measures
+            .jam_point
+            .as_ref()
+            .unwrap()
+            .left
+            .is_empty()
+    );
+    let results = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
+    assert!(!results.lines().next().unwrap().contains("jam_rejams"));
+    let dir = tempfile::tempdir().unwrap();
+    common::run_ok(&above("1e-3", ""), dir.path(), 1);
+    let file = std::fs::read_dir(dir.path().join("packings"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap();
+    let text = std::fs::read_to_string(file.path()).unwrap();
+    assert!(
+        !text.contains("rejams") && !text.contains("\"left\""),
+        "{text}"
+    );
 }
 
 /// A list of targets scans, one grid point per value, innermost: `AboveJam`

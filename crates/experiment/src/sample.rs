@@ -192,6 +192,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                 search,
                 ref delta_phi,
                 compress_eps,
+                rejams,
                 ..
             } => {
                 let delta_phi = target(delta_phi);
@@ -202,7 +203,32 @@ impl SceneVisitor for SampleVisitor<'_> {
                     max_density_steps,
                     search,
                 };
-                jam(&mut scene, &mut fire, &params).and_then(|jammed| {
+                // The jamming points left when the packing unjammed on its
+                // way up (with `rejams`), and the work of every pass.
+                let mut left = Vec::new();
+                let mut total = jamkit_engine::ProtocolOutcome {
+                    phi: f64::NAN,
+                    energy_per_particle: f64::NAN,
+                    fire_steps: 0,
+                    minimizations: 0,
+                    newton_iterations: 0,
+                    lbfgs_evaluations: 0,
+                };
+                fn add(
+                    total: &mut jamkit_engine::ProtocolOutcome,
+                    o: &jamkit_engine::ProtocolOutcome,
+                ) {
+                    total.fire_steps += o.fire_steps;
+                    total.minimizations += o.minimizations;
+                    total.newton_iterations += o.newton_iterations;
+                    total.lbfgs_evaluations += o.lbfgs_evaluations;
+                }
+                loop {
+                    let jammed = match jam(&mut scene, &mut fire, &params) {
+                        Ok(jammed) => jammed,
+                        Err(err) => break Err(err),
+                    };
+                    add(&mut total, &jammed);
                     // The jamming point's contacts, before the compression
                     // (reading them moves no body: same packing after).
                     let at_jam = e.needs_contacts().then(|| {
@@ -214,35 +240,47 @@ impl SceneVisitor for SampleVisitor<'_> {
                         z: at_jam.as_ref().map(|s| s.z_j),
                         n_rattlers: at_jam.as_ref().map(|s| s.n_rattlers),
                         iso_margin: at_jam.as_ref().map(|s| s.iso_margin),
+                        left: left.clone(),
                     });
                     let target = jammed.phi + delta_phi;
-                    let above = compress_to_phi(&mut scene, &mut fire, target, compress_eps)?;
+                    let above = match compress_to_phi(&mut scene, &mut fire, target, compress_eps) {
+                        Ok(above) => above,
+                        Err(err) => break Err(err),
+                    };
+                    add(&mut total, &above);
+                    if above.energy_per_particle > energy_high {
+                        total.phi = above.phi;
+                        total.energy_per_particle = above.energy_per_particle;
+                        break Ok(total);
+                    }
                     // NOTE: a compression step followed by FIRE can rearrange
                     // the packing into a state that jams above φ_J + δφ
                     // (measured: N = 64 disks, seed 1, δφ = 3e-3 ended with
                     // V/N = 7e-17 and no contact). That is not a packing at
-                    // δφ above its jamming point: fail, naming it.
-                    if !(above.energy_per_particle > energy_high) {
-                        return Err(jamkit_core::Error::JammingFailed {
+                    // δφ above its jamming point: jam it again from there
+                    // (`rejams` times at most), or fail, naming it.
+                    if left.len() as u32 >= rejams {
+                        break Err(jamkit_core::Error::JammingFailed {
                             phi: above.phi,
                             // The compression's density changes: one
                             // minimisation more (the first, at φ_J).
                             steps: above.minimizations.saturating_sub(1),
                             reason: format!(
-                                "the packing unjammed while compressed by delta_phi = {delta_phi:e} from phi_J = {:.12} (V/N = {:.3e}, not above energy_high = {energy_high:e}): a rearrangement found a state that jams above phi_J + delta_phi; try a smaller protocol.compress_eps or another seed",
-                                jammed.phi, above.energy_per_particle
+                                "the packing unjammed while compressed by delta_phi = {delta_phi:e} from phi_J = {:.12} (V/N = {:.3e}, not above energy_high = {energy_high:e}): a rearrangement found a state that jams above phi_J + delta_phi{}",
+                                jammed.phi,
+                                above.energy_per_particle,
+                                if rejams == 0 {
+                                    "; try protocol.rejams (jam it again from there), a smaller protocol.compress_eps or another seed".to_string()
+                                } else {
+                                    format!(
+                                        ", after protocol.rejams = {rejams} earlier jamming points ({left:?}) left the same way"
+                                    )
+                                }
                             ),
                         });
                     }
-                    Ok(jamkit_engine::ProtocolOutcome {
-                        phi: above.phi,
-                        energy_per_particle: above.energy_per_particle,
-                        fire_steps: jammed.fire_steps + above.fire_steps,
-                        minimizations: jammed.minimizations + above.minimizations,
-                        newton_iterations: jammed.newton_iterations + above.newton_iterations,
-                        lbfgs_evaluations: jammed.lbfgs_evaluations + above.lbfgs_evaluations,
-                    })
-                })
+                    left.push(jammed.phi);
+                }
             }
             Protocol::Phi { ref phi, eps, .. } => {
                 compress_to_phi(&mut scene, &mut fire, target(phi), eps)

@@ -240,6 +240,13 @@ pub enum Protocol {
         /// Largest step of φ on the way from φ_J to φ_J + δφ.
         #[serde(default = "default_eps")]
         compress_eps: f64,
+        /// How often a packing that unjams on its way up (a rearrangement
+        /// into a state that jams above φ_J + δφ) is jammed again from
+        /// where it stopped and compressed by δφ from its new φ_J, before
+        /// the sample fails. `0` (the default, and not written out, so
+        /// that settings of earlier runs are unchanged): it fails at once.
+        #[serde(default, skip_serializing_if = "is_zero")]
+        rejams: u32,
         /// After the protocol, shear-stabilise the packing (Dagois-Bohy et
         /// al. 2012): relax the cell's shape and volume (every strain) with
         /// the coordinates at the packing's own pressure, minimising the
@@ -262,6 +269,9 @@ pub enum Protocol {
     },
 }
 
+fn is_zero(n: &u32) -> bool {
+    *n == 0
+}
 fn default_phi_start() -> f64 {
     0.1
 }

@@ -84,6 +84,13 @@ pub struct JamPoint {
     pub n_rattlers: Option<usize>,
     /// `N_c − (f N_nr − d)` at φ_J.
     pub iso_margin: Option<i64>,
+    /// The jamming points this packing left, in order: each time it
+    /// unjammed on its way up to φ_J + δφ it was jammed again from there
+    /// (`protocol.rejams`), and `phi` above is the last. Empty, and not
+    /// written out, for a packing that went up at the first try (so files
+    /// written before it existed are unchanged).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub left: Vec<f64>,
 }
 
 /// The elastic moduli of one packing, as stored.

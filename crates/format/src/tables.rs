@@ -162,6 +162,14 @@ pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
     if with_cell_contacts {
         head.extend(CELL_CONTACTS_COLUMNS.map(String::from));
     }
+    // How often each `AboveJam` packing was jammed again after unjamming
+    // on its way up; only when some was, so that other tables keep their
+    // columns.
+    let rejams = |f: &PackingFile| f.measures.jam_point.as_ref().map_or(0, |j| j.left.len());
+    let with_rejams = files.iter().any(|f| rejams(f) > 0);
+    if with_rejams {
+        head.push("jam_rejams".into());
+    }
     let mut rows = Vec::with_capacity(files.len());
     for f in files {
         let m = &f.measures;
@@ -231,6 +239,9 @@ pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
                 ],
                 None => Default::default(),
             });
+        }
+        if with_rejams {
+            row.push(rejams(f).to_string());
         }
         rows.push(row);
     }
