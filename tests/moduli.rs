@@ -969,8 +969,9 @@ fn above_jam_refuses_a_packing_that_unjammed() {
 /// φ from the box), the packing sits δφ above the new one (to 1e-12, as in
 /// `protocol_targets_given_as_lists_scan`) with V/N above the window, and
 /// `results.csv` counts the re-jams. A packing that goes up at the first
-/// try writes no `left` and no `rejams` setting, so files of earlier runs
-/// are unchanged.
+/// try is the same with and without `rejams` (φ and V/N bit for bit, the
+/// same FIRE steps) and, without it, writes no `left` and no `rejams`
+/// setting, so files of earlier runs are unchanged.
 #[test]
 fn above_jam_jams_again_a_packing_that_unjammed() {
     let parse = |t: &str| jamkit_experiment::Experiment::from_ron(t, "inline").unwrap();
@@ -1018,20 +1019,20 @@ fn above_jam_jams_again_a_packing_that_unjammed() {
 
     // Went up at the first try: nothing new in the file or the table.
     let dir = tempfile::tempdir().unwrap();
-    let report = common::run_ok(&above("1e-3", ", rejams: 2"), dir.path(), 1);
-    assert!(
-        report.packings[0]
-            .measures
-            .jam_point
-            .as_ref()
-            .unwrap()
-            .left
-            .is_empty()
-    );
+    let with = common::run_ok(&above("1e-3", ", rejams: 2"), dir.path(), 1);
+    let with = &with.packings[0].measures;
+    assert!(with.jam_point.as_ref().unwrap().left.is_empty());
     let results = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
     assert!(!results.lines().next().unwrap().contains("jam_rejams"));
     let dir = tempfile::tempdir().unwrap();
-    common::run_ok(&above("1e-3", ""), dir.path(), 1);
+    let without = common::run_ok(&above("1e-3", ""), dir.path(), 1);
+    let without = &without.packings[0].measures;
+    assert_eq!(with.phi.to_bits(), without.phi.to_bits());
+    assert_eq!(
+        with.energy_per_particle.to_bits(),
+        without.energy_per_particle.to_bits()
+    );
+    assert_eq!(with.fire_steps, without.fire_steps);
     let file = std::fs::read_dir(dir.path().join("packings"))
         .unwrap()
         .next()
