@@ -33,7 +33,8 @@ packings, 13 % at n = 4). --csv writes the per-point table, --svg a figure of th
 (another N: matched by family parameters without N and delta_phi), --vs-p
 (session 22) adds, in every range, the slopes against the mean pressure of
 the same packings (G ~ p^a: the disks' law is a = 1/2 whether or not p is
-linear in delta_phi). Only the
+linear in delta_phi), --svg-p (session 22) draws the stabilised G against
+p of every family, with those of --points tables (other runs). Only the
 standard library (`mean_sem` from fit.py).
 """
 import argparse
@@ -174,14 +175,14 @@ def show(name, result, boot):
     print(f"  {name}: {best:.3f} ± {sd:.3f} [16-84 %: {lo16:.3f} … {hi84:.3f}] over {span}{extra}")
 
 
-def collapse_svg(curves, path):
-    """A log-log figure of G~ = G_stab/Delta^1/2 against x = delta_phi/Delta,
-    one series per Delta (mean +- s.e.m.), with the paper's two limits
-    G~ ~ x and G~ ~ x^1/2 as guides through the first and last points of
-    the smallest Delta. SVG only (the standard library has no PNG
-    writer)."""
-    colours = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e"]
-    pts = [(x, g, r) for c in curves.values() for x, g, r in c]
+def loglog_svg(series, guides, guide_label, xlabel, ylabel, path):
+    """A log-log figure: `series` is a list of (legend, [(x, y, relative
+    error)]) drawn as points with error bars joined by a line, `guides` a
+    list of ((x0, y0), slope), dashed lines through (x0, y0), clipped to
+    the frame, named once in the legend by `guide_label`. SVG only (the
+    standard library has no PNG writer)."""
+    colours = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d", "#666666"]
+    pts = [(x, g, r) for _, c in series for x, g, r in c]
     lx0 = math.floor(math.log10(min(x for x, _, _ in pts)))
     lx1 = math.ceil(math.log10(max(x for x, _, _ in pts)))
     ly0 = math.floor(math.log10(min(g * (1 - r) for _, g, r in pts if r < 1)))
@@ -198,35 +199,86 @@ def collapse_svg(curves, path):
     for k in range(ly0, ly1 + 1):
         out.append(f'<line x1="{left - 5}" y1="{Y(10 ** k):.1f}" x2="{left}" y2="{Y(10 ** k):.1f}" stroke="black"/>')
         out.append(f'<text x="{left - 8}" y="{Y(10 ** k) + 4:.1f}" text-anchor="end">1e{k}</text>')
-    out.append(f'<text x="{(left + w - right) / 2}" y="{h - 15}" text-anchor="middle">x = δφ/Δ</text>')
-    out.append(f'<text x="18" y="{(top + h - bottom) / 2}" text-anchor="middle" transform="rotate(-90 18 {(top + h - bottom) / 2})">G/Δ^(1/2) (stabilised)</text>')
-    first = curves[min(curves)]
-    (xa, ga, _), (xb, gb, _) = first[0], first[-1]
+    out.append(f'<text x="{(left + w - right) / 2}" y="{h - 15}" text-anchor="middle">{xlabel}</text>')
+    out.append(f'<text x="18" y="{(top + h - bottom) / 2}" text-anchor="middle" transform="rotate(-90 18 {(top + h - bottom) / 2})">{ylabel}</text>')
     # The guides, clipped to the frame.
     out.append(f'<clipPath id="frame"><rect x="{left}" y="{top}" width="{w - left - right}" height="{h - top - bottom}"/></clipPath>')
     out.append('<g clip-path="url(#frame)">')
-    for (x0, g0), slope in (((xa, ga), 1.0), ((xb, gb), 0.5)):
+    for (x0, g0), slope in guides:
         xs = (10 ** lx0, 10 ** lx1)
         ys = [g0 * (x / x0) ** slope for x in xs]
         out.append(f'<line x1="{X(xs[0]):.1f}" y1="{Y(ys[0]):.1f}" x2="{X(xs[1]):.1f}" y2="{Y(ys[1]):.1f}" stroke="gray" stroke-dasharray="4 4"/>')
     out.append('</g>')
-    for k, d in enumerate(sorted(curves)):
+    for k, (name, curve) in enumerate(series):
         col = colours[k % len(colours)]
-        path_d = " ".join(("M" if i == 0 else "L") + f"{X(x):.1f},{Y(g):.1f}" for i, (x, g, _) in enumerate(curves[d]))
+        path_d = " ".join(("M" if i == 0 else "L") + f"{X(x):.1f},{Y(g):.1f}" for i, (x, g, _) in enumerate(curve))
         out.append(f'<path d="{path_d}" fill="none" stroke="{col}"/>')
-        for x, g, r in curves[d]:
+        for x, g, r in curve:
             lo = g * (1 - r) if r < 1 else 10 ** ly0
             out.append(f'<line x1="{X(x):.1f}" y1="{Y(lo):.1f}" x2="{X(x):.1f}" y2="{Y(g * (1 + r)):.1f}" stroke="{col}"/>')
             out.append(f'<circle cx="{X(x):.1f}" cy="{Y(g):.1f}" r="4" fill="{col}"/>')
         ly = top + 20 + 20 * k
         out.append(f'<circle cx="{w - right + 20}" cy="{ly}" r="4" fill="{col}"/>')
-        out.append(f'<text x="{w - right + 30}" y="{ly + 4}">Δ = {d:g}</text>')
-    ly = top + 20 + 20 * len(curves)
+        out.append(f'<text x="{w - right + 30}" y="{ly + 4}">{name}</text>')
+    ly = top + 20 + 20 * len(series)
     out.append(f'<line x1="{w - right + 12}" y1="{ly}" x2="{w - right + 28}" y2="{ly}" stroke="gray" stroke-dasharray="4 4"/>')
-    out.append(f'<text x="{w - right + 30}" y="{ly + 4}">x and x^(1/2)</text>')
+    out.append(f'<text x="{w - right + 30}" y="{ly + 4}">{guide_label}</text>')
     out.append('</svg>')
     with open(path, "w") as f:
         f.write("\n".join(out) + "\n")
+
+
+def collapse_svg(curves, path):
+    """G~ = G_stab/Delta^1/2 against x = delta_phi/Delta, one series per
+    Delta (mean +- s.e.m.), with the paper's two limits G~ ~ x and
+    G~ ~ x^1/2 as guides through the first and last points of the
+    smallest Delta."""
+    first = curves[min(curves)]
+    (xa, ga, _), (xb, gb, _) = first[0], first[-1]
+    loglog_svg([(f"Δ = {d:g}", curves[d]) for d in sorted(curves)],
+               [((xa, ga), 1.0), ((xb, gb), 0.5)], "x and x^(1/2)",
+               "x = δφ/Δ", "G/Δ^(1/2) (stabilised)", path)
+
+
+def short_name(family):
+    """`fourier N=1024 delta=0.003 n=2` -> `Δ = 0.003, N = 1024`; a sphere
+    family -> `disks, N = …`; others as they are."""
+    words = dict(w.split("=", 1) for w in family.split()[1:] if "=" in w)
+    kind = family.split()[0]
+    if kind == "fourier" and "delta" in words:
+        return f"Δ = {float(words['delta']):g}, N = {words['N']}"
+    if kind == "sphere":
+        return f"disks, N = {words['N']}"
+    return family
+
+
+def pressure_svg(rows, path, only=()):
+    """The stabilised G against the mean pressure, one series per family
+    (this run's points and those of --points tables; a family's points come
+    from the first source that has it; with `only`, the families whose key
+    holds one of those words), with the disks' law
+    G ~ p^1/2 through the last point of the first disk family (or of the
+    series with the largest p) and G ~ p through the first point of the
+    series with the smallest p."""
+    series = defaultdict(list)
+    source = {}
+    for r in rows:
+        if only and not any(w in r["family"].split() or w == r["family"].split()[0] for w in only):
+            continue
+        if source.setdefault(r["family"], r["_source"]) != r["_source"]:
+            continue
+        if r["G_stab"] in ("", None) or float(r["G_stab"]) <= 0:
+            continue
+        g, se = float(r["G_stab"]), float(r["G_stab_sem"])
+        series[r["family"]].append((float(r["p"]), g, se / g))
+    if not series:
+        return
+    curves = [(short_name(f), sorted(c)) for f, c in sorted(series.items(), key=lambda fc: short_name(fc[0]))]
+    disks = [c for name, c in curves if name.startswith("disks")]
+    top = disks[0] if disks else max((c for _, c in curves), key=lambda c: c[-1][0])
+    low = min((c for _, c in curves), key=lambda c: c[0][0])
+    loglog_svg(curves, [(top[-1][:2], 0.5), (low[0][:2], 1.0)], "p^(1/2) and p",
+               "p", "G (stabilised)", path)
 
 
 def collapse(groups, deltas, svg=None):
@@ -362,6 +414,12 @@ def main():
     ap.add_argument("--svg", help="draw the collapse G/Delta^1/2 against delta_phi/Delta here")
     ap.add_argument("--against", action="append", default=[], metavar="POINTS.csv",
                     help="compare the points with another run's --csv table (e.g. another N)")
+    ap.add_argument("--svg-p", metavar="OUT.svg",
+                    help="draw the stabilised G against p for every family here (and --points tables)")
+    ap.add_argument("--points", action="append", default=[], metavar="POINTS.csv",
+                    help="with --svg-p: also draw the points of another run's --csv table")
+    ap.add_argument("--svg-p-only", action="append", default=[], metavar="WORD",
+                    help="with --svg-p: only the families with this word in their key (N=1024, sphere, …)")
     ap.add_argument("--vs-p", action="store_true",
                     help="also fit each quantity against the mean pressure of its points")
     ap.add_argument("dirs", nargs="+")
@@ -434,6 +492,10 @@ def main():
                     show(f"{name} ~ p^a", fit(points, q, lo, hi, args.boot, rng_p, "p"), args.boot)
         print()
     collapse(groups, deltas, args.svg)
+    if args.svg_p:
+        mine = [dict(r, _source="") for r in rows]
+        extra = [dict(r, _source=path) for path in args.points for r in csv.DictReader(open(path))]
+        pressure_svg(mine + extra, args.svg_p, args.svg_p_only)
     for path in args.against:
         against(rows, path)
     if failed:
