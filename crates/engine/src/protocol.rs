@@ -151,6 +151,17 @@ pub struct ProtocolOutcome {
     pub lbfgs_evaluations: u64,
 }
 
+impl ProtocolOutcome {
+    /// Adds `other`'s work (FIRE steps, minimisations, Newton iterations,
+    /// L-BFGS evaluations) to this outcome's; φ and `V/N` stay this one's.
+    pub fn add_work(&mut self, other: &ProtocolOutcome) {
+        self.fire_steps += other.fire_steps;
+        self.minimizations += other.minimizations;
+        self.newton_iterations += other.newton_iterations;
+        self.lbfgs_evaluations += other.lbfgs_evaluations;
+    }
+}
+
 /// Bookkeeping shared by the protocols.
 #[derive(Default)]
 struct Tally {

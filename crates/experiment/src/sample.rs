@@ -204,31 +204,14 @@ impl SceneVisitor for SampleVisitor<'_> {
                     search,
                 };
                 // The jamming points left when the packing unjammed on its
-                // way up (with `rejams`), and the work of every pass.
+                // way up (with `rejams`), and the work of those passes.
                 let mut left = Vec::new();
-                let mut total = jamkit_engine::ProtocolOutcome {
-                    phi: f64::NAN,
-                    energy_per_particle: f64::NAN,
-                    fire_steps: 0,
-                    minimizations: 0,
-                    newton_iterations: 0,
-                    lbfgs_evaluations: 0,
-                };
-                fn add(
-                    total: &mut jamkit_engine::ProtocolOutcome,
-                    o: &jamkit_engine::ProtocolOutcome,
-                ) {
-                    total.fire_steps += o.fire_steps;
-                    total.minimizations += o.minimizations;
-                    total.newton_iterations += o.newton_iterations;
-                    total.lbfgs_evaluations += o.lbfgs_evaluations;
-                }
+                let mut spent: Option<jamkit_engine::ProtocolOutcome> = None;
                 loop {
                     let jammed = match jam(&mut scene, &mut fire, &params) {
                         Ok(jammed) => jammed,
                         Err(err) => break Err(err),
                     };
-                    add(&mut total, &jammed);
                     // The jamming point's contacts, before the compression
                     // (reading them moves no body: same packing after).
                     let at_jam = e.needs_contacts().then(|| {
@@ -243,15 +226,18 @@ impl SceneVisitor for SampleVisitor<'_> {
                         left: left.clone(),
                     });
                     let target = jammed.phi + delta_phi;
-                    let above = match compress_to_phi(&mut scene, &mut fire, target, compress_eps) {
-                        Ok(above) => above,
+                    let climb = match compress_to_phi(&mut scene, &mut fire, target, compress_eps) {
+                        Ok(climb) => climb,
                         Err(err) => break Err(err),
                     };
-                    add(&mut total, &above);
+                    // φ and V/N of the compression, the work of every pass.
+                    let mut above = climb;
+                    above.add_work(&jammed);
+                    if let Some(spent) = &spent {
+                        above.add_work(spent);
+                    }
                     if above.energy_per_particle > energy_high {
-                        total.phi = above.phi;
-                        total.energy_per_particle = above.energy_per_particle;
-                        break Ok(total);
+                        break Ok(above);
                     }
                     // NOTE: a compression step followed by FIRE can rearrange
                     // the packing into a state that jams above φ_J + δφ
@@ -261,14 +247,14 @@ impl SceneVisitor for SampleVisitor<'_> {
                     // (`rejams` times at most), or fail, naming it.
                     if left.len() as u32 >= rejams {
                         break Err(jamkit_core::Error::JammingFailed {
-                            phi: above.phi,
+                            phi: climb.phi,
                             // The compression's density changes: one
                             // minimisation more (the first, at φ_J).
-                            steps: above.minimizations.saturating_sub(1),
+                            steps: climb.minimizations.saturating_sub(1),
                             reason: format!(
                                 "the packing unjammed while compressed by delta_phi = {delta_phi:e} from phi_J = {:.12} (V/N = {:.3e}, not above energy_high = {energy_high:e}): a rearrangement found a state that jams above phi_J + delta_phi{}",
                                 jammed.phi,
-                                above.energy_per_particle,
+                                climb.energy_per_particle,
                                 if rejams == 0 {
                                     "; try protocol.rejams (jam it again from there), a smaller protocol.compress_eps or another seed".to_string()
                                 } else {
@@ -280,6 +266,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                         });
                     }
                     left.push(jammed.phi);
+                    spent = Some(above);
                 }
             }
             Protocol::Phi { ref phi, eps, .. } => {
