@@ -75,13 +75,15 @@ def read(dirs):
             if path.endswith(".failed.json"):
                 failed.append((d["id"], d["measures"]["flag"].split(";")[0][:160]))
                 continue
-            if d["id"] in seen:
-                continue
-            seen.add(d["id"])
             protocol = d["settings"]["protocol"]
             if "AboveJam" not in protocol:
                 raise SystemExit(f"{path}: not an AboveJam packing")
             x = protocol["AboveJam"]["delta_phi"]
+            # By id and delta_phi: a run of one delta_phi names its
+            # packings without it, so runs at two share ids.
+            if (d["id"], x) in seen:
+                continue
+            seen.add((d["id"], x))
             m = d["measures"]
             moduli = m["moduli"]
             stab = moduli.get("stabilisation")

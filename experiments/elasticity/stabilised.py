@@ -151,9 +151,11 @@ def main():
     for d in args.dirs:
         r, f = rows_of(d)
         # A packing in several directories (a re-measured copy first)
-        # counts once, from the first.
-        rows += [x for x in r if x["id"] not in seen]
-        seen.update(x["id"] for x in r)
+        # counts once, from the first. By id and target: a run of one
+        # target names its packings without it, so runs at two targets
+        # share ids (as fit.py).
+        rows += [x for x in r if (x["id"], x["x"]) not in seen]
+        seen.update((x["id"], x["x"]) for x in r)
         failed += f
     if args.csv:
         write_csv(args.csv, COLUMNS, rows)
