@@ -32,6 +32,15 @@ packings, 13 % at n = 4). --csv writes the per-point table, --svg a figure of th
 --against (session 21) compares the points with another run's --csv table
 (another N: matched by family parameters without N and delta_phi). Only the
 standard library (`mean_sem` from fit.py).
+
+--ellipse-delta (session 22) treats the `ellipse` family as a near-disk
+with Delta_eff = aspect - 1: an ellipse of aspect 1 + eps has, to first
+order in eps, the polar radius R0 [1 + (eps/2) cos 2 theta], the n = 2
+near-disk R0 [1 + Delta sin(2 theta)/2] with Delta = eps turned by 45
+degrees (docs/elasticity.md, "Ellipses near alpha = 1"). Its points then
+get x = delta_phi/Delta_eff and the fits and collapse of a near-disk, the
+collapse's column named "Delta = ... (ellipse)". Without it the output is
+what it was.
 """
 import argparse
 import csv
@@ -60,7 +69,21 @@ def family_of(d):
     return d["family"] + " N=" + str(d["particles"]) + "".join(f" {k}={v}" for k, v in params.items())
 
 
-def read(dirs):
+class EllipseDelta(float):
+    """Delta_eff = aspect - 1 of an ellipse (--ellipse-delta): a float that
+    is its own key beside a near-disk's equal Delta and names itself."""
+
+    def __eq__(self, other):
+        return isinstance(other, EllipseDelta) and float(self) == float(other)
+
+    def __hash__(self):
+        return hash(("ellipse", float(self)))
+
+    def __format__(self, spec):
+        return format(float(self), spec) + " (ellipse)"
+
+
+def read(dirs, ellipse_delta=False):
     groups = defaultdict(lambda: defaultdict(list))
     failed = []
     deltas = {}
@@ -84,6 +107,8 @@ def read(dirs):
             fixed = stab["fixed_box"] if stab else moduli["moduli"]
             key = family_of(d)
             deltas[key] = d["params"].get("delta")
+            if ellipse_delta and d["family"] == "ellipse" and d["params"]["aspect"] > 1:
+                deltas[key] = EllipseDelta(round(d["params"]["aspect"] - 1, 12))
             groups[key][x].append(
                 {
                     "p": m["pressure"],
@@ -347,10 +372,12 @@ def main():
     ap.add_argument("--svg", help="draw the collapse G/Delta^1/2 against delta_phi/Delta here")
     ap.add_argument("--against", action="append", default=[], metavar="POINTS.csv",
                     help="compare the points with another run's --csv table (e.g. another N)")
+    ap.add_argument("--ellipse-delta", action="store_true",
+                    help="scale the ellipse family as a near-disk with Delta = aspect - 1")
     ap.add_argument("dirs", nargs="+")
     args = ap.parse_args()
     rng = random.Random(args.seed)
-    groups, failed, deltas = read(args.dirs)
+    groups, failed, deltas = read(args.dirs, args.ellipse_delta)
     rows = []
     for key in sorted(groups):
         points = groups[key]
