@@ -36,6 +36,15 @@ the same packings (G ~ p^a: the disks' law is a = 1/2 whether or not p is
 linear in delta_phi), --svg-p (session 22) draws the stabilised G against
 p of every family, with those of --points tables (other runs). Only the
 standard library (`mean_sem` from fit.py).
+
+--ellipse-delta (session 22) treats the `ellipse` family as a near-disk
+with Delta_eff = aspect - 1: an ellipse of aspect 1 + eps has, to first
+order in eps, the polar radius R0 [1 + (eps/2) cos 2 theta], the n = 2
+near-disk R0 [1 + Delta sin(2 theta)/2] with Delta = eps turned by 45
+degrees (docs/elasticity.md, "Ellipses near alpha = 1"). Its points then
+get x = delta_phi/Delta_eff and the fits and collapse of a near-disk, the
+collapse's column named "Delta = ... (ellipse)". Without it the output is
+what it was.
 """
 import argparse
 import csv
@@ -64,7 +73,21 @@ def family_of(d):
     return d["family"] + " N=" + str(d["particles"]) + "".join(f" {k}={v}" for k, v in params.items())
 
 
-def read(dirs):
+class EllipseDelta(float):
+    """Delta_eff = aspect - 1 of an ellipse (--ellipse-delta): a float that
+    is its own key beside a near-disk's equal Delta and names itself."""
+
+    def __eq__(self, other):
+        return isinstance(other, EllipseDelta) and float(self) == float(other)
+
+    def __hash__(self):
+        return hash(("ellipse", float(self)))
+
+    def __format__(self, spec):
+        return format(float(self), spec) + " (ellipse)"
+
+
+def read(dirs, ellipse_delta=False):
     groups = defaultdict(lambda: defaultdict(list))
     failed = []
     deltas = {}
@@ -90,6 +113,8 @@ def read(dirs):
             fixed = stab["fixed_box"] if stab else moduli["moduli"]
             key = family_of(d)
             deltas[key] = d["params"].get("delta")
+            if ellipse_delta and d["family"] == "ellipse" and d["params"]["aspect"] > 1:
+                deltas[key] = EllipseDelta(round(d["params"]["aspect"] - 1, 12))
             groups[key][x].append(
                 {
                     "p": m["pressure"],
@@ -424,11 +449,13 @@ def main():
                     help="with --svg-p: only the families with this word in their key (N=1024, sphere, …)")
     ap.add_argument("--vs-p", action="store_true",
                     help="also fit each quantity against the mean pressure of its points")
+    ap.add_argument("--ellipse-delta", action="store_true",
+                    help="scale the ellipse family as a near-disk with Delta = aspect - 1")
     ap.add_argument("dirs", nargs="+")
     args = ap.parse_args()
     rng = random.Random(args.seed)
     rng_p = random.Random(f"{args.seed} vs p")
-    groups, failed, deltas = read(args.dirs)
+    groups, failed, deltas = read(args.dirs, args.ellipse_delta)
     rows = []
     for key in sorted(groups):
         points = groups[key]
