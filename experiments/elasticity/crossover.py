@@ -290,7 +290,7 @@ def pressure_svg(rows, path, only=()):
     series = defaultdict(list)
     source = {}
     for r in rows:
-        if only and not any(w in r["family"].split() or w == r["family"].split()[0] for w in only):
+        if only and not any(w in r["family"].split() for w in only):
             continue
         if source.setdefault(r["family"], r["_source"]) != r["_source"]:
             continue
