@@ -772,9 +772,6 @@ fn moduli_observable_options_are_checked() {
     );
 }
 
-/// The packing of the runner test's first sample (disks, N = 32, seed 1,
-/// `Pressure` p = 10⁻³ to 1 %), made through the engine: `G < 0` in its
-/// fixed box.
 /// The full spectrum (rotations included) of `scene` with the rattlers'
 /// rows removed, as `Moduli` counts its modes.
 fn spectrum_without_rattlers<const D: usize, S: Shape<D>>(
@@ -788,6 +785,9 @@ fn spectrum_without_rattlers<const D: usize, S: Shape<D>>(
     jamkit_observe::spectrum::measure(scene, rattler, options, false, &Default::default()).unwrap()
 }
 
+/// The packing of the runner test's first sample (disks, N = 32, seed 1,
+/// `Pressure` p = 10⁻³ to 1 %), made through the engine: `G < 0` in its
+/// fixed box.
 fn negative_g_disks() -> Scene<2, Sphere> {
     pressure_disks(1, 1e-3)
 }
