@@ -2,7 +2,7 @@
 //!
 //! * `jamkit run FILE… [--out DIR] [--jobs N] [--set KEY=VALUE …]`
 //! * `jamkit validate FILE [--set KEY=VALUE …]`
-//! * `jamkit shapes`
+//! * `jamkit shapes [--markdown]`
 //! * `jamkit bench [packing|eval|spectrum|accuracy|pair]`
 //! * `jamkit spectrum PACKING.json [--stiffness-only] [--remove-rattlers] [--modes] -o FILE.csv`
 //! * `jamkit report DIR… -o OUT`
@@ -25,7 +25,7 @@ mod bench_spectrum;
 mod spectrum;
 
 use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use jamkit_experiment::grid::Shard;
 use jamkit_experiment::runner::{RunOptions, default_out, run};
 use jamkit_experiment::{Experiment, Log, grid, overrides};
@@ -117,7 +117,12 @@ enum Command {
         sets: Vec<String>,
     },
     /// List the registered shape families and their parameters.
-    Shapes,
+    Shapes {
+        /// Print the reference page docs/reference/families.md (Markdown)
+        /// instead of the plain list.
+        #[arg(long)]
+        markdown: bool,
+    },
     /// Time the engine (see docs/performance.md).
     Bench {
         #[command(subcommand)]
@@ -283,7 +288,16 @@ fn main() {
 }
 
 fn real_main() -> Result<()> {
-    match Cli::parse().command {
+    // `--version` names the commit too, as the files jamkit writes do.
+    let version: &'static str = Box::leak(
+        jamkit_format::provenance::describe()
+            .trim_start_matches("jamkit ")
+            .to_string()
+            .into_boxed_str(),
+    );
+    let matches = Cli::command().version(version).get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    match cli.command {
         Command::Export { path, out } => {
             let files = packing_files(&path)?;
             let mut text = String::new();
@@ -418,7 +432,11 @@ fn real_main() -> Result<()> {
             }
             Ok(())
         }
-        Command::Shapes => {
+        Command::Shapes { markdown: true } => {
+            out!("{}", registry::reference_markdown().trim_end());
+            Ok(())
+        }
+        Command::Shapes { markdown: false } => {
             for f in registry::FAMILIES {
                 out!("{} ({}): {}", f.name, registry::describe_dims(f), f.about);
                 if f.params.is_empty() {

@@ -86,6 +86,7 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<PackingFile, Experimen
     let id = path
         .file_stem()
         .map_or("analyzed".into(), |s| s.to_string_lossy().into_owned());
+    let (jamkit_version, git_commit) = jamkit_format::provenance::stamp();
     let file = PackingFile {
         id,
         experiment: "analyze".into(),
@@ -126,6 +127,8 @@ pub fn read(path: &Path, options: &ReadOptions) -> Result<PackingFile, Experimen
         orientations: Vec::new(),
         rattler: Vec::new(),
         spheres: Vec::new(),
+        jamkit_version,
+        git_commit,
     };
     file.check_as(path.display())?;
     Ok(file)

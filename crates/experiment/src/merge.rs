@@ -53,9 +53,17 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeReport, ExperimentErro
         return Err(refuse("no directories to merge".into()));
     };
     // The parts must have run one experiment.
+    // Compared without the header comment that names the jamkit which
+    // wrote it: parts run by different builds of one experiment merge (each
+    // packing file records its own jamkit).
     let read = |d: &Path| -> Result<String, ExperimentError> {
         let path = d.join("experiment.ron");
-        std::fs::read_to_string(&path).map_err(|e| ExperimentError::io(&path, e))
+        let text = std::fs::read_to_string(&path).map_err(|e| ExperimentError::io(&path, e))?;
+        Ok(text
+            .lines()
+            .skip_while(|l| l.starts_with("//"))
+            .collect::<Vec<_>>()
+            .join("\n"))
     };
     let text = read(first)?;
     for d in &dirs[1..] {

@@ -80,7 +80,11 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
     std::fs::create_dir_all(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;
     let effective = ron::ser::to_string_pretty(experiment, ron::ser::PrettyConfig::default())
         .expect("experiment serialises");
-    format::write_atomic(&options.out.join("experiment.ron"), effective.as_bytes())?;
+    let header = format!("// {}\n", format::provenance::describe());
+    format::write_atomic(
+        &options.out.join("experiment.ron"),
+        (header + &effective).as_bytes(),
+    )?;
 
     let log = BatchLog::new(options.log, jobs.len());
     // The packings finished so far, in grid order and without their

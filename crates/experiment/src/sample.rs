@@ -371,6 +371,7 @@ impl SampleVisitor<'_> {
         measures: Measures,
     ) -> PackingFile {
         let (e, job) = (self.experiment, self.job);
+        let (jamkit_version, git_commit) = jamkit_format::provenance::stamp();
         PackingFile {
             id: job.id.clone(),
             experiment: e.name.clone(),
@@ -407,6 +408,8 @@ impl SampleVisitor<'_> {
             },
             rattler: Vec::new(),
             spheres: if write { sphere_rows(p) } else { Vec::new() },
+            jamkit_version,
+            git_commit,
         }
     }
 

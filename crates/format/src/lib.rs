@@ -8,6 +8,7 @@
 //! `docs/formats.md`.
 
 pub mod error;
+pub mod provenance;
 pub mod record;
 pub mod tables;
 

@@ -239,6 +239,14 @@ pub struct PackingFile {
     /// and when `output.packings` is false.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub spheres: Vec<Vec<f64>>,
+    /// The version of jamkit that made the packing
+    /// ([`crate::provenance::VERSION`]); `None` in files made before it was
+    /// recorded. A file measured again keeps the version that made it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jamkit_version: Option<String>,
+    /// The git commit of that jamkit, when it was built from a checkout.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub git_commit: Option<String>,
 }
 
 /// `file` without its configuration (centres, sizes, orientations,
