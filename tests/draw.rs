@@ -84,7 +84,8 @@ fn draw_near_disks_to_svg_and_png() {
 
 #[test]
 fn draw_the_tutorial_family() {
-    // `lobed` (docs/adding-a-shape.md) draws through the registry alone.
+    // `lobed` (docs/tutorials/new-shape-rust.md) draws through the registry
+    // alone.
     let dir = tempfile::tempdir().unwrap();
     let packing = jam(
         &dir.path().join("run"),

@@ -1,6 +1,6 @@
-//! The `lobed` family (the example of `docs/adding-a-shape.md`) in the
-//! engine: the conformance kit on blunt to sharp lobes, and its example
-//! experiment end to end.
+//! The `lobed` family (the example of `docs/tutorials/new-shape-rust.md`)
+//! in the engine: the conformance kit on blunt to sharp lobes, and its
+//! example experiment end to end.
 
 use jamkit_experiment::{Experiment, overrides};
 use jamkit_lobed::{Lobed, LobedParams};

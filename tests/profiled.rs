@@ -12,7 +12,7 @@ use std::f64::consts::PI;
 
 /// `P(φ) = a sin 2φ / 2 + b sin 3φ / 3`: the paper's modes n = 2 and 3,
 /// mixed. This is the whole family a user writes (plus its parameters and
-/// registration, docs/adding-a-shape.md).
+/// registration, docs/tutorials/new-shape-rust.md).
 #[derive(Clone, Debug, PartialEq)]
 struct TwoMode {
     a: f64,

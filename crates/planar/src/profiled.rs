@@ -28,7 +28,7 @@
 //! contacts, Hessians, the outline for drawing, the convexity warning)
 //! is written once here. A new near-disk family is a profile, its
 //! parameters and its registration: `shapes/lobed` is the example
-//! (docs/adding-a-shape.md).
+//! (docs/tutorials/new-shape-rust.md).
 //!
 //! NOTE: the pair loop calls no `atan2`, `sin` or `cos`: `e^{iA_i} =
 //! e^{iθ_i} e^{−iθ_ij}` is a complex product of the cached `e^{iθ_i}`

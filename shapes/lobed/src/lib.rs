@@ -1,7 +1,8 @@
 //! # Two-lobed near-disks: the `lobed` family
 //!
-//! The worked example of `docs/adding-a-shape.md`. A body of size `R⁰` and
-//! orientation `θ_i` has the polar outline (lab direction `φ`)
+//! The worked example of `docs/tutorials/new-shape-rust.md`. A body of
+//! size `R⁰` and orientation `θ_i` has the polar outline (lab direction
+//! `φ`)
 //!
 //! ```text
 //! R_i(φ) = R⁰ [1 + Δ G(θ_i − φ)],
