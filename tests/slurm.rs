@@ -1,4 +1,4 @@
-//! The Slurm path of docs/cluster.md on a real one-node cluster:
+//! The Slurm path of docs/how-to/slurm.md on a real one-node cluster:
 //! `tests/slurm/run.sh` installs Slurm and MUNGE from Debian's packages if
 //! needed, starts slurmctld and slurmd on this machine, runs
 //! `scripts/slurm-jam-array.sbatch` as a 4-task array, gathers, and compares

@@ -1,5 +1,5 @@
 #!/bin/bash
-# A real Slurm test of docs/cluster.md: install Slurm and MUNGE from
+# A real Slurm test of docs/how-to/slurm.md: install Slurm and MUNGE from
 # Debian's packages if they are missing, start a one-node cluster on this
 # machine (as root: slurmctld + slurmd, proctrack/linuxproc, task/none, a
 # MUNGE key of its own), submit scripts/slurm-jam-array.sbatch as a 4-task

@@ -5,7 +5,7 @@
 //! one into a shaded orthographic ray-cast of the box seen along `z`
 //! ([`scene3d`], [`render3d`]), and draws polar plots
 //! `R(θ)/R⁰ = 1 + Δ F(θ)` of near-disk shapes (shaded bodies in 3D). It backs
-//! the `jamkit draw` and `jamkit draw-shape` commands (`docs/drawing.md`).
+//! the `jamkit draw` and `jamkit draw-shape` commands (`docs/how-to/draw.md`).
 //!
 //! The crate is split in two layers:
 //!
