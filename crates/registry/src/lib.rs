@@ -225,7 +225,7 @@ pub fn reference_markdown() -> String {
         md.push_str(&format!(
             "| [`{}`](#{}) | {} | {} |\n",
             f.name,
-            f.name.replace('_', ""),
+            f.name,
             describe_dims(f).trim_start_matches("dim "),
             f.about.replace('|', "\\|")
         ));
