@@ -1,48 +1,9 @@
-//! Every registered family is known to the documentation and draws.
-//!
-//! The registry (`crates/registry/src/lib.rs`) is the one list of
-//! families; the docs keep lists of their own for readers. These tests fail
-//! when a family is added to the registry and a list is not updated (such
-//! lists once went stale unnoticed; docs/how-to/draw.md keeps none and
-//! points to `jamkit shapes`), or when a registered 2D or 3D family cannot
-//! be drawn from its example.
+//! Every registered family draws from its example, in 2D and in 3D. (That
+//! the manual names every family is checked by `tests/reference.rs`, on
+//! the generated page docs/reference/families.md.)
 
 use jamkit_draw::Outline;
 use jamkit_registry::{EXAMPLES, FAMILIES, supports_dim};
-
-fn read(path: &str) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"))
-}
-
-/// The paragraph of `text` that starts at the line containing `marker`
-/// and runs to the next blank line.
-fn paragraph<'a>(text: &'a str, marker: &str, path: &str) -> &'a str {
-    let start = text
-        .find(marker)
-        .unwrap_or_else(|| panic!("{path}: no line with {marker:?}"));
-    let line_start = text[..start].rfind('\n').map_or(0, |k| k + 1);
-    let rest = &text[line_start..];
-    &rest[..rest.find("\n\n").unwrap_or(rest.len())]
-}
-
-#[test]
-fn every_registered_family_is_in_the_docs_family_lists() {
-    let lists = [
-        ("docs/formats.md", "a registered family (`jamkit shapes`)"),
-        ("README.md", "Shape families (`jamkit shapes`)"),
-    ];
-    for (path, marker) in lists {
-        let text = read(path);
-        let list = paragraph(&text, marker, path);
-        for info in FAMILIES {
-            let name = format!("`{}`", info.name);
-            assert!(
-                list.contains(&name),
-                "{path}: the family list ({marker:?}) does not name {name}"
-            );
-        }
-    }
-}
 
 #[test]
 fn every_registered_planar_family_draws_from_its_example() {
