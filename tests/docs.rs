@@ -70,7 +70,10 @@ fn sh_blocks(text: &str) -> Vec<Block> {
             while end < lines.len() && !lines[end].trim_start().starts_with("```") {
                 end += 1;
             }
-            assert!(end < lines.len(), "a ```sh block at line {start} is not closed");
+            assert!(
+                end < lines.len(),
+                "a ```sh block at line {start} is not closed"
+            );
             blocks.push(Block {
                 line: start,
                 directive,
@@ -273,5 +276,9 @@ fn relative_links_resolve() {
             }
         }
     }
-    assert!(broken.is_empty(), "links to nothing:\n{}", broken.join("\n"));
+    assert!(
+        broken.is_empty(),
+        "links to nothing:\n{}",
+        broken.join("\n")
+    );
 }

@@ -50,7 +50,11 @@ fn the_families_page_is_what_the_registry_generates() {
          `jamkit shapes --markdown > docs/reference/families.md`"
     );
     for f in jamkit_registry::FAMILIES {
-        assert!(committed.contains(&format!("\n## {}\n", f.name)), "{}", f.name);
+        assert!(
+            committed.contains(&format!("\n## {}\n", f.name)),
+            "{}",
+            f.name
+        );
     }
 }
 
@@ -176,8 +180,7 @@ fn explore(text: &str, schema: &mut Schema, seen: &mut BTreeSet<String>) {
     // variant the message lists, bare and with an empty group.
     for (start, end) in identifiers(&canonical) {
         let word = &canonical[start..end];
-        if !word.starts_with(|c: char| c.is_ascii_uppercase()) || word == "None" || word == "Some"
-        {
+        if !word.starts_with(|c: char| c.is_ascii_uppercase()) || word == "None" || word == "Some" {
             continue;
         }
         let group = if canonical[end..].starts_with('(') {
@@ -185,7 +188,11 @@ fn explore(text: &str, schema: &mut Schema, seen: &mut BTreeSet<String>) {
         } else {
             end
         };
-        let probe = format!("{}{VARIANT_PROBE}{}", &canonical[..start], &canonical[group..]);
+        let probe = format!(
+            "{}{VARIANT_PROBE}{}",
+            &canonical[..start],
+            &canonical[group..]
+        );
         let Err(m) = parse(&probe) else { continue };
         let Some(owner) = name_after(&m, "in enum") else {
             continue;
@@ -222,7 +229,10 @@ fn every_experiment_field_and_variant_is_in_the_reference() {
         ("Protocol", "AboveJam"),
         ("Observable", "Spectrum"),
     ] {
-        let found = schema.fields.get(owner).or_else(|| schema.variants.get(owner));
+        let found = schema
+            .fields
+            .get(owner)
+            .or_else(|| schema.variants.get(owner));
         assert!(
             found.is_some_and(|names| names.contains(needed)),
             "the exploration did not find `{owner}.{needed}`: fields {:?}, variants {:?}",
@@ -259,11 +269,20 @@ fn commands(help: &str) -> Vec<String> {
         .collect()
 }
 
-/// The long flags of a `--help` text, without `--help` and `--version`.
+/// The long flags of a `--help` text (its option lines, `  -o, --out <OUT>`
+/// or `      --quiet`), without `--help` and `--version`.
 fn long_flags(help: &str) -> BTreeSet<String> {
-    help.split(|c: char| c.is_whitespace() || c == ',' || c == '[' || c == ']')
-        .filter(|w| w.starts_with("--") && w.len() > 2)
-        .map(|w| w.split(['=', '<']).next().unwrap().to_string())
+    help.lines()
+        .map(str::trim_start)
+        .filter(|l| l.starts_with('-'))
+        .filter_map(|l| {
+            let at = l.find("--")?;
+            let name: String = l[at + 2..]
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '-')
+                .collect();
+            (!name.is_empty()).then(|| format!("--{name}"))
+        })
         .filter(|w| w != "--help" && w != "--version")
         .collect()
 }
@@ -296,7 +315,11 @@ fn every_command_and_flag_is_in_the_reference() {
             if !body.contains(&sub) {
                 absent.push(format!("jamkit {name} {sub}"));
             }
-            flags.extend(long_flags(&jamkit(&[name.as_str(), sub.as_str(), "--help"])));
+            flags.extend(long_flags(&jamkit(&[
+                name.as_str(),
+                sub.as_str(),
+                "--help",
+            ])));
         }
         for flag in flags {
             if !body.contains(&format!("`{flag}")) && !body.contains(&format!("{flag} ")) {
@@ -316,6 +339,7 @@ fn every_command_and_flag_is_in_the_reference() {
 
 /// The packings of a small run of `experiment` (RON) into `dir`.
 fn run(dir: &Path, experiment: &str) -> Vec<PackingFile> {
+    std::fs::create_dir_all(dir).unwrap();
     let file = dir.join("e.ron");
     std::fs::write(&file, experiment).unwrap();
     let out = dir.join("out");
@@ -362,7 +386,11 @@ fn every_column_is_in_the_reference() {
             observables: [Contacts, Pressure, Moduli()])"#,
     );
     // A packing that was jammed again on its way up: its `left` list.
-    let jam = above[0].measures.jam_point.as_mut().expect("a jamming point");
+    let jam = above[0]
+        .measures
+        .jam_point
+        .as_mut()
+        .expect("a jamming point");
     jam.left.push(jam.phi);
     let mut files = jammed;
     files.extend(above);

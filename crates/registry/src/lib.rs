@@ -246,7 +246,9 @@ pub fn reference_markdown() -> String {
         }
         md.push_str("| parameter | default | meaning |\n|---|---|---|\n");
         for p in f.params {
-            let default = p.default.map_or("required".to_string(), |d| format!("`{d}`"));
+            let default = p
+                .default
+                .map_or("required".to_string(), |d| format!("`{d}`"));
             let list = if p.is_list { " (a list)" } else { "" };
             md.push_str(&format!(
                 "| `{}` | {} | {}{} |\n",
