@@ -236,7 +236,7 @@ fn the_pair_benchmark_runs_on_its_own() {
     assert!(!out.join("results.csv").exists() && !out.join("packings").exists());
 }
 
-/// The brief's slice: FirstOrder against SecondOrder (no Exact), N = 12,
+/// A small comparison: FirstOrder against SecondOrder (no Exact), N = 12,
 /// two seeds, through the command line; the comparison is the runner's
 /// numbers, and `jamkit run` of the file with the same overrides makes the
 /// same packings.

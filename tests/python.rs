@@ -1,4 +1,4 @@
-//! The Python module (`python/`, docs/python.md): `tests/python/run.sh`
+//! The Python module (`python/`, docs/how-to/python.md): `tests/python/run.sh`
 //! installs it with pip into a venv under `target/` (numpy, pytest and
 //! maturin from PyPI) and runs `python/tests` with pytest, which checks the
 //! module's packings, contacts and spectra against this build's `jamkit`
