@@ -1386,7 +1386,9 @@ pub struct Stabilised<const D: usize, S: Shape<D>> {
     /// The packing in its relaxed, deformed cell (rebased: strains set on
     /// it act on top of the stabilising deformation).
     pub cell: Strained<D, S>,
-    /// The cell's deformation from the box it started in (`det = 1`).
+    /// The cell's deformation `F` from the box it started in: `det F = 1`
+    /// at fixed volume; at fixed pressure (the runner's) the dilation is
+    /// free and `det F` is the cell's volume over the box's, not 1.
     pub deformation: Matrix<D>,
     /// `max_k |σ : E_k| / p` at the end.
     pub residual: f64,
