@@ -281,7 +281,7 @@ impl BlockMasses {
             5 => self.sums_of::<5>(g, v, w),
             6 => self.sums_of::<6>(g, v, w),
             // Blocks of one coordinate (one-dimensional spheres) or more
-            // than six (none today): the general loop.
+            // than six (no family has more): the general loop.
             _ => self.sums_general(g, v, w),
         }
     }
