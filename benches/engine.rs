@@ -9,7 +9,7 @@
 //!   energy-and-gradient evaluation of N = 128 `harmonic` near-spheres
 //!   (`Ŷ_22`, Δ = 0.1, φ = 0.66, random, overlapping) with the first-order
 //!   and the exact gap, the latter by the nested and the joint solver
-//!   (docs/reproduction-3d.md, "Exact gap").
+//!   (docs/reports/performance.md, "Where the time of a packing goes").
 //!
 //! The N = 1024 packing benchmark is `jamkit bench packing` (one packing is
 //! seconds long, too long for criterion's repetitions).
@@ -114,7 +114,7 @@ fn energy_gradient_harmonic(c: &mut Criterion) {
 criterion_group!(
     name = benches;
     // NOTE: no plots: criterion's plotters backend panicked on a machine
-    // without system fonts (the numbers are what docs/performance.md uses).
+    // without system fonts (the numbers are what docs/reports/performance.md uses).
     config = Criterion::default().without_plots();
     targets = energy_gradient, energy_gradient_near_disks, jam_disks, energy_gradient_harmonic
 );

@@ -1,4 +1,4 @@
-//! `jamkit bench`: timings of the engine, for docs/performance.md.
+//! `jamkit bench`: timings of the engine, for docs/reports/performance.md.
 //!
 //! * `packing`: one packing with the paper's protocol per seed, one thread:
 //!   binary disks (default) or near-disks (`--family fourier --n 2 --delta 0.1`,
@@ -252,15 +252,15 @@ pub enum BenchCommand {
         particles: Vec<usize>,
     },
     /// Speed against error of the near-disk gap models and of FIRE's
-    /// tolerances: CSV, figures and tables.md (docs/speed-vs-error.md).
+    /// tolerances: CSV, figures and tables.md (docs/reports/speed-vs-error.md).
     Accuracy {
         /// Output directory; the default also rewrites the generated block
-        /// of docs/speed-vs-error.md.
+        /// of docs/reports/speed-vs-error.md.
         #[arg(short, long, value_name = "DIR", default_value = crate::bench_accuracy::DEFAULT_OUT)]
         out: std::path::PathBuf,
         /// Directory of the runner's runs of experiments/accuracy/*.ron
-        /// (parts 2 and 3); a rerun into it resumes, reading back every
-        /// packing it holds.
+        /// (the gap models and the tolerances); a rerun into it resumes,
+        /// reading back every packing it holds.
         #[arg(long, value_name = "DIR", default_value = crate::bench_accuracy::DEFAULT_RUNS)]
         runs: std::path::PathBuf,
         /// Small sizes, for a smoke test (seconds): fewer pairs, and the
@@ -283,7 +283,7 @@ pub enum BenchCommand {
     },
     /// Time and error of one pair evaluation (gap and gradient) of the
     /// near-disk gap models: pairs.csv, slopes.csv, figures and pairs.md
-    /// (part 1 of `bench accuracy`, on its own).
+    /// (the pair benchmark of `bench accuracy`, on its own).
     Pair {
         /// Output directory.
         #[arg(short, long, value_name = "DIR", default_value = crate::bench_pair::DEFAULT_OUT)]

@@ -62,7 +62,7 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
         /// Run only part I of K of the samples (e.g. one part per task of a
-        /// cluster job array; docs/formats.md). Parts may share one output
+        /// cluster job array; docs/how-to/slurm.md). Parts may share one output
         /// directory; a part writes packings only, and a run without
         /// --shard into that directory reuses them and writes the tables.
         #[arg(long, value_name = "I/K")]
@@ -89,8 +89,8 @@ enum Command {
     },
     /// Copy a run's measures, tables and experiment.ron without the
     /// packings' configurations (a fortieth of the size at N = 1024): what
-    /// `jamkit report` needs, small enough to commit (docs/formats.md,
-    /// "Archives"). Packings the run has not made yet are absent.
+    /// `jamkit report` needs, small enough to commit
+    /// (docs/reference/output-files.md, "Archives"). Packings the run has not made yet are absent.
     Archive {
         /// The run's directory.
         dir: PathBuf,
@@ -100,7 +100,7 @@ enum Command {
     },
     /// Write packings as extended XYZ (for OVITO and ASE): one packing file,
     /// or every packing of a run directory as the frames of one file
-    /// (docs/formats.md, "Extended XYZ").
+    /// (docs/reference/output-files.md, "Extended XYZ").
     Export {
         /// A packing file (DIR/packings/<id>.json) or a run directory.
         path: PathBuf,
@@ -123,7 +123,7 @@ enum Command {
         #[arg(long)]
         markdown: bool,
     },
-    /// Time the engine (see docs/performance.md).
+    /// Time the engine (see docs/reports/performance.md).
     Bench {
         #[command(subcommand)]
         what: bench::BenchCommand,
@@ -145,7 +145,7 @@ enum Command {
         #[arg(long, default_value_t = 500)]
         resamples: usize,
         /// Instead of the paper's figures, the accuracy comparison of
-        /// docs/speed-vs-error.md: `gap-models` (each packing against the
+        /// docs/reports/speed-vs-error.md: `gap-models` (each packing against the
         /// most accurate gap model's of the same Δ and seed) or `tolerances`
         /// (against the tightest force tolerance that converged on the same
         /// seed); writes its CSV, figure and OUT/accuracy.md.
@@ -155,7 +155,7 @@ enum Command {
     /// Measure a sphere packing made by another code (extended XYZ, or
     /// plain `x y (z) r` lines) as our own: contacts, rattlers, z, iso
     /// margin, pressure, spectrum, gaps; writes a jamkit packing file
-    /// (docs/formats.md, "jamkit analyze").
+    /// (docs/reference/output-files.md, "jamkit analyze output").
     Analyze {
         /// The packing: FILE.xyz / FILE.extxyz (extended XYZ, first frame)
         /// or plain text.
@@ -176,7 +176,7 @@ enum Command {
     /// Figures of any run, whatever its family: each scanned parameter (or
     /// N) against φ_J, z_J, z_corr, the rattler fraction and the pressure
     /// with error bars, and D(ω) and Z(h) where they were measured
-    /// (docs/formats.md, "jamkit plot").
+    /// (docs/reference/output-files.md, "jamkit plot output").
     Plot {
         /// Output directories of runs (or archives), each with packings/.
         #[arg(required = true, num_args = 1..)]
@@ -756,7 +756,7 @@ fn print_table(report: &jamkit_experiment::runner::RunReport) {
         );
     }
     out!(
-        "phi, z: mean ± s.e.m. over the point's packings (z = z_J among non-rattlers); z_iso: the isostatic z of the non-rattlers' coordinates (2f); z_corr: z_J counting free rotations of rotational rattlers as missing contacts; iso_min: the smallest N_c − (f N_nr − d) (negative: hypostatic); flagged: packings with a warning (results.csv column flag). docs/formats.md, \"results.csv\"."
+        "phi, z: mean ± s.e.m. over the point's packings (z = z_J among non-rattlers); z_iso: the isostatic z of the non-rattlers' coordinates (2f); z_corr: z_J counting free rotations of rotational rattlers as missing contacts; iso_min: the smallest N_c − (f N_nr − d) (negative: hypostatic); flagged: packings with a warning (results.csv column flag). docs/reference/output-files.md, \"results.csv\"."
     );
 }
 

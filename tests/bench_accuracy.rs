@@ -1,7 +1,7 @@
-//! `jamkit bench accuracy` and `jamkit bench pair`: the pair benchmark (files, rows, the fitted
-//! orders 2 and 3 of the gap models), and parts 2 and 3, which run
-//! `experiments/accuracy/*.ron` through the runner and compare what it
-//! recorded: the comparison holds the runner's numbers, the reference rows
+//! `jamkit bench accuracy` and `jamkit bench pair`: the pair benchmark
+//! (files, rows, the fitted orders 2 and 3 of the gap models), and the
+//! gap-model and tolerance runs, which run `experiments/accuracy/*.ron`
+//! through the runner and compare what it recorded: the comparison holds the runner's numbers, the reference rows
 //! differ from themselves by exactly 0, a rerun reads the packings back,
 //! and `jamkit run` of the same file with the same overrides makes the same
 //! packings.
@@ -212,8 +212,9 @@ fn quick_accuracy_bench_writes_tables_figures_and_the_orders_of_the_models() {
     assert_eq!(before, after);
 }
 
-/// `jamkit bench pair` is part 1 on its own: the same files and rows as
-/// `bench accuracy` writes, and a `pairs.md` that says where it was measured.
+/// `jamkit bench pair` is the pair benchmark on its own: the same files
+/// and rows as `bench accuracy` writes, and a `pairs.md` that says where
+/// it was measured.
 #[test]
 fn the_pair_benchmark_runs_on_its_own() {
     let dir = tempfile::tempdir().unwrap();
@@ -236,7 +237,7 @@ fn the_pair_benchmark_runs_on_its_own() {
     assert!(!out.join("results.csv").exists() && !out.join("packings").exists());
 }
 
-/// The brief's slice: FirstOrder against SecondOrder (no Exact), N = 12,
+/// A small comparison: FirstOrder against SecondOrder (no Exact), N = 12,
 /// two seeds, through the command line; the comparison is the runner's
 /// numbers, and `jamkit run` of the file with the same overrides makes the
 /// same packings.

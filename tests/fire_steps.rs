@@ -39,10 +39,11 @@ impl PackingVisitor for OmegaMaxSq {
 /// The default `dt_max` (the family's, recorded in the packing's settings)
 /// sits at most at 0.82 of the semi-implicit Euler step's stability limit
 /// `2/ω_max` on a jammed packing of each kind. 0.82 separates what was
-/// measured (docs/sanity.md): FIRE stalled for 10⁵–10⁶ steps in single
-/// minimisations at 0.86–0.87 (3D dimers with the old 0.5) and converged
-/// on every packing at 0.58–0.62 (disks, spheres), 0.79–0.80 (2D dimers,
-/// 30 of 30 at N = 512) and 0.6 (3D dimers with 0.35, 30 of 30). The 3D
+/// measured (docs/reports/sanity.md): FIRE stalled for 10⁵–10⁶ steps in
+/// single minimisations at 0.86–0.87 (3D dimers with `dt_max` 0.5) and
+/// converged on every packing at 0.58–0.62 (disks, spheres), 0.79–0.80
+/// (2D dimers, 30 of 30 at N = 512) and 0.6 (3D dimers with 0.35, 30 of
+/// 30). The 3D
 /// dimers' own `ω_max` is why they take a smaller step: with 0.5 they
 /// would sit above 0.83 of their limit.
 #[test]

@@ -1,7 +1,7 @@
 //! The ladder of near-disk gap models (`gap: FirstOrder | SecondOrder |
 //! Exact`): finite-difference gradients and Hessians, independent checks of
-//! the exact gap, and the order of each model's error (`docs/physics.md`,
-//! "The ladder of gap models").
+//! the exact gap, and the order of each model's error
+//! (`docs/explanation/gap-models.md`, "The ladder of gap models").
 
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution, Vector};
 use jamkit_engine::{Scene, check::gradient_error};

@@ -1,5 +1,4 @@
-//! The field's tools and jamkit, both ways (issue "Fit the physicist's
-//! tools"): `tests/interop/run.sh` installs ASE from PyPI into a venv under
+//! The field's tools and jamkit, both ways: `tests/interop/run.sh` installs ASE from PyPI into a venv under
 //! `target/` and runs `tests/interop/check.py`, which reads with
 //! `ase.io.read` the extended XYZ that `jamkit export` writes for a packing
 //! of every registered family in D = 2 and 3, from the family's example
@@ -8,7 +7,8 @@
 //! text (the run's contacts and rattlers must come back) and by
 //! `ase.io.write` (ASE's bodies and box must come back as ASE reads them;
 //! ASE writes 8 decimals, too few to keep the contacts of a packing at
-//! φ_J, whose overlaps are ~1e-8: docs/formats.md).
+//! φ_J, whose overlaps are ~1e-8: docs/how-to/ovito-ase.md, "Measure a
+//! sphere packing made by another code").
 //!
 //! It needs python3 with venv and access to PyPI. Under CI (`CI` set) a
 //! failure to set that up is a test failure; elsewhere the test says it

@@ -161,7 +161,7 @@ fn extrapolated_search_ends_in_the_window_in_fewer_minimisations() {
 }
 
 /// `Extrapolated` is the default (its ensembles are the bisection's:
-/// docs/performance.md). `experiment.ron` always names the search, so a run
+/// docs/reports/minimizers.md, "The defaults against the paper's path"). `experiment.ron` always names the search, so a run
 /// directory reads back as the search it was made with; a packing's
 /// recorded settings leave out `search: Bisection`, as packings made before
 /// the field existed (all bisection packings) record nothing, so that those

@@ -714,12 +714,12 @@ fn lbfgs_is_the_family_choice_of_3d_dimers_only() {
     assert_eq!(recorded("nmer", 3, three, ""), None, "a bent trimer");
 }
 
-/// The default packings of families other than 3D dimers are those of
-/// commit a8cbafb (before L-BFGS became the 3D dimers' default), and the
-/// 3D dimers' previous default is `--no-lbfgs` (experiment files:
-/// `lbfgs: None`) bit for bit: the hashes printed by that commit's
-/// `jamkit bench packing` for these arguments. The new 3D default is
-/// `--lbfgs-after 0 --lbfgs-blocks`, and differs from the old one here.
+/// L-BFGS as the 3D dimers' default leaves everything else bit for bit: the
+/// default packings of the other families, and 3D dimers with
+/// `--no-lbfgs` (experiment files: `lbfgs: None`), have the hashes that
+/// `jamkit bench packing` of commit a8cbafb (FIRE for every family)
+/// printed for these arguments. The 3D dimers' default,
+/// `--lbfgs-after 0 --lbfgs-blocks`, makes other packings here.
 #[test]
 fn the_lbfgs_default_leaves_other_families_and_no_lbfgs_as_they_were() {
     let hash = bench_hash;

@@ -1,4 +1,4 @@
-//! Elastic moduli (issue 21): the strain derivatives of the energy and the
+//! Elastic moduli (docs/reports/elasticity.md): the strain derivatives of the energy and the
 //! stress tensor against finite differences for every family with a
 //! Hessian, and the linear-response moduli against a deformation of the
 //! cell relaxed by the engine's minimiser.
@@ -273,7 +273,7 @@ fn relaxed<const D: usize, S: Shape<D>>(shape: S, n: usize, seed: u64, phi: f64)
 /// relaxations (`max g² < 10⁻²⁶`: forces ≲ 10⁻¹³, displacements ≲
 /// 10⁻¹³/λ_min, a stress error ≲ 10⁻¹³ and ≲ 10⁻⁷ relative after the
 /// division by 2γ = 2·10⁻⁶). `tol` = 10⁻⁶ is the allowed relative
-/// difference; measured: 10⁻¹¹ … 10⁻⁸ (docs/elasticity.md). The rattler
+/// difference; measured: 10⁻¹¹ … 10⁻⁸ (docs/reports/elasticity.md). The rattler
 /// rule is the experiments' (`Rank` for bodies made of spheres).
 fn check_against_deformation<const D: usize, S: Shape<D>>(
     mut scene: Scene<D, S>,
@@ -314,7 +314,7 @@ fn check_against_deformation<const D: usize, S: Shape<D>>(
     (lr, def)
 }
 
-/// Disks over the issue's range of strains, γ = 10⁻⁷ … 10⁻⁵. At 10⁻⁷ the
+/// Disks over the strains γ = 10⁻⁷ … 10⁻⁵. At 10⁻⁷ the
 /// relaxations' residual stress (~10⁻¹³) is 10⁻⁶ of `2γG`, so the bound is
 /// 10⁻⁵ there; at 10⁻⁵ the `O(γ²)` nonlinearity is still ≪ 10⁻⁶.
 #[test]
@@ -627,8 +627,7 @@ fn sparse_stiffness_tensor_and_stabilisation_agree_with_dense() {
 }
 
 /// The stabilisation counts zero modes with the `Moduli` observable's
-/// `omega_zero` (`StabiliseParams::moduli`; before session 21 it used the
-/// default whatever the observable said). With `λ_zero = 0.9 λ_1` (`λ_1`
+/// `omega_zero` (`StabiliseParams::moduli`), not the default. With `λ_zero = 0.9 λ_1` (`λ_1`
 /// the softest mode of the fixed box's Hessian, rattlers removed) the
 /// dense path still inverts that mode, but the sparse one needs
 /// `λ_1 > 2 λ_zero` and so falls back at the first step (and at the next
@@ -1151,7 +1150,7 @@ fn shipped_3d_above_jam_file_gives_finite_moduli() {
 /// `experiments/elasticity/above_jam_3d_{ellipsoids,dimers}.ron`. The
 /// tolerance is the other families' 10⁻⁶ at γ = 10⁻⁶ (see
 /// `check_against_deformation`: nonlinearity `O(γ²)` and residual stress
-/// ~10⁻⁷ relative); measured 10⁻¹⁰ … 10⁻⁸ (docs/elasticity.md).
+/// ~10⁻⁷ relative); measured 10⁻¹⁰ … 10⁻⁸ (docs/reports/elasticity.md).
 #[test]
 fn ellipsoid_and_dimer_moduli_agree_with_deformation_3d() {
     for alpha in [1.2, 1.0 / 1.2] {
@@ -1312,10 +1311,10 @@ fn strained_cell_counts_contacts_as_contacts_does() {
 /// relaxed cell is a minimum of the true energy: a fresh listing of every
 /// pair gives the same energy and forces (10⁻¹² relative and absolute: the
 /// rebasing's round-off), the largest force is below the minimiser's
-/// `max_i g² < 10⁻²⁶`, and `check_pairs` passes. On a fixed list (before)
-/// unlisted neighbours did not repel and bodies slid through them: in the
-/// failing 3D case below the listed energy fell to zero and the true one
-/// rose ×50 (docs/elasticity.md, "Why stabilisation failed at δφ = 10⁻¹").
+/// `max_i g² < 10⁻²⁶`, and `check_pairs` passes. On a fixed list unlisted
+/// neighbours would not repel and bodies would slide through them: in the
+/// 3D case of `dense_3d_spheres_stabilise` the listed energy fell to zero
+/// and the true one rose ×50.
 #[test]
 fn strained_cell_follows_a_rearrangement() {
     let scene = relaxed::<2, _>(Sphere, 32, 1, 0.88);
@@ -1349,15 +1348,16 @@ fn strained_cell_follows_a_rearrangement() {
     }
 }
 
-/// The packings session 16 could not stabilise: 3D spheres, N = 128,
-/// δφ = 10⁻¹ above their own φ_J (`experiments/elasticity/above_jam_3d.ron`,
-/// seeds 1 and 2). Both failed with "no strain step lowers the energy"
-/// (seed 1 after 11 steps: residual 3.2 % of p, smallest stiffness −0.24):
-/// along the stress-lowering strain the packing rearranges, which the
-/// fixed pair list could not follow. Now each stabilises: residual below
-/// 10⁻⁶ p, stiffness `C` with no negative eigenvalue, `G_min ≥ 0`, no
-/// negative mode, the pressure held (10⁻⁶) and the enthalpy not risen
-/// (10⁻¹² relative).
+/// Packings a cell on a fixed pair list cannot stabilise: 3D spheres,
+/// N = 128, δφ = 10⁻¹ above their own φ_J
+/// (`experiments/elasticity/above_jam_3d.ron`, seeds 1 and 2). On a fixed
+/// list both fail with "no strain step lowers the energy" (seed 1 after 11
+/// steps: residual 3.2 % of p, smallest stiffness −0.24): along the
+/// stress-lowering strain the packing rearranges, which a fixed pair list
+/// cannot follow. With the cell listing its pairs again as bodies move,
+/// each stabilises: residual below 10⁻⁶ p, stiffness `C` with no negative
+/// eigenvalue, `G_min ≥ 0`, no negative mode, the pressure held (10⁻⁶) and
+/// the enthalpy not risen (10⁻¹² relative).
 #[test]
 fn dense_3d_spheres_stabilise() {
     let report = common::run_file(

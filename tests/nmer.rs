@@ -1,4 +1,4 @@
-//! The `nmer` family (rigid bodies made of spheres, issue 4) in the engine:
+//! The `nmer` family (rigid bodies made of spheres) in the engine:
 //! finite-difference forces and torques in 2D and 3D (dense random
 //! packings and a crafted pair touching at several points), second
 //! derivatives of the gap, rotation invariance of the energy, and small
@@ -502,7 +502,7 @@ fn rot_rattlers_from_spheres(p: &jamkit_format::PackingFile) -> usize {
 /// (up to 0.4 below 4d − 2 in 3D), while a wrong torque or a missed sphere
 /// pair (one contact of four) moves z by ~1 or more. The isostaticity margin,
 /// with rattlers by rank (a body held on one sphere counts D coordinates,
-/// docs/sanity.md), is at least 1: the network is rigid. The rotational
+/// docs/reports/sanity.md), is at least 1: the network is rigid. The rotational
 /// rattlers are those bodies held on one sphere, and the contact number
 /// corrected for them, `z_corr`, is within 0.05 of `4d − 2`.
 #[test]
@@ -588,7 +588,7 @@ fn small_dimer_packings_jam_near_isostatic() {
             "{}: z_corr = {z_corr}",
             p.id
         );
-        // The issue's criterion, |z − (4D − 2)| ≤ 0.05, holds for z_corr
+        // The sanity criterion, |z − (4D − 2)| ≤ 0.05, holds for z_corr
         // (it fails for z_J here, 0.09–0.31 below): it needs
         // |margin − D| ≤ 0.025 N_nr, i.e. 1 ≤ margin ≤ 3 at N_nr ≈ 64 in
         // 2D (margin 4 would give +0.0625); these packings have margin 1,

@@ -106,10 +106,10 @@ fn new_observables_are_measured_on_saved_packings() {
 /// A re-measure of a saved near-disk packing (another observable added, so
 /// the runner reads the packings back) gives the run's own measures bit
 /// for bit: the run measures the configuration as its file records it.
-/// Before that (session 19), the run measured the orientations in memory,
-/// `e^{iθ}` a bit or two from what the stored `θ` gives back, and these
-/// packings' fixed-box G came back 3e-12 and 1e-9 off (N = 32, Δ = 0.03,
-/// δφ = 1e-2, seeds 1 and 2).
+/// Measured on the orientations in memory instead, `e^{iθ}` a bit or two
+/// from what the stored `θ` gives back, these packings' fixed-box G would
+/// come back 3e-12 and 1e-9 off (N = 32, Δ = 0.03, δφ = 1e-2, seeds 1
+/// and 2).
 #[test]
 fn remeasured_near_disk_moduli_equal_the_run_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();

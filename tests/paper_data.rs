@@ -1,9 +1,9 @@
-//! The committed paper-size data (`data/`, issue "The paper at the paper's
-//! size"): every archived packing loads and is a jammed packing of the
+//! The committed paper-size data (`data/`, docs/reports/paper-2d.md and
+//! docs/reports/paper-3d.md): every archived packing loads and is a jammed packing of the
 //! profile, and `jamkit report` regenerates the report from a slice of
 //! them (the n = 2 packings), with φ_J as the files say; the same for the
 //! 3D near-spheres at N = 512 (`data/paper3d-n512`) and their finite-size
-//! set (`data/paper3d-finite-size`, issue 20).
+//! set (`data/paper3d-finite-size`).
 
 use jamkit_format::PackingFile;
 use std::path::{Path, PathBuf};
@@ -128,7 +128,7 @@ fn the_report_regenerates_from_a_slice_of_the_data() {
     );
 }
 
-/// The committed 3D data (`data/paper3d-n512`, issue 20): every archived
+/// The committed 3D data (`data/paper3d-n512`): every archived
 /// packing is a jammed `harmonic` packing at N = 512 with its contacts,
 /// gaps and spectrum, and `jamkit report` regenerates `report/paper3d`'s
 /// fits from it, named by `l`, with ω_* read off below ω = 1 as the
@@ -165,7 +165,7 @@ fn the_3d_data_regenerates_its_report() {
 }
 
 /// The committed 3D finite-size set (`data/paper3d-finite-size`, l = 2,
-/// N = 64, 128, 256, Δ = 10⁻⁵ … 0.1; issue 20). Every packing is jammed
+/// N = 64, 128, 256, Δ = 10⁻⁵ … 0.1). Every packing is jammed
 /// and has at least one contact more than the translations of its
 /// non-rattlers can take, `N_c ≥ 3 (N_nr − 1) + 1` (the rigidity of a
 /// sphere packing: it holds for any jammed packing whatever Δ). With the
@@ -207,8 +207,8 @@ fn the_3d_finite_size_set_collapses_to_one_extra_contact() {
 }
 
 /// The committed Fig. 5 gap models (`data/paper-full-gap-models`: n = 2
-/// near-disks at N = 512 with the second-order and the exact gap, issue
-/// 19): every packing is a jammed near-disk packing of the profile, and
+/// near-disks at N = 512 with the second-order and the exact gap): every
+/// packing is a jammed near-disk packing of the profile, and
 /// with the Fig. 5 set `jamkit report` keeps them apart from the
 /// first-order packings of the same Δ: the paper's figures and the Fig. 5
 /// first-order column are those of the first-order files alone, and the
@@ -257,11 +257,11 @@ fn the_fig05_gap_models_stay_apart_from_the_first_order_packings() {
     );
 }
 
-/// The committed 3D gap comparison at N = 64 (issue 20): `harmonic` l = 2
+/// The committed 3D gap comparison at N = 64: `harmonic` l = 2
 /// near-spheres with the first-order and the exact gap at Δ = 0.1 and 0.3
 /// (`data/paper3d-exact-n64`) and spheroids of equal asphericity with
 /// their exact gap (`data/paper3d-spheroids-n64`), 10 seeds each. Every
-/// packing is jammed; and what reproduction-3d.md reads from them holds:
+/// packing is jammed; and what docs/reports/paper-3d.md reads from them holds:
 /// at Δ = 0.3 the first-order packing is denser than the exact one grown
 /// from the same start on every seed, and the exact near-spheres' mean φ_J
 /// is within 0.005 of the spheroids' (they differ by 0.0006 ± 0.0016,
@@ -296,10 +296,11 @@ fn the_3d_exact_gap_packings_follow_the_spheroids() {
     assert!((e - s).abs() < 0.005, "exact {e}, spheroids {s}");
 }
 
-/// The committed exact-gap packing at N = 512 (issue 20's benchmark,
-/// `data/paper3d-exact-n512`): the first-order and the exact packing of
-/// seed 1 (l = 2, Δ = 0.1) both ended in the paper's window, from the same
-/// start, and their φ_J differ by less than 0.005. The bound: at N = 64 the
+/// The committed exact-gap packing at N = 512 (the benchmark of the exact
+/// gap in docs/reports/performance.md, `data/paper3d-exact-n512`): the
+/// first-order and the exact packing of seed 1 (l = 2, Δ = 0.1) both ended
+/// in the paper's window, from the same start, and their φ_J differ by
+/// less than 0.005. The bound: at N = 64 the
 /// paired difference at Δ = 0.1 is −0.0011 ± 0.0017 over 10 seeds (a
 /// seed's spread ≈ 0.005), and the first-order gap's O(Δ²) excess seen at
 /// Δ = 0.3 (0.026 ≈ 0.28 Δ²) is 0.003 at Δ = 0.1; a larger difference

@@ -1,4 +1,4 @@
-//! The Python module (`python/`, docs/python.md): `tests/python/run.sh`
+//! The Python module (`python/`, docs/how-to/python.md): `tests/python/run.sh`
 //! installs it with pip into a venv under `target/` (numpy, pytest and
 //! maturin from PyPI) and runs `python/tests` with pytest, which checks the
 //! module's packings, contacts and spectra against this build's `jamkit`
@@ -30,7 +30,7 @@ fn the_python_module_passes_its_pytest_suite() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "python tests failed:\n{text}\n{err}");
     // pytest's summary line, "N passed in …": all of python/tests ran
-    // (5 tests today), none skipped or failed.
+    // (at least the 5 tests of test_jamkit.py), none skipped or failed.
     let summary = text.lines().last().unwrap_or_default();
     let passed: usize = summary
         .split_whitespace()

@@ -117,7 +117,7 @@ fn report_of_near_spheres_names_the_mode_l_and_refuses_mixing() {
     assert!(md.contains("| 2 | 64 | 3e-2, 1e-1, 3e-1 | 1–1 |"), "{md}");
     assert!(md.contains("φ_J rises with Δ for every l"), "{md}");
     // δz_J is measured against the spheres' z_iso = 2d = 6 in 3D: near-spheres
-    // at Δ = 0.3 jam far above it (z_J ≈ 9 at N = 128, docs/reproduction-3d.md).
+    // at Δ = 0.3 jam far above it (z_J ≈ 9 at N = 128, docs/reports/paper-3d.md).
     assert!(md.contains("l = 2: "), "{md}");
 
     let disks = tempfile::tempdir().unwrap();

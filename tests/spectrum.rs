@@ -83,8 +83,8 @@ fn sphere_zero_modes_are_translations_and_rattlers_3d() {
 /// contact Jacobian has N_f − rank J zero modes, and rank J = N_c − 1 when
 /// the contact forces carry exactly one state of self-stress (the
 /// pressure). So the zero modes, the quartic ones included, number
-/// N_f − N_c + 1 among the non-rattlers; the issue asks for "close to
-/// N_f − N_c", and this is the exact count.
+/// N_f − N_c + 1 among the non-rattlers: not merely close to N_f − N_c,
+/// this is the exact count.
 #[test]
 fn near_disk_zero_modes_count_the_missing_contacts() {
     for (delta, seed) in [(0.01, 1), (0.1, 1), (0.1, 2)] {

@@ -1,9 +1,9 @@
-//! The stability suite of issue 7, reduced so that each case runs in
+//! The stability suite, reduced so that each case runs in
 //! seconds: every hard case ends converged inside its window with finite
 //! values, or with an error whose message names what happened; never a
 //! NaN, a panic or a hang (every reduced run caps `max_steps` and
 //! `max_density_steps`). The full-size files are `experiments/stress/*.ron`;
-//! their measured outcomes are in `docs/stress.md`.
+//! their measured outcomes are in `docs/reports/stress.md`.
 
 use jamkit_core::{Packing, Potential, Shape, Vector};
 use jamkit_engine::{Objective, Scene};
@@ -96,7 +96,8 @@ fn tiny_delta_1e_8_jams() {
 /// The same tiny-Δ near-disks with block masses (`minimizer.masses`),
 /// whose rotations are held by a stiffness `∼ Δ²` far below the stress
 /// part `∼ |h| Δ` of their Hessian: without the preconditioner's floor
-/// `κ m_a` both stalled at the step cap (docs/physics.md, "Block masses").
+/// `κ m_a` both stalled at the step cap (docs/explanation/minimizers.md,
+/// "Block masses").
 #[test]
 fn tiny_deltas_jam_with_block_masses() {
     for case in ["tiny_delta_1e-6", "tiny_delta_1e-8"] {
@@ -212,7 +213,7 @@ fn small_box_fails_with_box_too_small() {
 /// V/N in (1e-30, 2e-30): overlaps at the round-off of positions. FIRE
 /// cannot push |∇V|² below ~1e-30 (round-off of the forces), so with
 /// `force_tol = 1e-45` it runs to its cap and says so; the full file
-/// (2·10⁶ steps) ends the same way (docs/stress.md).
+/// (2·10⁶ steps) ends the same way (docs/reports/stress.md).
 #[test]
 fn window_near_precision_ends_with_a_clear_error() {
     let r = run_case(

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Power-law fits of G and z - z_J against delta_phi per regime, with
-bootstrap errors over packings (docs/elasticity.md, "At N = 512: G against
-δφ across Δ² (session 18)").
+bootstrap errors over packings (docs/reports/elasticity.md, "Near-disks
+across δφ ∼ Δ (stabilised, N = 512 and 1024)").
 
     python3 experiments/elasticity/crossover.py [--boot 4000] [--range LO:HI]... [--vs-p] [--csv OUT.csv] DIR...
 
@@ -15,11 +15,11 @@ packing's own jamming point), each mean +- s.e.m. with the number of
 negative G; then the local slope d ln y / d ln delta_phi between
 neighbouring points, and least-squares slopes of ln(mean y) against
 ln(delta_phi) over each --range and over the two regimes of a near-disk
-family on either side of delta_phi = Delta^2 (the issue's crossover) and of
+family on either side of delta_phi = Delta^2 (a crossover in delta_phi/Delta^2) and of
 delta_phi = Delta (the paper's outlook: G ~ Delta^1/2 G~(delta_phi/Delta),
 G~(x) ~ x for x << 1 and x^1/2 for x >> 1), where they hold two points or
 more; for near-disks also the scaling variables x = delta_phi/Delta and
-G_stab/Delta^1/2 per point, and (session 19) across the near-disk
+G_stab/Delta^1/2 per point, and across the near-disk
 families the collapse on G~ = G_stab/Delta^1/2 against x at equal x, and
 z_stab - z_J, the stabilised cell's contacts (`moduli.stabilisation.
 contacts`, where recorded) against the packing's own jamming point.
@@ -29,22 +29,23 @@ replacement (a replica with a mean <= 0 in the range is dropped and
 counted), and the 16th-84th percentile range. With few packings per point
 the bootstrap underestimates the spread (by about sqrt((n-1)/n) for n
 packings, 13 % at n = 4). --csv writes the per-point table, --svg a figure of the collapse,
---against (session 21) compares the points with another run's --csv table
+--against compares the points with another run's --csv table
 (another N: matched by family parameters without N and delta_phi), --vs-p
-(session 22) adds, in every range, the slopes against the mean pressure of
+adds, in every range, the slopes against the mean pressure of
 the same packings (G ~ p^a: the disks' law is a = 1/2 whether or not p is
-linear in delta_phi), --svg-p (session 22) draws the stabilised G against
+linear in delta_phi), --svg-p draws the stabilised G against
 p of every family, with those of --points tables (other runs). Only the
 standard library (`mean_sem` from fit.py).
 
---ellipse-delta (session 22) treats the `ellipse` family as a near-disk
+--ellipse-delta treats the `ellipse` family as a near-disk
 with Delta_eff = aspect - 1: an ellipse of aspect 1 + eps has, to first
 order in eps, the polar radius R0 [1 + (eps/2) cos 2 theta], the n = 2
 near-disk R0 [1 + Delta sin(2 theta)/2] with Delta = eps turned by 45
-degrees (docs/elasticity.md, "Ellipses near alpha = 1"). Its points then
+degrees (docs/reports/elasticity.md, "Ellipses near α = 1 (stabilised,
+N = 256)"). Its points then
 get x = delta_phi/Delta_eff and the fits and collapse of a near-disk, the
-collapse's column named "Delta = ... (ellipse)". Without it the output is
-what it was.
+collapse's column named "Delta = ... (ellipse)". Without it an ellipse
+has no Delta: no x, no near-disk fits, not in the collapse.
 """
 import argparse
 import csv
@@ -121,8 +122,8 @@ def read(dirs, ellipse_delta=False):
                     "G_fixed": fixed["shear"],
                     "G_stab": moduli["moduli"]["shear"] if stab else None,
                     "dz": m["z_j"] - m["jam_point"]["z"],
-                    # The stabilised cell's contacts (session 19 on;
-                    # None in packings made before).
+                    # The stabilised cell's contacts (None in files
+                    # written before they were recorded).
                     "dz_stab": (stab["contacts"]["z"] - m["jam_point"]["z"])
                     if stab and stab.get("contacts") else None,
                     "stab_rattlers": stab["contacts"]["n_rattlers"]
@@ -154,7 +155,7 @@ def fit(points, q, lo, hi, boot, rng, abscissa=None):
     if len(sel) < 2:
         return None
     # The packings that have the quantity (the stabilised contacts are
-    # missing from packings made before session 19).
+    # missing from files written before they were recorded).
     rows = {x: [r for r in points[x] if r[q] is not None] for x in sel}
     values = {x: [r[q] for r in rows[x]] for x in sel}
     if any(not values[x] for x in sel):
@@ -502,8 +503,8 @@ def main():
         ranges = [tuple(float(v) for v in r.split(":")) for r in args.range]
         labels = [f"{lo:g} <= delta_phi <= {hi:g}" for lo, hi in ranges]
         if delta:
-            # The issue's crossover (delta_phi ~ Delta^2) and the paper's
-            # (its outlook: G ~ Delta^1/2 G~(delta_phi / Delta)).
+            # A crossover in delta_phi/Delta^2 (delta_phi ~ Delta^2) and
+            # the paper's (its outlook: G ~ Delta^1/2 G~(delta_phi / Delta)).
             for scale, name in ((delta * delta, "Delta^2"), (delta, "Delta")):
                 ranges += [(0.0, scale * (1 - 1e-9)), (scale * (1 + 1e-9), math.inf)]
                 labels += [f"delta_phi < {name}", f"delta_phi > {name}"]

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Tables and power-law fits of the moduli runs of docs/elasticity.md.
+"""Tables and power-law fits of the moduli runs of docs/reports/elasticity.md.
 
     python3 experiments/elasticity/fit.py [--x p|dphi] [--pmin X] [--pmax X] [--same-seeds] DIR...
 

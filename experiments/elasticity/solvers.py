@@ -1,7 +1,6 @@
 #!/usr/bin/env python3
 """Sparse against Dense shear stabilisation: are the two ensembles the same?
-(docs/elasticity.md, "Sparse against Dense stabilisation at N = 512
-(session 20)").
+(docs/reports/elasticity.md, "Sparse against Dense").
 
     python3 experiments/elasticity/solvers.py \
         --dense STAB.csv POINTS.csv --sparse STAB.csv POINTS.csv \
@@ -53,7 +52,9 @@ from crossover import slope  # noqa: E402  (crossover.py's fit, so the slopes ar
 # moves G by 1e-6..1e-5).
 SAME = 1e-5
 NEAR = 1e-3
-# Session 19's ranges of the slope table (docs/elasticity.md, "Three Δ").
+# The slope table's ranges, per Δ (docs/reports/elasticity.md, "Near-disks
+# across δφ ∼ Δ"): below the bend (δφ = 1e-5 … 1e-3; … 1e-2 for
+# Δ = 0.03), above it (1e-2 … 1e-1), and all of Δ = 0.003's.
 RANGES = [
     "0.003:1e-5:1e-3", "0.003:1e-2:1e-1", "0.003:1e-5:1e-1",
     "0.01:1e-5:1e-3", "0.01:1e-2:1e-1",
@@ -141,7 +142,7 @@ def main():
     ap.add_argument("--sparse", nargs=2, required=True, metavar=("STAB", "POINTS"))
     ap.add_argument("--boot", type=int, default=4000)
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--range", action="append", default=[], help="DELTA:LO:HI (default: session 19's)")
+    ap.add_argument("--range", action="append", default=[], help="DELTA:LO:HI (default, per Delta: 1e-5:1e-3 below the bend, 1e-5:1e-2 for Delta = 0.03, 1e-2:1e-1 above it, and 1e-5:1e-1 for Delta = 0.003)")
     ap.add_argument("--csv", help="write the per-point comparison here")
     args = ap.parse_args()
     rng = random.Random(args.seed)

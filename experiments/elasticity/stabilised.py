@@ -1,18 +1,18 @@
 #!/usr/bin/env python3
 """Per-packing table and per-point summary of shear-stabilised runs
-(`protocol.shear_stabilised: true`; docs/elasticity.md, "Shear-stabilised
-packings").
+(`protocol.shear_stabilised: true`; docs/reports/elasticity.md,
+"Shear-stabilised packings at N = 128").
 
     python3 experiments/elasticity/stabilised.py [--csv OUT.csv] DIR...
 
 Reads the packing files of every DIR (`packings/*.json`; the failed
 samples, `*.failed.json`, are listed with their V/N and the start of their
-flag: those that unjammed on their way up, and since session 18 those whose
-stabilisation failed, kept as the fixed-box packing it started from) and writes one row per packing (--csv): the fixed-box moduli kept in
+flag: those that unjammed on their way up, and those whose stabilisation
+failed, kept as the fixed-box packing it started from) and writes one row per packing (--csv): the fixed-box moduli kept in
 `moduli.stabilisation.fixed_box` beside the stabilised ones, det F, the
 largest entry of |F - I|, strain steps, residuals, V/N before and after,
-z of the fixed box and (since session 19) the stabilised cell's z, rattlers
-and isostaticity margin, and (session 21) the dense fallbacks of a
+z of the fixed box and (where the file records it) the stabilised cell's
+z, rattlers and isostaticity margin, and the dense fallbacks of a
 `Moduli(solver: Sparse)` run (strain steps whose stiffness fell back, and
 whether the fixed box's and the stabilised cell's moduli did) and the
 packing's wall time. A packing found in several DIRs counts once, from
@@ -111,13 +111,13 @@ def rows_of(directory):
                 "e_before": s["energy_before"],
                 "e_after": s["energy_after"],
                 "stab_s": s["wall_s"],
-                # Contacts: the fixed box's (`Contacts`) and, since session
-                # 19, the stabilised cell's (empty in older files).
+                # Contacts: the fixed box's (`Contacts`) and the stabilised
+                # cell's (empty in files written before it was recorded).
                 "z_fixed": d["measures"]["z_j"],
                 "z_stab": cell["z"] if cell else "",
                 "rattlers_stab": cell["n_rattlers"] if cell else "",
                 "margin_stab": cell["iso_margin"] if cell else "",
-                # With `Moduli(solver: Sparse)` (session 20 on): the strain
+                # With `Moduli(solver: Sparse)`: the strain
                 # steps whose stiffness fell back to the dense solver (of
                 # `iterations + 1` evaluations), and whether the fixed box's
                 # and the stabilised cell's measured moduli did

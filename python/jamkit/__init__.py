@@ -2,7 +2,8 @@
 arrays, and measure contacts and vibrational spectra of a packing in memory.
 
 The numbers are jamkit's own (the same Rust library as the ``jamkit``
-command line, bit for bit). See docs/python.md for a worked example.
+command line, bit for bit). See docs/how-to/python.md for a worked example
+and docs/reference/python.md for the API.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-//! The native half of the Python module `jamkit` (docs/python.md): the
+//! The native half of the Python module `jamkit` (docs/reference/python.md): the
 //! experiment runner, the packing-file reader and the measurements of a
 //! packing in memory, each handing JSON to the Python layer
 //! (`jamkit/__init__.py`), which turns it into numpy arrays. The numbers

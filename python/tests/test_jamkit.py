@@ -71,7 +71,7 @@ def test_a_jammed_packing_is_the_command_lines_bit_for_bit(runs):
             assert p.measures["n_contacts"] == c.measures["n_contacts"]
         # 32 near-disks (n = 2, Delta = 0.1) jam near phi_J = 0.87 at large
         # N; a box of 32 moves it by a few 0.01 (N = 256 gives
-        # 0.872 +- 0.002 over 30 seeds, docs/performance.md), so the window
+        # 0.872 +- 0.002 over 30 seeds, docs/reports/minimizers.md), so the window
         # is wide: it catches a packing that did not jam, not noise.
         assert 0.80 < a.phi < 0.93
         assert 1e-16 < a.energy_per_particle < 2e-16

@@ -347,8 +347,8 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     /// from a decompressed jammed state (`masses: Blocks((jammed_only:
     /// true))` of `jamkit_engine`), instead of the bodies' own masses
     /// everywhere. A family says yes where that was measured faster with
-    /// the same ensembles (docs/performance.md, "FIRE's masses per
-    /// family"); an experiment's `minimizer.masses` overrides it.
+    /// the same ensembles (docs/reports/minimizers.md, "Block masses only
+    /// from jammed states"); an experiment's `minimizer.masses` overrides it.
     /// Default: no (the bodies' own masses, the paper's).
     fn fire_jammed_block_masses(&self) -> bool {
         false
@@ -359,7 +359,7 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     /// true)` of `jamkit_engine`) when the experiment leaves
     /// `minimizer.lbfgs` out and runs FIRE (not FIRE 2.0). A family says
     /// yes where that was measured faster with the same ensembles
-    /// (docs/performance.md, "L-BFGS as the 3D dimers' default"); an
+    /// (docs/reports/minimizers.md, "L-BFGS … the 3D dimer default"); an
     /// experiment's `minimizer.lbfgs` overrides it (`None`: FIRE alone).
     /// Default: no (FIRE alone, the paper's).
     fn lbfgs_blocks_by_default(&self) -> bool {

@@ -1,7 +1,7 @@
 //! A 2D packing file as bodies with outlines, ready to draw.
 //!
 //! [`Packing2d::from_file`] reads what `jamkit run` writes
-//! (`packings/<id>.json`, see `docs/formats.md`): `dim`, `box`, `family`,
+//! (`packings/<id>.json`, see `docs/reference/output-files.md`): `dim`, `box`, `family`,
 //! `params`, `positions`, `radii`, `orientations` and `rattler`. Every
 //! inconsistency (lengths, non-finite numbers, missing orientations of a
 //! near-disk) is an error naming the file's key, never a panic.

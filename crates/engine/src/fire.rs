@@ -249,9 +249,9 @@ impl FireParams {
         }
     }
 
-    /// The paper's FIRE as jamkit ran it before the Newton finish: FIRE
-    /// (Bitzek et al.) all the way, `Σ (∂V/∂q)² < 10⁻²⁵`. Bit for bit the
-    /// packings of earlier versions.
+    /// The paper's FIRE: FIRE (Bitzek et al.) all the way, no Newton
+    /// finish, `Σ (∂V/∂q)² < 10⁻²⁵`. Bit for bit the packings recorded
+    /// without the Newton finish.
     pub fn paper() -> Self {
         Self {
             variant: FireVariant::Fire,

@@ -27,11 +27,12 @@
 //! without a contact add exact zeros, and `x + 0 = x − 0 = x` for every sum
 //! here (none of them is ever `−0`: they start at `+0`, and `+0 + −0 = +0`).
 //!
-//! NOTE: a first version asked the family for four pairs per call: the
-//! family's dispatch (gap model, modes) every four pairs and half-scalar
-//! complex products left near-disk packings only 12 % faster; with a whole
-//! chunk per call and one fused loop per phase they are 45 % faster
-//! (docs/performance.md).
+//! NOTE: a whole chunk per call, not four pairs: asking the family for four
+//! pairs per call (its dispatch on gap model and modes every four pairs,
+//! half-scalar complex products) makes near-disk packings only 12 % faster
+//! than the generic pass; with a whole chunk per call and one fused loop
+//! per phase they are 45 % faster (docs/reports/performance.md, "Where the
+//! time of a packing goes").
 
 use jamkit_core::{ContactLanes, MAX_ROT, Packing, PairLanes, Potential, RotVec, Shape};
 use jamkit_core::{PeriodicBox, Vector};

@@ -8,8 +8,8 @@
 //! rotation is held only by contacts whose gap changes as `Δ` times a
 //! translation, so its stiffness is `O(Δ²)` and its frequency
 //! `ω² ≈ Δ²/Δ = Δ` sits far below the translations': FIRE crawls along
-//! these rotations (the issue "Jam non-spherical bodies … as fast as small
-//! disks"). A preconditioner replaces the masses by a matrix that looks
+//! these rotations, and non-spherical bodies jam far more slowly than
+//! disks. A preconditioner replaces the masses by a matrix that looks
 //! like the Hessian (Packwood et al., J. Chem. Phys. 144, 164109 (2016)),
 //! so that `M⁻¹H` is close to the identity and every mode moves on one
 //! time scale.
@@ -281,7 +281,7 @@ impl BlockMasses {
             5 => self.sums_of::<5>(g, v, w),
             6 => self.sums_of::<6>(g, v, w),
             // Blocks of one coordinate (one-dimensional spheres) or more
-            // than six (none today): the general loop.
+            // than six (no family has more): the general loop.
             _ => self.sums_general(g, v, w),
         }
     }

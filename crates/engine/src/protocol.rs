@@ -45,8 +45,9 @@ pub enum JamSearch {
     /// The paper's moves, except that a jammed state's decompression is
     /// the step to the window that `V/N ∝ (φ − φ_J)^α` predicts from its
     /// `V/N` and its pressure (module docs), where that step stays above
-    /// the last unjammed `φ`. The default since its ensembles were shown
-    /// to be the bisection's (docs/performance.md).
+    /// the last unjammed `φ`. The default: its ensembles are the
+    /// bisection's (docs/reports/minimizers.md, "The defaults against the
+    /// paper's path").
     #[default]
     Extrapolated,
 }
@@ -337,8 +338,8 @@ pub fn energy_slope<const D: usize, S: Shape<D>>(scene: &mut Scene<D, S>) -> f64
 /// `~10⁻³` to within `~10⁻⁸` of `φ_J` is slow (FIRE near marginal
 /// stability): near-disks N = 256, seeds 1–6, 1.08 M FIRE steps against the
 /// bisection's 0.79 M. Leaps of two decades of `V/N` (one of `φ − φ_J`)
-/// each: 0.72 M; of one decade or three or four: 0.73–0.76 M
-/// (docs/performance.md).
+/// each: 0.72 M; of one decade or three or four: 0.73–0.76 M (the rule:
+/// docs/explanation/physics.md, "Jamming (`protocol: Jam`)").
 const LEAP: f64 = 1e-2;
 
 /// The change of `φ` that brings a jammed, relaxed state to `V/N = e*`

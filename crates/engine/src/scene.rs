@@ -261,7 +261,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         if crate::simd::avx2() {
             // SAFETY: the CPU has AVX2 (checked at run time by `simd::avx2`).
             // Why: the AVX2 copy of the same code gives the same bits and,
-            // with FIRE's, −10 % per disk step (docs/performance.md).
+            // with FIRE's, −10 % per disk step (docs/reports/performance.md).
             return unsafe { self.pair_sum_avx2(grad) };
         }
         let mut found = std::mem::take(&mut self.found);

@@ -17,8 +17,8 @@
 //!    bounding balls overlap (`r² < (b_i + b_j)²`, the generic pass's own
 //!    test) appended in list order to a queue; the slots below take the
 //!    queue a full chunk at a time. In a jammed 3D dimer packing a quarter
-//!    of the listed pairs fail that test (docs/performance.md, "The slots
-//!    kernel").
+//!    of the listed pairs fail that test (docs/reports/performance.md,
+//!    "Where the time of a packing goes").
 //! 1. **Slots** of a chunk of queued pairs with no branch: the family's
 //!    contacts slot by slot (one call of
 //!    `Shape::slot_contacts_lanes` for the chunk, one loop over the chunk's

@@ -10,7 +10,8 @@
 //! (reported as *in flight elsewhere*; a later run gathers it). A lock left
 //! by a process that died on the same host (no `/proc/<pid>`) is taken
 //! over. One left by a dead process on another host cannot be told from a
-//! live one: remove it by hand (docs/formats.md).
+//! live one: remove it by hand (docs/reference/output-files.md, "Atomic
+//! writes and resuming").
 //!
 //! A packing file made with other settings (`sample::settings`: family,
 //! parameters, sizes, protocol, minimiser, potential, rattlers, engine) is

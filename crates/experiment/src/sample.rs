@@ -308,7 +308,8 @@ impl SceneVisitor for SampleVisitor<'_> {
         // the box, orientations through the family's coordinates), not on
         // the scene in memory: a planar near-disk's `e^{iθ}` is stored as
         // `θ` and comes back a bit or two off, which a soft Hessian
-        // amplifies (docs/elasticity.md, "Re-measuring a saved packing (session 19)").
+        // amplifies (`tests/observables.rs`,
+        // `remeasured_near_disk_moduli_equal_the_run_bit_for_bit`).
         // So a re-measure of the saved file gives these measures bit for bit.
         let run = Protocolled {
             phi: outcome.phi,

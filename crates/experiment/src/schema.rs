@@ -19,7 +19,7 @@
 //! ```
 //!
 //! Every field but `name`, `family` and `particles` has a default; unknown
-//! fields are rejected. `docs/formats.md` lists every field.
+//! fields are rejected. `docs/reference/experiment-file.md` lists every field.
 
 use crate::error::ExperimentError;
 use jamkit_core::{Potential, SizeDistribution};
@@ -153,15 +153,15 @@ pub enum Protocol {
         /// Hessian and re-jam (`jamkit_observe::saddle`). Off by default,
         /// and not written out when off, so that settings (and the resume
         /// check) of earlier runs are unchanged: on 2D dimers the end
-        /// states of the bisection turned out to be true minima
-        /// (docs/sanity.md), so the escape is a diagnostic, not a fix.
+        /// states of the bisection are true minima
+        /// (docs/reports/sanity.md), so the escape is a diagnostic, not a fix.
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         escape_saddles: bool,
         /// How a jammed state is decompressed: `Extrapolated` (the step its
-        /// pressure predicts, the default; docs/physics.md) or `Bisection`
-        /// (the paper's halved steps, the paper's path bit for bit). Always
-        /// written to `experiment.ron`; left out of a packing's settings
-        /// when `Bisection` (`sample::settings`).
+        /// pressure predicts, the default; docs/explanation/physics.md) or
+        /// `Bisection` (the paper's halved steps, the paper's path bit for
+        /// bit). Always written to `experiment.ron`; left out of a packing's
+        /// settings when `Bisection` (`sample::settings`).
         #[serde(default)]
         search: JamSearch,
     },
@@ -215,7 +215,7 @@ pub enum Protocol {
     /// Jam (as `Jam`), then compress the jammed packing by `delta_phi`
     /// in steps of at most `compress_eps`, relaxing after each: a packing
     /// at a chosen distance `φ − φ_J = delta_phi` above its own jamming
-    /// point (issue 21).
+    /// point (for the moduli above jamming: docs/how-to/moduli.md).
     AboveJam {
         /// Packing fraction of the random start.
         #[serde(default = "default_phi_start")]

@@ -824,7 +824,7 @@ pub fn joint_fallbacks() -> u64 {
 
 /// The exact gap of two star-shaped convex bodies by one Newton iteration
 /// on the normal and both support points at once (module documentation,
-/// "The joint iteration"), or by `nested` (today's [`exact_with`] on
+/// "The joint iteration"), or by `nested` (the nested solve, [`exact_with`] on
 /// [`radial_search`] supports, counted by [`joint_fallbacks`]) where that
 /// iteration fails. The same first evaluation as the nested solve (both
 /// supports searched to convergence at the line of centres), so the same

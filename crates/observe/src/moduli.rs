@@ -366,9 +366,9 @@ pub struct Moduli {
     /// term `Ξᵀ H⁺ Ξ` carried by the softest mode above the zero modes
     /// (`λ_1`, the smallest `λ > omega_zero²`). `G_ab` without that mode
     /// is `G_ab + soft_share · (non-affine term)/V`: even a small share can
-    /// be what makes a small `G_ab` negative (docs/elasticity.md,
-    /// "Negative G"). `None` in packing files written before it was
-    /// measured, and with no mode above the zero modes.
+    /// be what makes a small `G_ab` negative (docs/reports/elasticity.md,
+    /// "Negative G in the fixed box"). `None` in packing files written
+    /// before it was measured, and with no mode above the zero modes.
     #[serde(default)]
     pub soft_share: Option<f64>,
     /// With `solver: Sparse`, why the dense path was taken instead (the
@@ -583,10 +583,11 @@ fn relaxed_sparse(inverse: &SparseInverse, d: &StrainDerivatives) -> (f64, f64, 
 /// Like the engine's neighbour list, the pairs are listed again while a
 /// minimiser moves the bodies: as soon as some body has moved by a quarter
 /// of the margin since the last listing ([`Objective::displace`]). Without
-/// it a rearrangement (a plastic event under strain) ran on the fixed list,
-/// where unlisted neighbours do not repel: bodies slid through each other
-/// (moving by up to 1.9) and the listed energy fell to zero (3D spheres, N = 128,
-/// δφ = 10⁻¹; docs/elasticity.md, "Why stabilisation failed at δφ = 10⁻¹").
+/// it a rearrangement (a plastic event under strain) would run on the fixed
+/// list, where unlisted neighbours do not repel: bodies slide through each
+/// other and the listed energy falls to zero (3D spheres, N = 128,
+/// δφ = 10⁻¹: bodies moved by up to 1.9; `tests/moduli.rs`,
+/// `dense_3d_spheres_stabilise`).
 #[derive(Clone, Debug)]
 pub struct Strained<const D: usize, S: Shape<D>> {
     shape: S,
@@ -1124,9 +1125,9 @@ pub struct Deformation {
 /// The minimiser settings [`by_deformation`] suggests: FIRE with the Newton
 /// finish after 100 steps, an energy criterion that never stops it (above jamming `V/N` is not
 /// small) and `max_i (∂V/∂q_i)² < 10⁻²⁶`. No L-BFGS, whatever the family
-/// (`lbfgs: None`): the 3D dimers' L-BFGS default (session 20) is a
-/// jamming-search measurement; these relaxations of a strained packing
-/// and its stabilisation keep the minimiser they were measured with.
+/// (`lbfgs: None`): the 3D dimers' L-BFGS default was measured on the
+/// jamming search only; these relaxations of a strained packing and its
+/// stabilisation keep the minimiser they were validated with.
 pub fn deformation_minimizer() -> FireParams {
     FireParams {
         energy_tol: 1e-300,
@@ -1385,7 +1386,9 @@ pub struct Stabilised<const D: usize, S: Shape<D>> {
     /// The packing in its relaxed, deformed cell (rebased: strains set on
     /// it act on top of the stabilising deformation).
     pub cell: Strained<D, S>,
-    /// The cell's deformation from the box it started in (`det = 1`).
+    /// The cell's deformation `F` from the box it started in: `det F = 1`
+    /// at fixed volume; at fixed pressure (the runner's) the dilation is
+    /// free and `det F` is the cell's volume over the box's, not 1.
     pub deformation: Matrix<D>,
     /// `max_k |σ : E_k| / p` at the end.
     pub residual: f64,

@@ -5,7 +5,7 @@
 //! end of the paper's protocol, which suggested that the bisection stops on
 //! saddles (the gradient there is already below FIRE's stopping rule). This
 //! module pushes the packing off such saddles. **Measured** (2D dimers
-//! N = 64–128, 3D N = 64, `docs/sanity.md`): the *true* Hessian
+//! N = 64–128, 3D N = 64, `docs/reports/sanity.md`): the *true* Hessian
 //! `∂²V/∂q∂q` (every contact) has no negative eigenvalue on any of those
 //! packings; the negative modes of the other one came from dropping the
 //! contacts of bodies that touch on one sphere only (three contacts in 2D),
@@ -52,9 +52,10 @@ pub struct SaddleParams {
     pub eps: f64,
     /// Use the true Hessian `∂²V/∂q∂q` (every contact, rattlers kept: their
     /// rows add zero modes, never negative ones) rather than `K + T` of the
-    /// non-rattlers. Measured (docs/sanity.md): the negative modes of the
-    /// latter are an artefact of dropping the contacts of bodies below the
-    /// rattler threshold that still carry force; the true Hessian has none.
+    /// non-rattlers. Measured (docs/reports/sanity.md): the negative modes
+    /// of the latter are an artefact of dropping the contacts of bodies
+    /// below the rattler threshold that still carry force; the true Hessian
+    /// has none.
     pub full_hessian: bool,
     /// At most this many pushes.
     pub max_rounds: u32,

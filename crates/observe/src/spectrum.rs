@@ -32,7 +32,8 @@
 //! *rotational share*, the weight on rotational coordinates.
 //!
 //! The eigensolver is faer's dense self-adjoint divide-and-conquer
-//! (`docs/performance.md` compares it with the alternatives).
+//! (`docs/reports/performance.md`, "Current figures: one evaluation, one
+//! spectrum, moduli", compares it with the alternatives).
 
 use crate::hessian::Hessian;
 use jamkit_core::{Error, Result};

@@ -1,6 +1,7 @@
 //! Gap models for two-dimensional bodies beyond the paper's first order:
 //! the **second-order** near-disk gap and the **exact** gap of convex
-//! outlines (see `docs/physics.md`, "The ladder of gap models").
+//! outlines (see `docs/explanation/gap-models.md`, "The ladder of gap
+//! models").
 //!
 //! ## A gap as a function of `(r, A_i, A_j)`
 //!

@@ -1,4 +1,4 @@
-//! The accuracy comparisons of docs/speed-vs-error.md, from run
+//! The accuracy comparisons of docs/reports/speed-vs-error.md, from run
 //! directories: every packing against a reference packing of the same seed
 //! (`jamkit report --accuracy …`, and `jamkit bench accuracy`, which runs
 //! `experiments/accuracy/*.ron` and then these).
@@ -392,7 +392,7 @@ impl GapModels {
              `RUNS/gap_models` (`results.csv`, `summary.csv`).\n",
             if particles < 256 {
                 " (not more: Exact packings take minutes each at N = 256; the N = 256 \
-                 comparison is the Fig. 5 gap-model run of docs/reproduction.md)"
+                 comparison is the Fig. 5 gap-model run of docs/reports/paper-2d.md)"
             } else {
                 ""
             },

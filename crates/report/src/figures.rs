@@ -64,7 +64,8 @@ pub struct FitRow {
     pub fit: PowerLaw,
     /// Mean-field exponent.
     pub expected: f64,
-    /// Accepted deviation from it (the tolerance).
+    /// Accepted deviation from it: within it the report says the exponent
+    /// agrees.
     pub tolerance: f64,
     /// The same fit with the end points of its range left out one at a
     /// time (`without the smallest x`, `without the largest x`), where four

@@ -10,7 +10,7 @@
 //! * [`plot`]: figures with error bars and guide lines, SVG and PNG;
 //! * [`runplot`]: `jamkit plot`, figures of any run (every family): each
 //!   scanned parameter against φ_J, z_J, rattlers and pressure, D(ω), Z(h);
-//! * [`accuracy`]: the comparisons of docs/speed-vs-error.md, each packing
+//! * [`accuracy`]: the comparisons of docs/reports/speed-vs-error.md, each packing
 //!   against a reference packing of the same seed (gap models against
 //!   `Exact`, FIRE tolerances against the tightest that converged);
 //! * [`figures`]: the paper's Figs. 7–13 and the markdown summary with the

@@ -660,7 +660,8 @@ impl NearDisk {
     /// * a bound: `h ≥ h₁ − (s_i + s_j)`, with `s = R⁰ Δ² F'²_max / (1 − Δ F_max)`
     ///   (the support function exceeds the radius `R(ψ)` by at most
     ///   `(6/11) L²/R_min`, `L = max|R'|`, when `R_max < 1.85 R_min`; see
-    ///   `docs/physics.md`), so far pairs skip the iteration;
+    ///   `docs/explanation/gap-models.md`, "Exact"), so far pairs skip the
+    ///   iteration;
     /// * the first guess of the normal, `ψ₀ = θ_ij + Δ(R_i⁰F_i' + R_j⁰F_j')/r`,
     ///   exact to `O(Δ²)`.
     fn exact_gap(

@@ -226,8 +226,9 @@ pub struct HarmonicParams {
         deserialize_with = "jamkit_core::gap_model::deserialize_first_or_exact"
     )]
     pub gap: GapModel,
-    /// How the exact gap is solved (default: `Nested`, today's path bit
-    /// for bit); read with `gap: "Exact"` only.
+    /// How the exact gap is solved (default: `Nested`, the path of packings
+    /// recorded without this parameter, bit for bit); read with
+    /// `gap: "Exact"` only.
     #[serde(default, deserialize_with = "deserialize_exact_solver")]
     pub exact_solver: ExactSolver,
 }

@@ -40,14 +40,14 @@ use jamkit_core::{
 /// FIRE's largest time step for bodies made of spheres in 3D. Two bodies
 /// touch at up to four points, nearly parallel, so jammed dimers vibrate
 /// faster than spheres: `ω_max² ≈ 12` in 3D (α = 1.1–1.5) against 6.2 for
-/// spheres, and the default 0.5 sat at 0.87 of the stability limit
+/// spheres, and the default 0.5 sits at 0.87 of the stability limit
 /// `2/ω_max`, where FIRE stalled for 10⁵–10⁶ steps in single
 /// minimisations (2 of 3 packings of 256 dimers at α = 1.5; 1.5·10⁶ steps
 /// for one of 128 at α = 1.1). 0.35 puts it at 0.6 of the limit, where
 /// the default keeps spheres. 2D keeps the default: there dimers have
 /// `ω_max² ≈ 10`, 0.5 is 0.80 of the limit, and 30 of 30 packings jammed
-/// with fewer steps than with 0.35 (docs/sanity.md, "The 3D stalls were
-/// FIRE's time step").
+/// with fewer steps than with 0.35 (docs/reports/sanity.md;
+/// docs/explanation/minimizers.md, "FIRE").
 pub const FIRE_DT_MAX: f64 = 0.35;
 
 /// World-frame offsets `d_a = R⁰ R(o) s_a` of one body's spheres, room for
@@ -235,9 +235,9 @@ impl Shape<2> for Nmer<2> {
     /// over the dimers measured. Their ensembles are the plain masses'
     /// (N = 128, α = 1.1 and 1.5, 30 seeds), and at N = 512 they took 0.73×
     /// the CPU time at α = 1.1 but 1.05× the FIRE steps at α = 1.5 (seeds
-    /// 1–6; docs/performance.md, "FIRE's masses per family"). An
-    /// experiment at small α may ask for them (`masses: Blocks((jammed_only:
-    /// true))`).
+    /// 1–6; docs/reports/minimizers.md, "Block masses only from jammed
+    /// states"). An experiment at small α may ask for them
+    /// (`masses: Blocks((jammed_only: true))`).
     fn fire_jammed_block_masses(&self) -> bool {
         false
     }
@@ -447,8 +447,8 @@ impl Shape<3> for Nmer<3> {
     /// with their own masses (φ_J, z_J, z_corr, rattlers within 1.03
     /// standard errors, KS p ≥ 0.95) in 1.07–1.23× fewer FIRE steps, none
     /// left hypostatic (4 of 30 at α = 1.1 with their own masses), and at
-    /// N = 512, α = 1.1 in 0.72× the CPU time (docs/performance.md, "FIRE's
-    /// masses per family").
+    /// N = 512, α = 1.1 in 0.72× the CPU time (docs/reports/minimizers.md,
+    /// "Block masses only from jammed states").
     fn fire_jammed_block_masses(&self) -> bool {
         true
     }
@@ -460,8 +460,8 @@ impl Shape<3> for Nmer<3> {
     /// 1.6 standard errors, KS p ≥ 0.14, the same spread of φ_J) in 2.2–3.1×
     /// less CPU time. No for bodies of three or more spheres: bent trimers
     /// (N = 128, 40 seeds) kept the means but jammed with a wider spread of
-    /// φ_J (s.d. 0.0050 against 0.0034, F-test p = 0.02); docs/performance.md,
-    /// "L-BFGS as the 3D dimers' default".
+    /// φ_J (s.d. 0.0050 against 0.0034, F-test p = 0.02);
+    /// docs/reports/minimizers.md, "L-BFGS … the 3D dimer default".
     fn lbfgs_blocks_by_default(&self) -> bool {
         self.offsets.len() == 2
     }
