@@ -1,6 +1,6 @@
 //! `jamkit bench accuracy`: speed against error of the near-disk gap models
 //! (`FirstOrder`, `SecondOrder`, `Exact`) and of FIRE's tolerances, for
-//! `docs/speed-vs-error.md`. One thread throughout (unless `--jobs`).
+//! `docs/reports/speed-vs-error.md`. One thread throughout (unless `--jobs`).
 //!
 //! A thin command that chains three things and writes their tables into
 //! one document:
@@ -25,7 +25,7 @@
 //! `--set-gap-models` / `--set-tolerances` edit them as `jamkit run --set`
 //! does (`--quick` is a few such overrides). Everything else goes to `DIR`
 //! (CSV, PNG + SVG figures, `tables.md`); with the default `DIR` the
-//! generated block of `docs/speed-vs-error.md` is rewritten too.
+//! generated block of `docs/reports/speed-vs-error.md` is rewritten too.
 
 use anyhow::{Context, Result, bail};
 use jamkit_experiment::grid::{self, value_text};

@@ -1,6 +1,6 @@
 //! `jamkit bench pair`: a micro-benchmark of one function, the pair
 //! evaluation of the near-disk gap models (`FirstOrder`, `SecondOrder`,
-//! `Exact`), for `docs/speed-vs-error.md`.
+//! `Exact`), for `docs/reports/speed-vs-error.md`.
 //!
 //! Per model, `n` and `Δ`: the time of one pair evaluation (gap and
 //! gradient, `Shape::contacts`) over a batch of random pairs near contact,

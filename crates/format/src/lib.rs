@@ -5,7 +5,7 @@
 //! drawing and report crates and `jamkit spectrum` depend on this crate,
 //! not on the runner (`jamkit-experiment`), so reading a packing does not
 //! pull in the thread pool, the progress bars or the families. Formats:
-//! `docs/formats.md`.
+//! `docs/reference/output-files.md`.
 
 pub mod error;
 pub mod provenance;

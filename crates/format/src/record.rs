@@ -2,7 +2,7 @@
 //! settings, what was measured, and (unless left out) the configuration.
 //! Written to a temporary name and renamed into place, so a killed run
 //! never leaves a half-written file; the packing files are also the
-//! checkpoint from which a rerun resumes. Format: `docs/formats.md`.
+//! checkpoint from which a rerun resumes. Format: `docs/reference/output-files.md`.
 
 use crate::error::FormatError;
 use jamkit_observe::gaps::GapCounts;
@@ -112,8 +112,10 @@ pub struct ModuliMeasures {
 /// A shear stabilisation (`jamkit_observe::moduli::stabilise`), as stored.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Stabilisation {
-    /// The cell's deformation `F` from the fixed box (`det F = 1`), row by
-    /// row: the cell is `F · diag(box_edges)`.
+    /// The cell's deformation `F` from the fixed box, row by row: the cell
+    /// is `F · diag(box_edges)`. `det F = 1` at fixed volume; at the fixed
+    /// pressure the runner stabilises at, `det F` is the cell's volume over
+    /// the box's.
     pub deformation: Vec<Vec<f64>>,
     /// `max_k |σ : E_k| / p` over the deviatoric strains, at the end …
     pub residual: f64,
@@ -145,12 +147,12 @@ pub struct Stabilisation {
     /// sparse path (step `0`: the relaxed fixed box; the reasons of
     /// `Moduli::dense_fallback`, e.g. the softest mode within twice the
     /// zero-mode threshold). Absent when none fell back (and in files
-    /// written before session 21).
+    /// written before it was recorded).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dense_fallback_reasons: Option<Vec<(u32, String)>>,
     /// The contacts of the stabilised cell, with the same rattler rule as
     /// `Contacts` (by count). Absent in files made before they were
-    /// recorded (session 19).
+    /// recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contacts: Option<CellContacts>,
 }

@@ -3,7 +3,7 @@
 //! `dos.csv` (pooled `D(ω)`) and `gaps.csv` (pooled `Z(h)`). Cells are
 //! formatted here (one number format per column, an empty cell for what
 //! was not measured or a mean of nothing); quoting and line ends are the
-//! `csv` crate's. Columns: `docs/formats.md`.
+//! `csv` crate's. Columns: `docs/reference/output-files.md`.
 
 use crate::record::{ModuliMeasures, PackingFile, SpectrumMeasures};
 use jamkit_core::stats::mean_sem;
@@ -248,7 +248,7 @@ pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
     table(&head, rows)
 }
 
-/// The columns of a shear-stabilised cell's contacts (docs/formats.md).
+/// The columns of a shear-stabilised cell's contacts (docs/reference/output-files.md).
 const CELL_CONTACTS_COLUMNS: [&str; 4] = [
     "stab_contacts",
     "stab_rattlers",
@@ -256,7 +256,7 @@ const CELL_CONTACTS_COLUMNS: [&str; 4] = [
     "stab_iso_margin",
 ];
 
-/// The columns of `AboveJam`'s jamming point (docs/formats.md).
+/// The columns of `AboveJam`'s jamming point (docs/reference/output-files.md).
 const JAM_POINT_COLUMNS: [&str; 4] = ["jam_phi", "jam_z", "jam_rattlers", "jam_iso_margin"];
 
 const SPECTRUM_COLUMNS: [&str; 9] = [
@@ -271,7 +271,7 @@ const SPECTRUM_COLUMNS: [&str; 9] = [
     "spectrum_s",
 ];
 
-/// The columns of `Moduli` (docs/formats.md).
+/// The columns of `Moduli` (docs/reference/output-files.md).
 const MODULI_COLUMNS: [&str; 11] = [
     "G",
     "G_min",
