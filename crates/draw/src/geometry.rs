@@ -134,13 +134,15 @@ impl Outline {
             .collect()
     }
 
-    /// The closed polar curve `ρ(θ) (cos θ, sin θ)` on `m + 1` points
-    /// (`θ = 0 … 2π`), in units of `R⁰`: the shape plot of `draw-shape`.
+    /// The closed outline of a body of orientation 0, `R(φ)/R⁰ (cos φ,
+    /// sin φ)` with `R(φ) = R⁰ ρ(0 − φ)` as [`Outline::radius`] and the gap
+    /// read it, on `m + 1` points (`φ = 0 … 2π`): the shape plot of
+    /// `draw-shape`, the body as a packing at orientation 0 holds it.
     pub fn polar_curve(&self, m: usize) -> Vec<Point> {
         (0..=m)
             .map(|k| {
                 let theta = 2.0 * PI * k as f64 / m as f64;
-                let r = self.relative_radius(theta);
+                let r = self.relative_radius(-theta);
                 [r * theta.cos(), r * theta.sin()]
             })
             .collect()
@@ -365,7 +367,7 @@ mod tests {
     }
 
     #[test]
-    fn polar_curve_is_closed_and_matches_relative_radius() {
+    fn polar_curve_is_closed_and_is_the_body_at_orientation_zero() {
         let o = fourier(4, 0.1).unwrap();
         let c = o.polar_curve(100);
         assert_eq!(c.len(), 101);
@@ -374,7 +376,7 @@ mod tests {
         let theta = 2.0 * PI * 13.0 / 100.0;
         assert_relative_eq!(
             c[13][0].hypot(c[13][1]),
-            1.0 + 0.1 * (4.0 * theta).sin() / 4.0,
+            1.0 + 0.1 * (-4.0 * theta).sin() / 4.0,
             epsilon = 1e-12
         );
     }

@@ -3,10 +3,10 @@
 //! A body of size `R⁰` and orientation `θ_i` has the polar outline
 //!
 //! ```text
-//! R_i(φ) = R⁰ [1 + Δ F(φ − θ_i)],    F(φ) = Σ_k a_k sin(n_k φ + b_k)
+//! R_i(φ) = R⁰ [1 + Δ F(θ_i − φ)],    F(ψ) = Σ_k a_k sin(n_k ψ + b_k)
 //! ```
 //!
-//! (`fourier`: one mode with `a = 1/n`, `b = 0`, i.e. `F_n = sin(nφ)/n`, the
+//! (`fourier`: one mode with `a = 1/n`, `b = 0`, i.e. `F_n = sin(nψ)/n`, the
 //! paper's model). Two bodies interact through the paper's first-order gap
 //! (Ikeda, Eq. (8)),
 //!
@@ -31,8 +31,9 @@
 //! Orientation convention: the outline of body `i` is
 //! `R(φ) = R⁰ [1 + Δ F(θ_i − φ)]` in the lab direction `φ`, so that its
 //! radius towards `j` is `R⁰[1 + Δ F(θ_i − θ_ij)]`, exactly the term in the
-//! printed gap. (For the odd `F_n = sin(nφ)/n` this is the mirror image of
-//! `R⁰[1 + Δ F(φ − θ_i)]`; both describe the same family of shapes.)
+//! printed gap. (For the odd `F_n = sin(nψ)/n` this is the mirror image of
+//! `R⁰[1 + Δ F(φ − θ_i)]`, the same body turned by `π/n`; for a sum of
+//! modes with phases it is a different body, so the sign matters.)
 
 use jamkit_core::math::{Unit, cmul, turn_unit};
 use jamkit_core::{
@@ -47,7 +48,7 @@ use std::f64::consts::PI;
 /// The `fourier` family's self-description.
 pub const FOURIER_INFO: FamilyInfo = FamilyInfo {
     name: "fourier",
-    about: "near-disks R(θ) = R0 [1 + Δ sin(nθ)/n] with the paper's first-order gap, or a second-order or exact one (2D)",
+    about: "near-disks of radius R0 [1 + Δ F(θ − φ)] towards the direction φ, θ the body's angle, F(ψ) = sin(nψ)/n, with the paper's first-order gap, or a second-order or exact one (2D)",
     dims: Dims::Only(&[2]),
     params: &[
         ParamSpec {
@@ -87,7 +88,7 @@ const GAP_SPEC: ParamSpec = ParamSpec {
 /// The `fourier_sum` family's self-description.
 pub const FOURIER_SUM_INFO: FamilyInfo = FamilyInfo {
     name: "fourier_sum",
-    about: "near-disks R(θ) = R0 [1 + Δ Σ_k a_k sin(n_k θ + b_k)] with the first-order gap, or a second-order or exact one (2D)",
+    about: "near-disks of radius R0 [1 + Δ F(θ − φ)] towards the direction φ, θ the body's angle, F(ψ) = Σ_k a_k sin(n_k ψ + b_k), with the first-order gap, or a second-order or exact one (2D)",
     dims: Dims::Only(&[2]),
     params: &[
         ParamSpec {

@@ -55,7 +55,7 @@ use std::f64::consts::PI;
 /// The `lobed` family's self-description.
 pub const INFO: FamilyInfo = FamilyInfo {
     name: "lobed",
-    about: "two-lobed near-disks R(θ) = R0 [1 + Δ G(θ)], G a zero-mean pair of Gaussian bumps of sharpness κ, first-order gap (2D)",
+    about: "two-lobed near-disks of radius R0 [1 + Δ G(θ − φ)] towards the direction φ, θ the body's angle, G a zero-mean pair of Gaussian bumps of sharpness κ, first-order gap (2D)",
     dims: Dims::Only(&[2]),
     params: &[
         ParamSpec {
