@@ -13,6 +13,10 @@
 //!   `jamkit run` command of the block, so that CI runs it at small size;
 //! * `<!-- ci: skip: REASON -->`: not run here (a cargo or pip command, a
 //!   real cluster); the reason names what covers it.
+//!
+//! A ```ron block after `<!-- ci: same as PATH -->` must be the shipped
+//! file `PATH` as it is, so that a page that shows a file shows it whole
+//! and current.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -53,12 +57,17 @@ fn pages(dir: &Path) -> Vec<PathBuf> {
 /// The ```sh blocks of a page, with the `<!-- ci: … -->` directive on the
 /// line before each, if any.
 fn sh_blocks(text: &str) -> Vec<Block> {
+    blocks(text, &["```sh", "```bash"])
+}
+
+/// The blocks of a page opened by one of `fences`, with their directives.
+fn blocks(text: &str, fences: &[&str]) -> Vec<Block> {
     let lines: Vec<&str> = text.lines().collect();
     let mut blocks = Vec::new();
     let mut k = 0;
     while k < lines.len() {
         let fence = lines[k].trim_end();
-        if fence == "```sh" || fence == "```bash" {
+        if fences.contains(&fence) {
             let directive = k
                 .checked_sub(1)
                 .map(|j| lines[j].trim())
@@ -281,4 +290,33 @@ fn relative_links_resolve() {
         "links to nothing:\n{}",
         broken.join("\n")
     );
+}
+
+/// A page that shows a shipped file (`<!-- ci: same as PATH -->` before a
+/// ```ron block) shows it as it is.
+#[test]
+fn shown_files_are_the_shipped_ones() {
+    let root = Path::new(ROOT);
+    let mut shown = 0;
+    for page in pages(&root.join("docs")) {
+        for b in blocks(&read(&page), &["```ron"]) {
+            let Some(path) = b
+                .directive
+                .as_deref()
+                .and_then(|d| d.strip_prefix("same as "))
+            else {
+                continue;
+            };
+            let file = read(&root.join(path.trim()));
+            assert_eq!(
+                b.lines.join("\n").trim_end(),
+                file.trim_end(),
+                "{}:{}: the block is not {path} as shipped",
+                page.display(),
+                b.line
+            );
+            shown += 1;
+        }
+    }
+    assert!(shown >= 1, "no page shows a shipped file");
 }
