@@ -9,7 +9,8 @@ use jamkit_experiment::Experiment;
 use jamkit_format::PackingFile;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
-use std::process::Command;
+
+mod common;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
@@ -18,17 +19,11 @@ fn page(name: &str) -> String {
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
+/// `jamkit ARGS`, which must succeed: its standard output.
 fn jamkit(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_jamkit"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "jamkit {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
+    let (code, out, err) = common::jamkit(args);
+    assert_eq!(code, 0, "jamkit {args:?}: {err}");
+    out
 }
 
 /// The names of `names` that `text` does not write as inline code.

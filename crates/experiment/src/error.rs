@@ -18,13 +18,11 @@ pub enum ExperimentError {
     /// A `--set` override could not be applied.
     #[error("--set {key}: {message}")]
     Override { key: String, message: String },
-    /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
-    Io {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    /// Reading or writing a file failed. The cause is part of the message
+    /// and not a separate `source`, so that a chain of errors printed whole
+    /// (`{:#}`) names it once.
+    #[error("{path}: {error}")]
+    Io { path: String, error: std::io::Error },
     /// The output directory holds a packing of this run made with other
     /// settings (`lock` module): refused, so that one directory never
     /// mixes two experiments.
@@ -89,10 +87,10 @@ impl ExperimentError {
     }
 
     /// Wrap an I/O error with its path.
-    pub fn io(path: impl AsRef<std::path::Path>, source: std::io::Error) -> Self {
+    pub fn io(path: impl AsRef<std::path::Path>, error: std::io::Error) -> Self {
         Self::Io {
             path: path.as_ref().display().to_string(),
-            source,
+            error,
         }
     }
 }
@@ -111,7 +109,7 @@ impl From<jamkit_format::FormatError> for ExperimentError {
                 value,
                 allowed,
             },
-            F::Io { path, source } => Self::Io { path, source },
+            F::Io { path, error } => Self::Io { path, error },
         }
     }
 }

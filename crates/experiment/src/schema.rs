@@ -745,6 +745,9 @@ impl Experiment {
 
     /// Parse RON text; `file` names the source in errors.
     pub fn from_ron(text: &str, file: &str) -> Result<Self, ExperimentError> {
+        // Some editors start a UTF-8 file with a byte-order mark; it is not
+        // part of the RON.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         // Optional fields take a bare value (`dt_max: 0.3`) as well as
         // `Some(0.3)`.
         ron::Options::default()

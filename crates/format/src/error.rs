@@ -17,21 +17,19 @@ pub enum FormatError {
         value: String,
         allowed: String,
     },
-    /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
-    Io {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    /// Reading or writing a file failed. The cause is part of the message
+    /// and not a separate `source`, so that a chain of errors printed whole
+    /// (`{:#}`) names it once.
+    #[error("{path}: {error}")]
+    Io { path: String, error: std::io::Error },
 }
 
 impl FormatError {
     /// Wrap an I/O error with its path.
-    pub fn io(path: impl AsRef<std::path::Path>, source: std::io::Error) -> Self {
+    pub fn io(path: impl AsRef<std::path::Path>, error: std::io::Error) -> Self {
         Self::Io {
             path: path.as_ref().display().to_string(),
-            source,
+            error,
         }
     }
 }

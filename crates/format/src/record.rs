@@ -265,11 +265,18 @@ pub fn without_configuration(file: &PackingFile) -> PackingFile {
     }
 }
 
-/// Write `contents` to `path` atomically (temporary file, then rename).
+/// Write `contents` to `path` atomically (temporary file beside it, then
+/// rename). A failure names `path`, the file the caller asked for, and
+/// leaves no temporary file behind (a full disk leaves the directory as it
+/// was).
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), FormatError> {
     let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, contents).map_err(|e| FormatError::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| FormatError::io(path, e))
+    std::fs::write(&tmp, contents)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            FormatError::io(path, e)
+        })
 }
 
 impl PackingFile {
