@@ -120,7 +120,8 @@ pub enum SearchArg {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MassesArg {
     /// The family's default (`masses: Family`, as in experiment files):
-    /// `blocks-jammed` for dimers in 3D, `plain` otherwise.
+    /// `blocks-jammed` for bodies made of spheres (`nmer`) in 3D, `plain`
+    /// otherwise.
     Family,
     /// The bodies' own masses (the paper).
     Plain,

@@ -20,9 +20,10 @@
 //! run into one directory, or a packing outside the file's grid), or whose
 //! `experiment.ron` no longer parses, keeps its tables as they are.
 //!
-//! An archive is read by `jamkit report` like a run directory. It cannot be
-//! resumed (the configurations are gone): the packings of a resumed run are
-//! made again.
+//! An archive is read by `jamkit report` like a run directory. A run into
+//! it reuses its packings for the observables they hold; an observable they
+//! lack needs the configuration, which is gone, so those packings are made
+//! again.
 
 use crate::error::ExperimentError;
 use crate::{grid, runner, schema::Experiment};
