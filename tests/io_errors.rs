@@ -4,7 +4,7 @@
 use std::path::Path;
 
 mod common;
-use common::{jamkit, quickstart};
+use common::jamkit;
 
 /// `jamkit export … -o nodir/x.xyz`: the message names `nodir/x.xyz` (not
 /// the temporary file beside it) and gives the cause once.
@@ -12,18 +12,7 @@ use common::{jamkit, quickstart};
 fn a_write_into_a_missing_directory_names_the_file_once() {
     let tmp = tempfile::tempdir().unwrap();
     let run = tmp.path().join("run");
-    let (code, _, err) = jamkit(&[
-        "run",
-        quickstart().as_str(),
-        "--out",
-        run.to_str().unwrap(),
-        "--set",
-        "particles=16",
-        "--set",
-        "samples=1",
-        "--quiet",
-    ]);
-    assert_eq!(code, 0, "{err}");
+    common::small_quickstart(&run, 1, &[]);
     let target = tmp.path().join("nodir/x.xyz");
     let (code, _, err) = jamkit(&[
         "export",

@@ -12,21 +12,7 @@ const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// A quickstart of 16 disks and 2 samples into `out`, `extra` appended.
 fn small_run(out: &Path, extra: &[&str]) {
-    let file = quickstart();
-    let mut args = vec![
-        "run",
-        file.as_str(),
-        "--out",
-        out.to_str().unwrap(),
-        "--set",
-        "particles=16",
-        "--set",
-        "samples=2",
-        "--quiet",
-    ];
-    args.extend(extra);
-    let (code, _, err) = jamkit(&args);
-    assert_eq!(code, 0, "{err}");
+    common::small_quickstart(out, 2, extra);
 }
 
 fn packing_paths(dir: &Path) -> Vec<std::path::PathBuf> {

@@ -114,6 +114,27 @@ pub fn quickstart() -> String {
         .to_string()
 }
 
+/// `jamkit run` of the quickstart at 16 disks and `samples` samples into
+/// `out`, quietly, with the arguments `extra` appended; it must succeed.
+#[allow(dead_code)]
+pub fn small_quickstart(out: &Path, samples: usize, extra: &[&str]) {
+    let (file, samples) = (quickstart(), format!("samples={samples}"));
+    let mut args = vec![
+        "run",
+        file.as_str(),
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "particles=16",
+        "--set",
+        samples.as_str(),
+        "--quiet",
+    ];
+    args.extend(extra);
+    let (code, _, err) = jamkit(&args);
+    assert_eq!(code, 0, "{err}");
+}
+
 /// `results.csv` of `dir` without its `wall_s` column (the one number that
 /// depends on the machine, not on the packing).
 #[allow(dead_code)]
