@@ -17,6 +17,7 @@
 
 use anyhow::Result;
 use clap::{Subcommand, ValueEnum};
+use jamkit_core::BodyOrientation;
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::{
     Fire, FireParams, FireVariant, ForceCriterion, JamParams, JamSearch, LbfgsChoice, LbfgsParams,
@@ -519,7 +520,7 @@ pub(crate) fn packing_hash<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> u6
     p.bbox.edges().iter().for_each(|&x| eat(x));
     for (r, o) in p.positions.iter().zip(&p.orientations) {
         r.iter().for_each(|&x| eat(x));
-        p.shape.orientation_coords(o).into_iter().for_each(&mut eat);
+        o.to_coords().into_iter().for_each(&mut eat);
     }
     h
 }
@@ -560,7 +561,7 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         }
         f.flush()?;
     }
-    let threshold = scene.packing().shape.rattler_threshold();
+    let threshold = scene.packing().shape.policy().rattler_threshold;
     let s = summarize(&mut scene, threshold);
     out!(
         "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2},{}",

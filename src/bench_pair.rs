@@ -157,9 +157,11 @@ fn gaps(s: &NearDisk, pairs: &[Pair]) -> Vec<f64> {
         .iter()
         .map(|p| {
             let mut h = f64::NAN;
-            s.contacts(SIZES.0, &p.ti, SIZES.1, &p.tj, &p.d, f64::INFINITY, |c| {
-                h = c.gap
-            });
+            s.contacts(
+                &jamkit_core::Pair::new(SIZES.0, p.ti, SIZES.1, p.tj, p.d),
+                f64::INFINITY,
+                |c| h = c.gap,
+            );
             h
         })
         .collect()
@@ -175,11 +177,13 @@ fn time_pairs(s: &NearDisk, pairs: &[Pair], min_secs: f64) -> f64 {
         let s = black_box(s);
         for p in pairs {
             s.contacts(
-                SIZES.0,
-                black_box(&p.ti),
-                SIZES.1,
-                black_box(&p.tj),
-                black_box(&p.d),
+                &jamkit_core::Pair::new(
+                    SIZES.0,
+                    *black_box(&p.ti),
+                    SIZES.1,
+                    *black_box(&p.tj),
+                    *black_box(&p.d),
+                ),
                 f64::INFINITY,
                 |c| *sink += c.gap + c.grad_r[0] + c.grad_rot_i[0] + c.grad_rot_j[0],
             );

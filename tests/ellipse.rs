@@ -5,6 +5,7 @@
 //! jamming run, and bad input.
 
 use jamkit_core::{Contact, GapHessian, Shape, Vector};
+use jamkit_core::{Pair, ShapeExt};
 use jamkit_ellipse::{Axis, Ellipse, EllipseParams};
 use jamkit_experiment::{Experiment, overrides};
 use jamkit_fourier::{FourierParams, NearDisk};
@@ -26,17 +27,16 @@ fn ellipse(aspect: f64) -> Ellipse {
 const ASPECTS: [f64; 4] = [1.05, 1.3, 2.0, 4.0];
 
 fn contact(s: &Ellipse, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> Contact<2> {
-    s.pair_contacts(ri, &Axis::new(ti), rj, &Axis::new(tj), &d, f64::INFINITY)[0]
+    s.pair_contacts(
+        &Pair::new(ri, Axis::new(ti), rj, Axis::new(tj), d),
+        f64::INFINITY,
+    )[0]
 }
 
 fn hessian(s: &Ellipse, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> GapHessian<2> {
     let mut out = None;
     s.gap_hessians(
-        ri,
-        &Axis::new(ti),
-        rj,
-        &Axis::new(tj),
-        &d,
+        &Pair::new(ri, Axis::new(ti), rj, Axis::new(tj), d),
         f64::INFINITY,
         |c| out = Some(c),
     )

@@ -4,6 +4,7 @@
 //! (`docs/explanation/gap-models.md`, "The ladder of gap models").
 
 use jamkit_core::{Packing, Potential, Shape, SizeDistribution, Vector};
+use jamkit_core::{Pair, ShapeExt};
 use jamkit_engine::{Scene, check::gradient_error};
 use jamkit_fourier::{Angle, FourierParams, FourierSumParams, Mode, NearDisk};
 use jamkit_planar::gap2d::GapModel;
@@ -49,7 +50,11 @@ fn dense(shape: NearDisk, n: usize, seed: u64) -> Scene<2, NearDisk> {
 }
 
 fn gap_of(s: &NearDisk, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> f64 {
-    s.pair_contacts(ri, &Angle::new(ti), rj, &Angle::new(tj), &d, f64::INFINITY)[0].gap
+    s.pair_contacts(
+        &Pair::new(ri, Angle::new(ti), rj, Angle::new(tj), d),
+        f64::INFINITY,
+    )[0]
+    .gap
 }
 
 /// Forces and torques against central differences, for SecondOrder and
@@ -245,7 +250,7 @@ fn exact_gap_refuses_non_convex_outlines() {
     assert_eq!(e.field(), Some("params.gap"));
     assert!(e.allowed().unwrap().contains("convex"), "{e:?}");
     let s = NearDisk::fourier(&p(GapModel::SecondOrder)).unwrap();
-    assert!(!s.warnings().is_empty());
+    assert!(!s.policy().warnings.is_empty());
 }
 
 /// The exact gap skips pairs whose first-order gap `h₁` exceeds the cut by

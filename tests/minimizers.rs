@@ -435,6 +435,7 @@ struct DisksWithoutHessian;
 
 impl Shape<2> for DisksWithoutHessian {
     type Orientation = ();
+    type Fast = jamkit_core::NoFastPath;
     fn family(&self) -> &'static str {
         "disks-without-hessian"
     }
@@ -450,15 +451,11 @@ impl Shape<2> for DisksWithoutHessian {
     fn rotate(&self, _o: &mut (), _dq: &[f64]) {}
     fn contacts<F: FnMut(jamkit_core::Contact<2>)>(
         &self,
-        size_i: f64,
-        o_i: &(),
-        size_j: f64,
-        o_j: &(),
-        r_ij: &jamkit_core::Vector<2>,
+        pair: &jamkit_core::Pair<2, ()>,
         max_gap: f64,
         visit: F,
     ) {
-        Shape::<2>::contacts(&Sphere, size_i, o_i, size_j, o_j, r_ij, max_gap, visit)
+        Shape::<2>::contacts(&Sphere, pair, max_gap, visit)
     }
 }
 

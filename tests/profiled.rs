@@ -5,6 +5,7 @@
 //! under a half turn (n = 3), which tests body j's `−π`.
 
 use jamkit_core::{Angle, Shape, Vector};
+use jamkit_core::{Pair, ShapeExt};
 use jamkit_fourier::{FourierSumParams, Mode, NearDisk};
 use jamkit_planar::profiled::{NearDiskProfile, Profiled};
 use rand::{RngExt, SeedableRng};
@@ -108,13 +109,24 @@ fn the_generic_shape_is_the_fourier_family_where_they_coincide() {
         let phi = 2.0 * PI * rng.random::<f64>();
         let r = 1.0 + 0.3 * rng.random::<f64>();
         let d = Vector::<2>::new(r * phi.cos(), r * phi.sin());
-        let mine = ours.pair_contacts(0.5, &Angle::new(ti), 0.7, &Angle::new(tj), &d, 0.5);
-        let theirs = fourier.pair_contacts(
+        let mine = ours.pair_contacts(
+            &Pair::new(
+                0.5,
+                Angle::from_coords(&[ti]).unwrap(),
+                0.7,
+                Angle::from_coords(&[tj]).unwrap(),
+                d,
+            ),
             0.5,
-            &Shape::<2>::orientation_from_coords(&fourier, &[ti]).unwrap(),
-            0.7,
-            &Shape::<2>::orientation_from_coords(&fourier, &[tj]).unwrap(),
-            &d,
+        );
+        let theirs = fourier.pair_contacts(
+            &Pair::new(
+                0.5,
+                jamkit_core::Rotation2::from_coords(&[ti]).unwrap(),
+                0.7,
+                jamkit_core::Rotation2::from_coords(&[tj]).unwrap(),
+                d,
+            ),
             0.5,
         );
         assert_eq!(mine.len(), theirs.len());

@@ -5,6 +5,7 @@
 //! `max_density_steps`). The full-size files are `experiments/stress/*.ron`;
 //! their measured outcomes are in `docs/reports/stress.md`.
 
+use jamkit_core::Pair;
 use jamkit_core::{Packing, Potential, Shape, Vector};
 use jamkit_engine::{Objective, Scene};
 use jamkit_experiment::Experiment;
@@ -237,7 +238,7 @@ fn nearly_coincident_centres_give_finite_deterministic_contacts() {
     for r in [Vector::<2>::new(0.0, 0.0), Vector::<2>::new(3e-13, -4e-13)] {
         let mut sphere_contacts = Vec::new();
         for _ in 0..2 {
-            Shape::<2>::contacts(&Sphere, 0.5, &(), 0.7, &(), &r, 0.0, |c| {
+            Shape::<2>::contacts(&Sphere, &Pair::new(0.5, (), 0.7, (), r), 0.0, |c| {
                 sphere_contacts.push(c)
             });
         }
@@ -249,7 +250,9 @@ fn nearly_coincident_centres_give_finite_deterministic_contacts() {
         let (oi, oj) = (Angle::new(0.4), Angle::new(-1.3));
         let mut disk_contacts = Vec::new();
         for _ in 0..2 {
-            disk.contacts(0.5, &oi, 0.7, &oj, &r, 0.0, |c| disk_contacts.push(c));
+            disk.contacts(&Pair::new(0.5, oi, 0.7, oj, r), 0.0, |c| {
+                disk_contacts.push(c)
+            });
         }
         assert_eq!(disk_contacts.len(), 2);
         assert_eq!(disk_contacts[0], disk_contacts[1]);
@@ -280,7 +283,9 @@ fn nearly_coincident_centres_give_finite_deterministic_contacts() {
 
 fn gap(disk: &NearDisk, oi: &Angle, oj: &Angle, r: &Vector<2>) -> f64 {
     let mut h = f64::NAN;
-    disk.contacts(0.5, oi, 0.7, oj, r, f64::INFINITY, |c| h = c.gap);
+    disk.contacts(&Pair::new(0.5, *oi, 0.7, *oj, *r), f64::INFINITY, |c| {
+        h = c.gap
+    });
     h
 }
 

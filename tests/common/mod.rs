@@ -2,6 +2,7 @@
 //! declares `mod common;`, so not every item is used by every file).
 #![allow(dead_code)]
 
+use jamkit_core::{Pair, ShapeExt};
 use jamkit_experiment::Experiment;
 use jamkit_experiment::runner::{RunOptions, RunReport, run};
 use jamkit_fourier::{FourierSumParams, Mode, NearDisk};
@@ -278,7 +279,7 @@ where
     let o: Vec<jamkit_core::Quaternion> = p
         .orientations
         .iter()
-        .map(|c| shape.orientation_from_coords(c).unwrap())
+        .map(|c| jamkit_core::Quaternion::from_coords(c).unwrap())
         .collect();
     assert!(p.orientations.iter().all(|q| q.len() == 4));
     let mut pairs = Vec::new();
@@ -288,7 +289,7 @@ where
                 let (d, l) = (p.positions[j][a] - p.positions[i][a], p.box_edges[a]);
                 d - l * (d / l).round()
             });
-            for c in shape.pair_contacts(p.radii[i], &o[i], p.radii[j], &o[j], &r, 0.0) {
+            for c in shape.pair_contacts(&Pair::new(p.radii[i], o[i], p.radii[j], o[j], r), 0.0) {
                 if c.gap < 0.0 {
                     pairs.push((i, j));
                 }

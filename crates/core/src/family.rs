@@ -82,9 +82,8 @@ pub trait ShapeVisitor {
 /// `(name, dim, params)` into a typed shape.
 ///
 /// Per-family defaults that depend on the parameters or the dimension (the
-/// rotational inertia, FIRE's largest time step and masses) are methods of
-/// the shape ([`Shape::rot_inertia`], [`Shape::fire_dt_max`],
-/// [`Shape::fire_jammed_block_masses`]), so that they travel with it.
+/// rotational inertia, FIRE's largest time step and masses) travel with the
+/// shape ([`Shape::rot_inertia`], [`Shape::policy`]).
 pub trait Family {
     /// Name, description, dimensions and parameters (`jamkit shapes`).
     const INFO: FamilyInfo;
@@ -145,7 +144,7 @@ pub trait Surface: Debug + Send + Sync {
     fn relative_radius_bounds(&self) -> (f64, f64);
     /// The rotation from body to world frame, as a matrix (rows), of a body
     /// whose orientation is written `coords`
-    /// ([`Shape::orientation_coords`](crate::Shape::orientation_coords));
+    /// ([`BodyOrientation::to_coords`](crate::BodyOrientation::to_coords));
     /// `None` if the numbers are not an orientation. By default the
     /// orientation is a unit quaternion `[w, x, y, z]`
     /// ([`Quaternion::from_coords`](crate::Quaternion::from_coords)), as

@@ -5,9 +5,12 @@
 //! * [`math`]: the only module that names the linear-algebra crate
 //!   (`Vector<D>`, `RotVec`), so that the rest of the code reads as physics;
 //! * [`periodic`]: the periodic box and its minimum-image convention;
-//! * [`shape`]: the [`Shape`] trait a shape family implements (volume,
-//!   bounding radius, rotational coordinates and the *contacts* between two
-//!   bodies, each a gap `h` with its first derivatives);
+//! * [`shape`]: the [`Shape`] trait a shape family implements, its geometry
+//!   (volume, bounding radius, rotational coordinates and the *contacts*
+//!   of a [`Pair`] of bodies, each a gap `h` with its derivatives);
+//! * [`fast`]: the engine's optional fast paths ([`FastContacts`]);
+//! * [`policy`]: what a family says as plain data: the minimiser's and the
+//!   analysis' [`Policy`], and the [`Look`] the drawing and export read;
 //! * [`family`]: a family's one registration ([`Family`]), the
 //!   [`ShapeVisitor`] the registry hands shapes to, and the optional
 //!   [`Outline`] ability;
@@ -29,11 +32,13 @@
 
 pub mod error;
 pub mod family;
+pub mod fast;
 pub mod gap_model;
 pub mod math;
 pub mod orientation;
 pub mod packing;
 pub mod periodic;
+pub mod policy;
 pub mod potential;
 pub mod quaternion;
 pub mod rotation;
@@ -46,14 +51,16 @@ pub use family::{
     Dims, Family, FamilyInfo, Outline, ParamSpec, RoundOutline, ShapeVisitor, SharedOutline,
     SharedSurface, Surface,
 };
+pub use fast::{
+    ContactLanes, FastContacts, MAX_SLOTS, NoFastPath, PairLanes, SlotPairs, contacts_one_by_one,
+};
 pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use orientation::BodyOrientation;
 pub use packing::Packing;
 pub use periodic::PeriodicBox;
+pub use policy::{Look, Policy};
 pub use potential::Potential;
 pub use quaternion::Quaternion;
 pub use rotation::{Angle, Rotation2};
-pub use shape::{
-    Contact, ContactLanes, GapHessian, MAX_SLOTS, PairLanes, Shape, SlotPairs, contacts_one_by_one,
-};
+pub use shape::{Contact, GapHessian, Kernel, Pair, Shape, ShapeExt};
 pub use sizes::SizeDistribution;

@@ -4,14 +4,9 @@
 //! A family's [`Shape::Orientation`](crate::Shape::Orientation) is `()` for
 //! balls, [`Rotation2`] or [`Angle`] in 2D and [`Quaternion`] in 3D. Each
 //! knows its reference value, how to draw a uniformly random one, and how
-//! it is written to and read from a packing file; the `Shape` trait's
-//! [`reference_orientation`](crate::Shape::reference_orientation),
-//! [`random_orientation`](crate::Shape::random_orientation),
-//! [`orientation_coords`](crate::Shape::orientation_coords) and
-//! [`orientation_from_coords`](crate::Shape::orientation_from_coords) call
-//! these by default. What differs between families, how a body turns under
-//! its rotational coordinates ([`Shape::rotate`](crate::Shape::rotate)),
-//! stays with the family.
+//! it is written to and read from a packing file. What differs between
+//! families, how a body turns under its rotational coordinates
+//! ([`Shape::rotate`](crate::Shape::rotate)), stays with the family.
 
 use crate::{Angle, Quaternion, Rotation2};
 use rand::Rng;

@@ -10,12 +10,13 @@
 
 use crate::error::{Error, Result};
 use crate::math::Vector;
+use crate::orientation::BodyOrientation;
 use crate::periodic::PeriodicBox;
-use crate::shape::Shape;
+use crate::shape::{Pair, Shape};
 use rand::{Rng, RngExt};
 
 /// Most random draws for one body of an overlap-free start
-/// ([`Shape::overlap_free_start`]).
+/// ([`Policy::overlap_free_start`](crate::Policy::overlap_free_start)).
 pub const MAX_PLACEMENT_TRIES: usize = 100_000;
 
 /// Independent accumulators for [`largest_step_sq`].
@@ -87,7 +88,7 @@ impl<const D: usize, S: Shape<D>> Packing<D, S> {
         let total: f64 = sizes.iter().map(|&s| shape.volume(s)).sum();
         let edge = (total / phi).powf(1.0 / D as f64);
         let bbox = PeriodicBox::cubic(edge);
-        if shape.overlap_free_start() {
+        if shape.policy().overlap_free_start {
             return Self::random_without_overlaps(shape, sizes, bbox, phi, rng);
         }
         let positions = (0..sizes.len())
@@ -95,7 +96,7 @@ impl<const D: usize, S: Shape<D>> Packing<D, S> {
             .map(|r| bbox.wrap(r))
             .collect();
         let orientations = (0..sizes.len())
-            .map(|_| shape.random_orientation(rng))
+            .map(|_| S::Orientation::random(rng))
             .collect();
         Ok(Self {
             shape,
@@ -126,12 +127,14 @@ impl<const D: usize, S: Shape<D>> Packing<D, S> {
             let mut placed = false;
             for _ in 0..MAX_PLACEMENT_TRIES {
                 let r = bbox.wrap(Vector::<D>::from_fn(|_, _| edge * rng.random::<f64>()));
-                let o = shape.random_orientation(rng);
+                let o = S::Orientation::random(rng);
                 let overlaps = positions.iter().zip(&orientations).zip(&sizes).any(
                     |((rj, oj), &sj): ((&Vector<D>, &S::Orientation), &f64)| {
                         let r_ij = bbox.minimum_image(r - rj);
                         let mut hit = false;
-                        shape.contacts(sj, oj, size, &o, &r_ij, 0.0, |c| hit |= c.gap < 0.0);
+                        shape.contacts(&Pair::new(sj, *oj, size, o, r_ij), 0.0, |c| {
+                            hit |= c.gap < 0.0
+                        });
                         hit
                     },
                 );

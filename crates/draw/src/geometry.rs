@@ -10,6 +10,7 @@
 //! `e(θ)`.
 
 use crate::DrawError;
+use jamkit_core::BodyOrientation;
 use jamkit_core::{RoundOutline, Shape, SharedOutline};
 use jamkit_registry::{self as registry, ParamMap, SceneVisitor};
 use std::f64::consts::PI;
@@ -50,13 +51,13 @@ impl SceneVisitor for OutlineOf {
         if D != 2 {
             return None;
         }
-        if let Some(o) = shape.outline() {
+        if let Some(o) = shape.look().outline {
             return Some(Outline::Polar {
                 shape: o,
                 turns: shape.rot_dof() > 0,
             });
         }
-        let o = shape.reference_orientation();
+        let o = S::Orientation::reference();
         shape
             .sphere_decomposition(1.0, &o)
             .map(|_| Outline::Spheres)

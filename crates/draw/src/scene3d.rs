@@ -4,7 +4,7 @@
 //! A body is drawn from its family's shape through the registry, with no
 //! family named here:
 //!
-//! * a ball ([`Shape::BALL`](jamkit_core::Shape::BALL)): radius `R⁰`;
+//! * a ball ([`Look::ball`](jamkit_core::Look::ball)): radius `R⁰`;
 //! * a star-shaped body with a [`Surface`](jamkit_core::Surface)
 //!   ([`Shape::surface`](jamkit_core::Shape::surface)): the points
 //!   `c + s M y`, `0 ≤ s ≤ R⁰ ρ(y)`, `M` the rotation of the file's
@@ -24,6 +24,7 @@
 
 use crate::DrawError;
 use crate::colors::{Rgb, size_colors};
+use jamkit_core::BodyOrientation;
 use jamkit_core::{Shape, SharedSurface};
 use jamkit_format::PackingFile;
 use jamkit_registry::{self as registry, ParamMap, SceneVisitor};
@@ -53,13 +54,14 @@ impl SceneVisitor for SolidOf {
         if D != 3 {
             return None;
         }
-        if S::BALL {
+        let look = shape.look();
+        if look.ball {
             return Some(Solid::Ball);
         }
-        if let Some(s) = shape.surface() {
+        if let Some(s) = look.surface {
             return Some(Solid::Star(s));
         }
-        let o = shape.reference_orientation();
+        let o = S::Orientation::reference();
         shape.sphere_decomposition(1.0, &o).map(|_| Solid::Spheres)
     }
 }
@@ -83,7 +85,7 @@ impl Solid {
         impl SceneVisitor for Decompose {
             type Output = Option<Vec<Ball>>;
             fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Option<Vec<Ball>> {
-                let o = shape.reference_orientation();
+                let o = S::Orientation::reference();
                 let d = shape.sphere_decomposition(1.0, &o)?;
                 (D == 3).then(|| {
                     d.iter()

@@ -1,4 +1,4 @@
-//! The energy and gradient of balls (`Shape::BALL`), several pairs at a time.
+//! The energy and gradient of balls (`FastContacts::BALL`), several pairs at a time.
 //!
 //! For balls every listed pair costs a square root and a division, and
 //! one pair at a time these two set the pace of the whole step (their

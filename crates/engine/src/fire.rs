@@ -138,7 +138,7 @@ pub struct FireParams {
     /// Initial time step.
     pub dt_init: f64,
     /// Largest time step; `None`: the family's own
-    /// ([`jamkit_core::Shape::fire_dt_max`], 0.5 unless the family says
+    /// ([`jamkit_core::Policy::fire_dt_max`], 0.5 unless the family says
     /// otherwise). FIRE slows to a crawl as `dt_max` nears `2/ω_max`, the
     /// stability limit of the semi-implicit Euler step on the stiffest
     /// vibration (`ω_max² ≈ 5.4` for jammed disks, ≈ 12 for 3D dimers).
@@ -195,7 +195,7 @@ pub struct FireParams {
 /// Which masses FIRE integrates with.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub enum Masses {
-    /// The family's choice ([`jamkit_core::Shape::fire_jammed_block_masses`]):
+    /// The family's choice ([`jamkit_core::Policy::jammed_block_masses`]):
     /// `Blocks((jammed_only: true))` where the family says so and the
     /// variant is FIRE, else `Plain`; resolved by [`FireParams::for_family`]
     /// (FIRE integrates an unresolved `Family` with the plain masses).
@@ -302,17 +302,16 @@ impl FireParams {
     }
 
     /// These parameters with `dt_max`, the masses and L-BFGS set: their
-    /// own, else the family's ([`jamkit_core::Shape::fire_dt_max`], 0.5
-    /// where the family has none; [`jamkit_core::Shape::fire_jammed_block_masses`]
-    /// and [`jamkit_core::Shape::lbfgs_blocks_by_default`] with FIRE, the
+    /// own, else the family's ([`jamkit_core::Policy::fire_dt_max`], 0.5
+    /// where the family has none; [`jamkit_core::Policy::jammed_block_masses`]
+    /// and [`jamkit_core::Policy::lbfgs_blocks`] with FIRE, the
     /// plain masses and no L-BFGS with FIRE 2.0), so that the settings a
     /// packing records hold the time step, masses and minimiser it was made
     /// with.
     pub fn for_family<const D: usize, S: jamkit_core::Shape<D>>(&self, shape: &S) -> Self {
+        let policy = shape.policy();
         let masses = match &self.masses {
-            Masses::Family
-                if self.variant == FireVariant::Fire && shape.fire_jammed_block_masses() =>
-            {
+            Masses::Family if self.variant == FireVariant::Fire && policy.jammed_block_masses => {
                 Masses::Blocks(PreconParams {
                     jammed_only: true,
                     ..PreconParams::default()
@@ -322,20 +321,14 @@ impl FireParams {
             chosen => chosen.clone(),
         };
         let lbfgs = match &self.lbfgs {
-            LbfgsChoice::Family
-                if self.variant == FireVariant::Fire && shape.lbfgs_blocks_by_default() =>
-            {
+            LbfgsChoice::Family if self.variant == FireVariant::Fire && policy.lbfgs_blocks => {
                 LbfgsChoice::On(LbfgsChoice::family_default())
             }
             LbfgsChoice::Family => LbfgsChoice::Off,
             chosen => chosen.clone(),
         };
         Self {
-            dt_max: Some(
-                self.dt_max
-                    .or(shape.fire_dt_max())
-                    .unwrap_or(DEFAULT_DT_MAX),
-            ),
+            dt_max: Some(self.dt_max.or(policy.fire_dt_max).unwrap_or(DEFAULT_DT_MAX)),
             masses,
             lbfgs,
             ..self.clone()

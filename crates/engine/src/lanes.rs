@@ -1,4 +1,4 @@
-//! The energy and gradient of families with `Shape::LANE_CONTACTS`, several
+//! The energy and gradient of families with `FastContacts::LANES`, several
 //! pairs at a time.
 //!
 //! The generic pass (`Scene::pair_sum`) takes one pair at a time: a branch
@@ -6,12 +6,12 @@
 //! jamming), the family's contact, a push into a buffer, and a second branch
 //! per contact to sum it. For a family with at most one contact per pair
 //! that can compute its contacts several pairs at a time
-//! (`Shape::contacts_lanes`, e.g. the first-order near-disks), this kernel
+//! (`FastContacts::contacts_lanes`, e.g. the first-order near-disks), this kernel
 //! works like the balls' one (`balls`), in two phases over chunks of the
 //! neighbour list:
 //!
 //! 1. **Pair terms** of the whole chunk with no branch: separation (minimum
-//!    image), the family's contacts (one call of `Shape::contacts_lanes`
+//!    image), the family's contacts (one call of `FastContacts::contacts_lanes`
 //!    for the chunk), `v(h)`, `f = v'(h) ∂h/∂r_j` and the torques
 //!    `v'(h) ∂h/∂q_i`, `v'(h) ∂h/∂q_j`, zero for pairs without a contact.
 //!    Each step is one loop over the chunk's pairs (*lanes*) on plain
@@ -22,7 +22,7 @@
 //!    partners end.
 //!
 //! NOTE: the arithmetic of each pair and the order of every sum are those of
-//! the generic pass (`Shape::contacts_lanes` promises `Shape::contacts`'
+//! the generic pass (`FastContacts::contacts_lanes` promises `Shape::contacts`'
 //! bits; `v' · x = x · v'` exactly), so the results are the same bits: pairs
 //! without a contact add exact zeros, and `x + 0 = x − 0 = x` for every sum
 //! here (none of them is ever `−0`: they start at `+0`, and `+0 + −0 = +0`).
@@ -34,7 +34,10 @@
 //! per phase they are 45 % faster (docs/reports/performance.md, "Where the
 //! time of a packing goes").
 
-use jamkit_core::{ContactLanes, MAX_ROT, Packing, PairLanes, Potential, RotVec, Shape};
+use jamkit_core::{
+    BodyOrientation, ContactLanes, FastContacts, MAX_ROT, Packing, PairLanes, Potential, RotVec,
+    Shape,
+};
 use jamkit_core::{PeriodicBox, Vector};
 
 /// Pairs per chunk: the pair terms of a chunk stay in L1 between the phases.
@@ -98,7 +101,7 @@ impl<const D: usize, S: Shape<D>> Lanes<'_, D, S> {
             torque_j: [[0.0; CHUNK]; MAX_ROT],
         };
         // The chunk's pairs and contacts: every call fills them anew.
-        let o = self.packing.shape.reference_orientation();
+        let o = S::Orientation::reference();
         let mut lanes = PairLanes::<D, S::Orientation, CHUNK> {
             size_i: [0.0; CHUNK],
             size_j: [0.0; CHUNK],
@@ -192,7 +195,7 @@ impl<const D: usize, S: Shape<D>> Lanes<'_, D, S> {
             let cut = lanes.reach_i[l] + lanes.reach_j[l];
             cut2[l] = cut * cut;
         }
-        p.shape.contacts_lanes(lanes, c);
+        S::Fast::contacts_lanes(&p.shape, lanes, c);
         // NOTE: as in `Scene::pair_sum`, a pair counts unless `r² ≥ cut²`
         // (so a NaN separation counts, and shows up in V).
         let (mut counts, mut dv) = ([false; W], [0.0; W]);

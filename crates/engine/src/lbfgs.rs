@@ -94,7 +94,7 @@ impl Default for LbfgsParams {
 ///
 /// [`crate::FireParams::for_family`] resolves `Family` to `On((after: 0,
 /// blocks: true))` where the family says so
-/// ([`jamkit_core::Shape::lbfgs_blocks_by_default`], with FIRE) and to
+/// ([`jamkit_core::Policy::lbfgs_blocks`], with FIRE) and to
 /// `Off` elsewhere; FIRE runs an unresolved `Family` as `Off`. Written
 /// back as read (`Family` left out, `Off` as `None`), so that an
 /// experiment round-trips through `--set`.

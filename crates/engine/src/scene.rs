@@ -12,7 +12,7 @@
 
 use crate::fire::Objective;
 use crate::neighbors::NeighborList;
-use jamkit_core::{Contact, GapHessian, Packing, Potential, Shape, Vector};
+use jamkit_core::{Contact, FastContacts, GapHessian, Packing, Pair, Potential, Shape, Vector};
 
 /// A packing ready to be relaxed.
 #[derive(Clone, Debug)]
@@ -25,7 +25,7 @@ pub struct Scene<const D: usize, S: Shape<D>> {
     evaluations: u64,
     /// Scratch: the contacts of one chunk of the list, `(pair, contact)`.
     found: Vec<(u32, Contact<D>)>,
-    /// Scratch: `Shape::body_terms` of every body (the slots kernel).
+    /// Scratch: `FastContacts::body_terms` of every body (the slots kernel).
     body_terms: Vec<f64>,
     /// Scratch: the slots kernel's buffers.
     slot_scratch: crate::slots::Scratch<D>,
@@ -141,11 +141,13 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     ) {
         self.for_each_pair(extra, |p, i, j, d| {
             p.shape.contacts(
-                p.sizes[i],
-                &p.orientations[i],
-                p.sizes[j],
-                &p.orientations[j],
-                d,
+                &Pair::new(
+                    p.sizes[i],
+                    p.orientations[i],
+                    p.sizes[j],
+                    p.orientations[j],
+                    *d,
+                ),
                 extra,
                 |c| visit(i, j, d, &c),
             );
@@ -163,11 +165,13 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         self.for_each_pair(extra, |p, i, j, d| {
             if result.is_ok() {
                 result = p.shape.gap_hessians(
-                    p.sizes[i],
-                    &p.orientations[i],
-                    p.sizes[j],
-                    &p.orientations[j],
-                    d,
+                    &Pair::new(
+                        p.sizes[i],
+                        p.orientations[i],
+                        p.sizes[j],
+                        p.orientations[j],
+                        *d,
+                    ),
                     extra,
                     |c| visit(i, j, &c),
                 );
@@ -213,7 +217,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     pub fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
         self.refresh_neighbors();
         self.evaluations += 1;
-        if S::BALL {
+        if <S::Fast as FastContacts<D, S>>::BALL {
             let p = &self.packing;
             let (owners, partners) = self.neighbors.pairs();
             return crate::balls::Balls {
@@ -226,13 +230,17 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             }
             .energy_gradient(grad);
         }
-        if self.packing.shape.contact_slots() > 0 {
+        if S::Fast::contact_slots(&self.packing.shape) > 0 {
             let p = &self.packing;
-            let len = p.shape.body_terms_len();
+            let len = S::Fast::body_terms_len(&p.shape);
             self.body_terms.resize(p.len() * len, 0.0);
             for (b, (&size, o)) in p.sizes.iter().zip(&p.orientations).enumerate() {
-                p.shape
-                    .body_terms(size, o, &mut self.body_terms[b * len..(b + 1) * len]);
+                S::Fast::body_terms(
+                    &p.shape,
+                    size,
+                    o,
+                    &mut self.body_terms[b * len..(b + 1) * len],
+                );
             }
             let (owners, partners) = self.neighbors.pairs();
             return crate::slots::Slots {
@@ -245,7 +253,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             }
             .energy_gradient(grad, &mut self.slot_scratch);
         }
-        if S::LANE_CONTACTS && self.packing.shape.use_lanes() {
+        if <S::Fast as FastContacts<D, S>>::LANES && S::Fast::use_lanes(&self.packing.shape) {
             let p = &self.packing;
             let (owners, partners) = self.neighbors.pairs();
             return crate::lanes::Lanes {
@@ -335,11 +343,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
                     continue;
                 }
                 p.shape.contacts(
-                    sizes[i],
-                    &orientations[i],
-                    sizes[j],
-                    &orientations[j],
-                    &d,
+                    &Pair::new(sizes[i], orientations[i], sizes[j], orientations[j], d),
                     0.0,
                     |c| found.push((pair as u32, c)),
                 );

@@ -1,5 +1,5 @@
 //! The energy and gradient of families with contact slots
-//! (`Shape::contact_slots`, bodies made of spheres: up to `k²` contacts per
+//! (`FastContacts::contact_slots`, bodies made of spheres: up to `k²` contacts per
 //! pair, sphere `a` of one body against sphere `b` of the other), several
 //! pairs at a time.
 //!
@@ -10,7 +10,7 @@
 //! into a buffer, and a branch per contact to sum it. This kernel works
 //! like the near-disks' one (`lanes`), in phases over chunks of the
 //! neighbour list, after the family's terms of every body (the rotated
-//! offsets) are computed once per evaluation (`Shape::body_terms`):
+//! offsets) are computed once per evaluation (`FastContacts::body_terms`):
 //!
 //! 0. **Bounding pre-pass** over each chunk of the list with no branch and
 //!    no square root: separation (minimum image), `r²`, and the pairs whose
@@ -21,7 +21,7 @@
 //!    "Where the time of a packing goes").
 //! 1. **Slots** of a chunk of queued pairs with no branch: the family's
 //!    contacts slot by slot (one call of
-//!    `Shape::slot_contacts_lanes` for the chunk, one loop over the chunk's
+//!    `FastContacts::slot_contacts_lanes` for the chunk, one loop over the chunk's
 //!    pairs per slot; the AVX2 copy (`simd`) computes four lanes per
 //!    instruction); then the contacts that count, compacted with no branch
 //!    in the generic pass's order (pair by pair, each pair's slots in
@@ -31,7 +31,7 @@
 //!    when `i`'s partners end.
 //!
 //! NOTE: the arithmetic of each contact and the order of every sum are
-//! those of the generic pass (`Shape::slot_contacts_lanes` promises
+//! those of the generic pass (`FastContacts::slot_contacts_lanes` promises
 //! `Shape::contacts`' bits, which visits the slots in order; `v' · x =
 //! x · v'` exactly), so the results are the same bits: slots without a
 //! contact add nothing, as in the generic pass, and neither do the pairs
@@ -40,7 +40,7 @@
 
 use crate::lanes::add;
 use jamkit_core::{ContactLanes, MAX_ROT, MAX_SLOTS, Packing, PeriodicBox, Potential, RotVec};
-use jamkit_core::{Shape, SlotPairs, Vector};
+use jamkit_core::{FastContacts, Shape, SlotPairs, Vector};
 
 /// Pairs per chunk: with `k²` slots of contacts a pair, a chunk's terms
 /// stay in L1 between the phases (3D dimers: 4 × 5 kB).
@@ -49,7 +49,7 @@ const CHUNK: usize = 32;
 /// The bodies and the list, as the kernel reads them.
 pub(crate) struct Slots<'a, const D: usize, S: Shape<D>> {
     pub packing: &'a Packing<D, S>,
-    /// `Shape::body_terms` of every body, `Shape::body_terms_len` a body.
+    /// `FastContacts::body_terms` of every body, `FastContacts::body_terms_len` a body.
     pub terms: &'a [f64],
     /// `[b_i, b_j]` per pair, in list order.
     pub pair_reach: &'a [[f64; 2]],
@@ -62,7 +62,7 @@ pub(crate) struct Slots<'a, const D: usize, S: Shape<D>> {
 /// (made anew, zeroing them took 5 % of a 3D dimer run).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Scratch<const D: usize> {
-    /// Each slot's contacts in a chunk (`Shape::contact_slots` of them).
+    /// Each slot's contacts in a chunk (`FastContacts::contact_slots` of them).
     contacts: Vec<ContactLanes<D, CHUNK>>,
     /// The chunk's contacts that count, as (pair in the chunk, slot).
     found: Vec<(u16, u16)>,
@@ -115,7 +115,7 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
             return 0.0;
         }
         let k = self.packing.shape.rot_dof();
-        let slots = self.packing.shape.contact_slots().min(MAX_SLOTS);
+        let slots = S::Fast::contact_slots(&self.packing.shape).min(MAX_SLOTS);
         let Scratch {
             contacts,
             found,
@@ -251,9 +251,7 @@ impl<const D: usize, S: Shape<D>> Slots<'_, D, S> {
             }
             lanes.r2[l] = picked.r2[at];
         }
-        self.packing
-            .shape
-            .slot_contacts_lanes(self.terms, lanes, contacts);
+        S::Fast::slot_contacts_lanes(&self.packing.shape, self.terms, lanes, contacts);
         // The contacts that count, pair by pair and each pair's slots in
         // order (the generic pass's order), with no branch.
         let mut m = 0;

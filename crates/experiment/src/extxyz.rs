@@ -12,7 +12,7 @@
 //! | `radius` | the size `R⁰` (the sphere's radius for a rigid body's sphere) |
 //! | `orientation` | the rotation as a unit quaternion in OVITO's order `(x, y, z, w)`: a planar angle θ is `(0, 0, sin θ/2, cos θ/2)` |
 //! | `angle` | planar families: θ itself (radians), for colouring |
-//! | `aspherical_shape` | families whose shape gives [`Shape::ellipsoid_axes`]: ellipses the semi-axes `(a, b, b)`, `a = R⁰√α`, `b = R⁰/√α`; ellipsoids `R⁰ (ξ_x, ξ_y, ξ_z)` along the body axes |
+//! | `aspherical_shape` | families whose shape gives [`Look::ellipsoid_axes`](jamkit_core::Look::ellipsoid_axes): ellipses the semi-axes `(a, b, b)`, `a = R⁰√α`, `b = R⁰/√α`; ellipsoids `R⁰ (ξ_x, ξ_y, ξ_z)` along the body axes |
 //! | `body` | rigid bodies: the body a sphere belongs to |
 //! | `contacts` | the body's contacts (`h < 0`), each contact counted at both bodies |
 //! | `rattler` | 1 for a rattler, 0 otherwise (only when contacts were measured) |
@@ -53,12 +53,12 @@ impl SceneVisitor for AxesOf {
     type Output = Option<[f64; 3]>;
 
     fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Option<[f64; 3]> {
-        shape.ellipsoid_axes()
+        shape.look().ellipsoid_axes
     }
 }
 
 /// The semi-axes per unit size of the packing's bodies, if its family's
-/// shape is an ellipse or ellipsoid ([`Shape::ellipsoid_axes`]).
+/// shape is an ellipse or ellipsoid ([`Look::ellipsoid_axes`](jamkit_core::Look::ellipsoid_axes)).
 fn ellipsoid_axes(file: &PackingFile) -> Option<[f64; 3]> {
     let params = jamkit_registry::params_from_json(&file.params).ok()?;
     jamkit_registry::dispatch(&file.family, file.dim, &params, AxesOf)

@@ -15,6 +15,7 @@
 use crate::error::ExperimentError;
 use crate::schema::{Experiment, Protocol, ScanSetting, scan_value_text};
 use jamkit_core::FamilyInfo;
+use jamkit_core::Pair;
 use jamkit_engine::FireParams;
 use jamkit_registry::{self as registry, ParamMap};
 
@@ -325,10 +326,10 @@ impl registry::SceneVisitor for CheckOnly<'_> {
     type Output = Result<FireParams, ExperimentError>;
     fn visit<const D: usize, S: jamkit_core::Shape<D>>(self, shape: S) -> Self::Output {
         if let Some(observable) = self.hessian {
-            let o = shape.reference_orientation();
+            let o = <S::Orientation as jamkit_core::BodyOrientation>::reference();
             let apart = jamkit_core::Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
             shape
-                .gap_hessians(1.0, &o, 1.0, &o, &apart, f64::INFINITY, |_| {})
+                .gap_hessians(&Pair::new(1.0, o, 1.0, o, apart), f64::INFINITY, |_| {})
                 .map_err(|e| ExperimentError::invalid("observables", observable, e.to_string()))?;
         }
         Ok(self.minimizer.for_family(&shape))

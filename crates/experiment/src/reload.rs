@@ -5,13 +5,14 @@
 //! The file holds the family's parameters, the box edges, every centre,
 //! size and orientation, and the settings it was made with (potential,
 //! Verlet skin). Orientations come back through the family's
-//! `orientation_from_coords`, so they agree with the ones in memory only to
+//! `BodyOrientation::from_coords`, so they agree with the ones in memory only to
 //! the last bit or two (an angle is stored, not its cosine and sine); the
 //! runner therefore measures a new packing on the scene rebuilt here from
 //! its file (`sample::measure_saved`), so that a re-measure is bit for bit.
 
 use crate::error::ExperimentError;
 use crate::schema::EngineParams;
+use jamkit_core::BodyOrientation;
 use jamkit_core::{Packing, PeriodicBox, Potential, Shape, Vector};
 use jamkit_engine::Scene;
 use jamkit_format::PackingFile;
@@ -84,7 +85,7 @@ impl<V: PackingVisitor> SceneVisitor for Builder<'_, V> {
             .map(|r| vector(r, "positions"))
             .collect::<Result<Vec<_>, _>>()?;
         let orientations = if shape.rot_dof() == 0 {
-            vec![shape.reference_orientation(); f.particles]
+            vec![S::Orientation::reference(); f.particles]
         } else {
             if f.orientations.len() != f.particles {
                 return Err(bad(
@@ -95,7 +96,7 @@ impl<V: PackingVisitor> SceneVisitor for Builder<'_, V> {
             f.orientations
                 .iter()
                 .map(|o| {
-                    shape.orientation_from_coords(o).ok_or_else(|| {
+                    S::Orientation::from_coords(o).ok_or_else(|| {
                         bad(
                             "orientations",
                             format!("{o:?} is not an orientation of family `{}`", f.family),

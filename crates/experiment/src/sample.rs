@@ -13,6 +13,7 @@ use crate::error::ExperimentError;
 use crate::grid::{Job, Point};
 use crate::reload::{PackingVisitor, reload};
 use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
+use jamkit_core::BodyOrientation;
 use jamkit_core::{Packing, Shape};
 use jamkit_engine::{
     Fire, FireParams, JamParams, PressureParams, Progress, Scene, compress_to_phi,
@@ -166,7 +167,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                         let threshold = e
                             .rattlers
                             .min_contacts
-                            .unwrap_or_else(|| scene.packing().shape.rattler_threshold());
+                            .unwrap_or_else(|| scene.packing().shape.policy().rattler_threshold);
                         let s = saddle::escape_saddles(
                             &mut scene,
                             &mut fire,
@@ -400,10 +401,7 @@ impl SampleVisitor<'_> {
             },
             radii: if write { p.sizes.clone() } else { Vec::new() },
             orientations: if write && p.shape.rot_dof() > 0 {
-                p.orientations
-                    .iter()
-                    .map(|o| p.shape.orientation_coords(o))
-                    .collect()
+                p.orientations.iter().map(|o| o.to_coords()).collect()
             } else {
                 Vec::new()
             },
@@ -499,7 +497,7 @@ fn rattler_rule<const D: usize, S: Shape<D>>(e: &Experiment, p: &Packing<D, S>) 
     match e.rattlers.min_contacts {
         Some(t) => RattlerRule::Count(t),
         None if made_of_spheres => RattlerRule::Rank,
-        None => RattlerRule::Count(p.shape.rattler_threshold()),
+        None => RattlerRule::Count(p.shape.policy().rattler_threshold),
     }
 }
 
@@ -665,9 +663,10 @@ impl Observed {
         shape: &S,
     ) -> Measures {
         let contacts = self.contacts.as_ref();
-        let mut flags = shape.warnings();
+        let policy = shape.policy();
+        let mut flags = policy.warnings;
         if let (Some(s), Protocol::Jam { .. }, true) =
-            (contacts, &e.protocol, shape.expects_isostatic())
+            (contacts, &e.protocol, policy.expects_isostatic)
             && s.iso_margin < 1
         {
             flags.push(format!(

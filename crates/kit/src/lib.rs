@@ -19,7 +19,7 @@
 //!   family's rotational coordinates allow turning a body about that axis
 //!   (none, one angle in 2D, three world-frame angles in 3D);
 //! * **lanes = generic pass bit for bit**, for families with lane kernels
-//!   (`Shape::LANE_CONTACTS`) and contact slots (`Shape::contact_slots`);
+//!   (`FastContacts::LANES`) and contact slots (`FastContacts::contact_slots`);
 //! * **a small jamming run**: 16 bodies or more (as many as the box
 //!   needs to hold twice the interaction range) compressed from φ = 0.1 to the
 //!   paper's window `10⁻¹⁶ < V/N < 2·10⁻¹⁶`;
@@ -30,7 +30,10 @@
 //! special to it (its gap against a formula written out, its area against
 //! quadrature).
 
-use jamkit_core::{Contact, Packing, Potential, Shape, SizeDistribution, Vector};
+use jamkit_core::{
+    BodyOrientation, Contact, Kernel, Packing, Potential, Shape, SizeDistribution, Vector,
+};
+use jamkit_core::{Pair, ShapeExt};
 use jamkit_engine::check::gradient_error;
 use jamkit_engine::hessian::{Hessian, HessianOptions, finite_difference};
 use jamkit_engine::{Fire, FireParams, JamParams, Objective, Scene, jam};
@@ -96,7 +99,7 @@ pub fn check_family<const D: usize, S: Shape<D>>(shape: S) -> Checked {
             "its rotational coordinates cannot turn a body about a fixed world axis",
         ));
     }
-    if (S::LANE_CONTACTS && shape.use_lanes()) || shape.contact_slots() > 0 {
+    if matches!(shape.kernel(), Kernel::Lanes | Kernel::Slots(_)) {
         check_lanes(&shape);
         done.ran.push("lanes");
     } else {
@@ -139,10 +142,10 @@ pub fn check_hessian<const D: usize, S: Shape<D>>(shape: &S) -> bool {
 /// `seed` ([`dense`]).
 pub fn check_hessian_at<const D: usize, S: Shape<D>>(shape: &S, n: usize, seed: u64) -> bool {
     let name = &describe(shape);
-    let o = shape.reference_orientation();
+    let o = S::Orientation::reference();
     let apart = Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
     if shape
-        .gap_hessians(1.0, &o, 1.0, &o, &apart, f64::INFINITY, |_| {})
+        .gap_hessians(&Pair::new(1.0, o, 1.0, o, apart), f64::INFINITY, |_| {})
         .is_err()
     {
         return false;
@@ -189,11 +192,13 @@ pub fn check_symmetry<const D: usize, S: Shape<D>>(shape: &S) {
             let gaps = |a: usize, b: usize, r: Vector<D>| {
                 let mut g: Vec<f64> = shape
                     .pair_contacts(
-                        p.sizes[a],
-                        &p.orientations[a],
-                        p.sizes[b],
-                        &p.orientations[b],
-                        &r,
+                        &Pair::new(
+                            p.sizes[a],
+                            p.orientations[a],
+                            p.sizes[b],
+                            p.orientations[b],
+                            r,
+                        ),
                         f64::INFINITY,
                     )
                     .iter()
@@ -428,7 +433,7 @@ pub fn pair_gap_at<const D: usize, S: Shape<D>>(
     for k in 0..D {
         r[k] += z[k];
     }
-    let c = shape.pair_contacts(sizes.0, &a, sizes.1, &b, &r, f64::INFINITY);
+    let c = shape.pair_contacts(&Pair::new(sizes.0, a, sizes.1, b, r), f64::INFINITY);
     assert_eq!(c.len(), 1, "{}: one contact per pair", describe(shape));
     c[0].gap
 }
@@ -486,12 +491,17 @@ pub fn pair_derivatives<const D: usize, S: Shape<D>>(
     let n = D + 2 * m;
     let mut found = None;
     shape
-        .gap_hessians(sizes.0, o_i, sizes.1, o_j, r_ij, f64::INFINITY, |h| {
-            found = Some(h)
-        })
+        .gap_hessians(
+            &Pair::new(sizes.0, *o_i, sizes.1, *o_j, *r_ij),
+            f64::INFINITY,
+            |h| found = Some(h),
+        )
         .unwrap();
     let h = found.expect("gap_hessians visits the pair");
-    let c = shape.pair_contacts(sizes.0, o_i, sizes.1, o_j, r_ij, f64::INFINITY);
+    let c = shape.pair_contacts(
+        &Pair::new(sizes.0, *o_i, sizes.1, *o_j, *r_ij),
+        f64::INFINITY,
+    );
     assert_eq!(c.len(), 1, "{}: one contact per pair", describe(shape));
     let c = c[0];
     assert_eq!(h.contact, c, "gap_hessians and contacts agree bit for bit");
@@ -572,8 +582,14 @@ pub fn check_swapped<const D: usize, S: Shape<D>>(
         assert_eq!(c.len(), 1, "{}: one contact per pair", describe(shape));
         c[0]
     };
-    let ij = one(shape.pair_contacts(sizes.0, o_i, sizes.1, o_j, r_ij, f64::INFINITY));
-    let ji = one(shape.pair_contacts(sizes.1, o_j, sizes.0, o_i, &-r_ij, f64::INFINITY));
+    let ij = one(shape.pair_contacts(
+        &Pair::new(sizes.0, *o_i, sizes.1, *o_j, *r_ij),
+        f64::INFINITY,
+    ));
+    let ji = one(shape.pair_contacts(
+        &Pair::new(sizes.1, *o_j, sizes.0, *o_i, -r_ij),
+        f64::INFINITY,
+    ));
     assert!(
         relative_eq(ij.gap, ji.gap, eps_gap),
         "h_ij = {} but h_ji = {}",
@@ -638,6 +654,7 @@ mod tests {
 
     impl Shape<2> for WrongDisk {
         type Orientation = ();
+        type Fast = jamkit_core::NoFastPath;
         fn family(&self) -> &'static str {
             "wrong_disk"
         }
@@ -651,16 +668,10 @@ mod tests {
             size
         }
         fn rotate(&self, _o: &mut (), _dq: &[f64]) {}
-        fn contacts<F: FnMut(Contact<2>)>(
-            &self,
-            size_i: f64,
-            _o_i: &(),
-            size_j: f64,
-            _o_j: &(),
-            r_ij: &Vector<2>,
-            max_gap: f64,
-            mut visit: F,
-        ) {
+        fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, ()>, max_gap: f64, mut visit: F) {
+            let size_i = pair.size_i;
+            let size_j = pair.size_j;
+            let r_ij = &pair.r_ij;
             let d = r_ij.norm();
             let gap = d - size_i - size_j;
             if gap <= max_gap {
@@ -669,11 +680,7 @@ mod tests {
         }
         fn gap_hessians<F: FnMut(GapHessian<2>)>(
             &self,
-            _size_i: f64,
-            _o_i: &(),
-            _size_j: f64,
-            _o_j: &(),
-            _r_ij: &Vector<2>,
+            _pair: &Pair<2, ()>,
             _max_gap: f64,
             _visit: F,
         ) -> Result<()> {

@@ -62,6 +62,7 @@
 use crate::hessian::{Hessian, HessianOptions, add_contact};
 use crate::pinverse::SparseInverse;
 use crate::spectrum::ZeroModes;
+use jamkit_core::Pair;
 use jamkit_core::{Error, Matrix, Packing, PeriodicBox, Potential, Result, Shape, Vector};
 use jamkit_engine::{Fire, FireParams, Objective, Scene};
 use serde::{Deserialize, Serialize};
@@ -886,11 +887,13 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
             let (i, j) = (i as usize, j as usize);
             let r = self.separation(i, j, &r0);
             self.shape.contacts(
-                self.sizes[i],
-                &self.orientations[i],
-                self.sizes[j],
-                &self.orientations[j],
-                &r,
+                &Pair::new(
+                    self.sizes[i],
+                    self.orientations[i],
+                    self.sizes[j],
+                    self.orientations[j],
+                    r,
+                ),
                 0.0,
                 |c| visit(i, j, &r0, &r, &c),
             );
@@ -1058,11 +1061,13 @@ impl<const D: usize, S: Shape<D>> Objective for Strained<D, S> {
             let (iu, ju) = (i as usize, j as usize);
             let r = self.separation(iu, ju, &r0);
             let outcome = self.shape.gap_hessians(
-                self.sizes[iu],
-                &self.orientations[iu],
-                self.sizes[ju],
-                &self.orientations[ju],
-                &r,
+                &Pair::new(
+                    self.sizes[iu],
+                    self.orientations[iu],
+                    self.sizes[ju],
+                    self.orientations[ju],
+                    r,
+                ),
                 0.0,
                 |c| {
                     add_contact::<D>(
@@ -1246,11 +1251,13 @@ impl<const D: usize, S: Shape<D>> Cell<D> for Strained<D, S> {
             let (i, j) = (i as usize, j as usize);
             let r = self.separation(i, j, &r0);
             self.shape.gap_hessians(
-                self.sizes[i],
-                &self.orientations[i],
-                self.sizes[j],
-                &self.orientations[j],
-                &r,
+                &Pair::new(
+                    self.sizes[i],
+                    self.orientations[i],
+                    self.sizes[j],
+                    self.orientations[j],
+                    r,
+                ),
                 0.0,
                 |c| visit(i, j, &r, &c),
             )?;

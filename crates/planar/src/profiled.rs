@@ -40,7 +40,8 @@
 use crate::first_order::{Profile, gap_hessian};
 use crate::gap2d::direction;
 use jamkit_core::{
-    Angle, Contact, Error, GapHessian, Outline, RotVec, Shape, SharedOutline, Vector,
+    Angle, Contact, Error, GapHessian, Look, NoFastPath, Outline, Pair, Policy, RotVec, Shape,
+    Vector,
 };
 use std::f64::consts::PI;
 use std::fmt::Debug;
@@ -211,6 +212,7 @@ impl<P: NearDiskProfile> Outline for Profiled<P> {
 
 impl<P: NearDiskProfile> Shape<2> for Profiled<P> {
     type Orientation = Angle<1>;
+    type Fast = NoFastPath;
 
     fn family(&self) -> &'static str {
         P::FAMILY
@@ -233,47 +235,44 @@ impl<P: NearDiskProfile> Shape<2> for Profiled<P> {
         [self.inertia, 1.0, 1.0]
     }
 
-    fn outline(&self) -> Option<SharedOutline> {
-        Some(std::sync::Arc::new(self.clone()))
-    }
-
     fn rotate(&self, o: &mut Angle<1>, dq: &[f64]) {
         *o = o.turned(dq[0]);
     }
 
-    /// Three, as for the paper's near-disks (`d + 1`).
-    fn rattler_threshold(&self) -> usize {
-        3
-    }
-
-    /// Near-disks jam hypostatic.
-    fn expects_isostatic(&self) -> bool {
-        false
-    }
-
-    fn warnings(&self) -> Vec<String> {
-        if self.is_convex() {
-            Vec::new()
-        } else {
-            vec![format!(
+    /// Rattlers below three contacts, as for the paper's near-disks
+    /// (`d + 1`); near-disks jam hypostatic; a warning where the outline is
+    /// not convex.
+    fn policy(&self) -> Policy {
+        let mut warnings = Vec::new();
+        if !self.is_convex() {
+            warnings.push(format!(
                 "non-convex outline (Δ = {}, {}): the first-order gap assumes convex bodies with one contact per pair",
                 self.delta,
                 self.profile.describe()
-            )]
+            ));
+        }
+        Policy {
+            rattler_threshold: 3,
+            expects_isostatic: false,
+            warnings,
+            ..Policy::new(2)
+        }
+    }
+
+    fn look(&self) -> Look {
+        Look {
+            outline: Some(std::sync::Arc::new(self.clone())),
+            ..Look::default()
         }
     }
 
     #[inline(always)]
-    fn contacts<F: FnMut(Contact<2>)>(
-        &self,
-        size_i: f64,
-        o_i: &Angle<1>,
-        size_j: f64,
-        o_j: &Angle<1>,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-        mut visit: F,
-    ) {
+    fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, Angle<1>>, max_gap: f64, mut visit: F) {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         let r = r_ij.norm();
         // P ≤ max P, so h ≥ |r| − b_i − b_j: skip pairs certainly apart.
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
@@ -299,14 +298,15 @@ impl<P: NearDiskProfile> Shape<2> for Profiled<P> {
     /// ([`first_order::gap_hessian`](crate::first_order::gap_hessian)).
     fn gap_hessians<V: FnMut(GapHessian<2>)>(
         &self,
-        size_i: f64,
-        o_i: &Angle<1>,
-        size_j: f64,
-        o_j: &Angle<1>,
-        r_ij: &Vector<2>,
+        pair: &Pair<2, Angle<1>>,
         max_gap: f64,
         mut visit: V,
     ) -> jamkit_core::Result<()> {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         let (r, u, _) = direction(r_ij);
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return Ok(());

@@ -64,8 +64,8 @@
 //! spectrally accurate for this smooth periodic integrand.
 
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, Outline, ParamSpec, RotVec, Shape, ShapeVisitor,
-    SharedOutline, Vector,
+    Contact, Dims, Family, FamilyInfo, GapHessian, Look, NoFastPath, Outline, Pair, ParamSpec,
+    Policy, RotVec, Shape, ShapeVisitor, Vector,
 };
 use jamkit_planar::gap2d::{ExactGap, SupportJet};
 use serde::Deserialize;
@@ -456,6 +456,7 @@ fn asphericity_of(alpha: f64) -> f64 {
 
 impl Shape<2> for Ellipse {
     type Orientation = Axis;
+    type Fast = NoFastPath;
 
     fn family(&self) -> &'static str {
         INFO.name
@@ -475,16 +476,6 @@ impl Shape<2> for Ellipse {
         size * self.root
     }
 
-    fn outline(&self) -> Option<SharedOutline> {
-        Some(std::sync::Arc::new(self.clone()))
-    }
-
-    /// `(√α, 1/√α, 1/√α)`: the semi-axes per unit size, the third (out of
-    /// the plane) taken as the short one.
-    fn ellipsoid_axes(&self) -> Option<[f64; 3]> {
-        Some([self.root, 1.0 / self.root, 1.0 / self.root])
-    }
-
     fn rot_inertia(&self, size: f64) -> RotVec {
         let i = self.inertia.unwrap_or_else(|| {
             let (a, b) = self.semi_axes(size);
@@ -498,27 +489,33 @@ impl Shape<2> for Ellipse {
         *o = o.turned(dq[0]);
     }
 
-    /// `d + 1 = 3`, as for near-disks.
-    fn rattler_threshold(&self) -> usize {
-        3
+    /// Rattlers below `d + 1 = 3` contacts, as for near-disks; ellipses jam
+    /// hypostatic (Donev et al. 2007).
+    fn policy(&self) -> Policy {
+        Policy {
+            expects_isostatic: false,
+            ..Policy::new(2)
+        }
     }
 
-    /// Ellipses jam hypostatic (Donev et al. 2007).
-    fn expects_isostatic(&self) -> bool {
-        false
+    /// The outline for drawing, and the semi-axes per unit size for export,
+    /// `(√α, 1/√α, 1/√α)`, the third (out of the plane) taken as the short
+    /// one.
+    fn look(&self) -> Look {
+        Look {
+            outline: Some(std::sync::Arc::new(self.clone())),
+            ellipsoid_axes: Some([self.root, 1.0 / self.root, 1.0 / self.root]),
+            ..Look::default()
+        }
     }
 
     #[inline]
-    fn contacts<F: FnMut(Contact<2>)>(
-        &self,
-        size_i: f64,
-        o_i: &Axis,
-        size_j: f64,
-        o_j: &Axis,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-        mut visit: F,
-    ) {
+    fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, Axis>, max_gap: f64, mut visit: F) {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if let Some(s) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
             visit(s.contact());
         }
@@ -526,14 +523,15 @@ impl Shape<2> for Ellipse {
 
     fn gap_hessians<V: FnMut(GapHessian<2>)>(
         &self,
-        size_i: f64,
-        o_i: &Axis,
-        size_j: f64,
-        o_j: &Axis,
-        r_ij: &Vector<2>,
+        pair: &Pair<2, Axis>,
         max_gap: f64,
         mut visit: V,
     ) -> jamkit_core::Result<()> {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if let Some(s) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
             visit(s.hessian());
         }
@@ -545,6 +543,7 @@ impl Shape<2> for Ellipse {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use jamkit_core::{Pair, ShapeExt};
     use std::f64::consts::FRAC_PI_2;
 
     fn ellipse(aspect: f64) -> Ellipse {
@@ -556,7 +555,10 @@ mod tests {
     }
 
     fn contact(s: &Ellipse, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> Contact<2> {
-        s.pair_contacts(ri, &Axis::new(ti), rj, &Axis::new(tj), &d, f64::INFINITY)[0]
+        s.pair_contacts(
+            &Pair::new(ri, Axis::new(ti), rj, Axis::new(tj), d),
+            f64::INFINITY,
+        )[0]
     }
 
     fn gap(s: &Ellipse, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> f64 {

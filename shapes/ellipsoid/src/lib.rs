@@ -78,8 +78,8 @@
 
 use jamkit_core::Error;
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, ParamSpec, Quaternion, RotVec, Shape,
-    ShapeVisitor, Vector,
+    Contact, Dims, Family, FamilyInfo, GapHessian, Look, MAX_ROT, NoFastPath, Pair, ParamSpec,
+    Policy, Quaternion, RotVec, Shape, ShapeVisitor, Vector,
 };
 use jamkit_gap3d::{self as gap3d, ExactGap3, QuadraticSupport, WORLD_AXES};
 use serde::Deserialize;
@@ -418,6 +418,7 @@ impl jamkit_core::Surface for EllipsoidSurface {
 
 impl Shape<3> for Ellipsoid {
     type Orientation = Quaternion;
+    type Fast = NoFastPath;
 
     fn family(&self) -> &'static str {
         INFO.name
@@ -459,37 +460,37 @@ impl Shape<3> for Ellipsoid {
         *o = o.stepped(dq, self.axial);
     }
 
-    /// The ellipsoid, for drawing ([`EllipsoidSurface`]).
-    fn surface(&self) -> Option<jamkit_core::SharedSurface> {
-        Some(std::sync::Arc::new(EllipsoidSurface(self.clone())))
+    /// Rattlers below `d + 1 = 4` contacts, the paper's convention carried
+    /// to 3D; ellipsoids jam hypostatic (Donev et al. 2004).
+    fn policy(&self) -> Policy {
+        Policy {
+            expects_isostatic: false,
+            ..Policy::new(3)
+        }
     }
 
-    /// The ratios `ξ` along the body axes; `None` for the ball.
-    fn ellipsoid_axes(&self) -> Option<[f64; 3]> {
-        (!self.ball).then_some(self.ratios)
-    }
-
-    /// `d + 1 = 4`, the paper's convention carried to 3D.
-    fn rattler_threshold(&self) -> usize {
-        4
-    }
-
-    /// Ellipsoids jam hypostatic (Donev et al. 2004).
-    fn expects_isostatic(&self) -> bool {
-        false
+    /// The ellipsoid, for drawing ([`EllipsoidSurface`]), and its ratios `ξ`
+    /// along the body axes for export (none for the ball).
+    fn look(&self) -> Look {
+        Look {
+            surface: Some(std::sync::Arc::new(EllipsoidSurface(self.clone()))),
+            ellipsoid_axes: (!self.ball).then_some(self.ratios),
+            ..Look::default()
+        }
     }
 
     #[inline]
     fn contacts<F: FnMut(Contact<3>)>(
         &self,
-        size_i: f64,
-        o_i: &Quaternion,
-        size_j: f64,
-        o_j: &Quaternion,
-        r_ij: &Vector<3>,
+        pair: &Pair<3, Quaternion>,
         max_gap: f64,
         mut visit: F,
     ) {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
             visit(e.contact(&self.axes(o_i), &self.axes(o_j), self.rot_dof()));
         }
@@ -497,14 +498,15 @@ impl Shape<3> for Ellipsoid {
 
     fn gap_hessians<V: FnMut(GapHessian<3>)>(
         &self,
-        size_i: f64,
-        o_i: &Quaternion,
-        size_j: f64,
-        o_j: &Quaternion,
-        r_ij: &Vector<3>,
+        pair: &Pair<3, Quaternion>,
         max_gap: f64,
         mut visit: V,
     ) -> jamkit_core::Result<()> {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
             visit(e.hessian(&self.axes(o_i), &self.axes(o_j), self.rot_dof()));
         }

@@ -6,6 +6,7 @@
 
 use super::*;
 use approx::assert_relative_eq;
+use jamkit_core::{Pair, ShapeExt};
 
 fn spheroid(alpha: f64) -> Ellipsoid {
     Ellipsoid::spheroid(alpha).unwrap()
@@ -62,7 +63,7 @@ fn separations(s: &Ellipsoid, o_i: &Quaternion, o_j: &Quaternion) -> Vec<Vector<
 }
 
 fn contact(s: &Ellipsoid, o_i: &Quaternion, o_j: &Quaternion, r: &Vector<3>) -> Contact<3> {
-    let c = s.pair_contacts(SIZES.0, o_i, SIZES.1, o_j, r, f64::INFINITY);
+    let c = s.pair_contacts(&Pair::new(SIZES.0, *o_i, SIZES.1, *o_j, *r), f64::INFINITY);
     assert_eq!(c.len(), 1);
     c[0]
 }
@@ -465,7 +466,7 @@ fn aligned_spheroids_have_known_gaps() {
 fn the_drawing_surface_is_the_shape() {
     use rand::SeedableRng;
     let s = triaxial([1.0, 1.4, 2.2]);
-    let surface = Shape::<3>::surface(&s).unwrap();
+    let surface = Shape::<3>::look(&s).surface.unwrap();
     let (lo, hi) = surface.relative_radius_bounds();
     let ratios = s.ratios();
     assert_relative_eq!(lo, ratios[0], epsilon = 1e-15);

@@ -37,8 +37,8 @@
 
 use jamkit_core::math::{Unit, cmul, turn_unit};
 use jamkit_core::{
-    Contact, ContactLanes, Dims, Family, FamilyInfo, GapHessian, Outline, PairLanes, ParamSpec,
-    Shape, ShapeVisitor, SharedOutline, Vector, contacts_one_by_one,
+    Contact, ContactLanes, Dims, Family, FamilyInfo, FastContacts, GapHessian, Look, Outline, Pair,
+    PairLanes, ParamSpec, Policy, Shape, ShapeVisitor, Vector, contacts_one_by_one,
 };
 use jamkit_planar::first_order::{Profile, gap_hessian};
 use jamkit_planar::gap2d::{self, GapModel, Jet3, SupportJet};
@@ -783,6 +783,7 @@ impl NearDisk {
 
 impl Shape<2> for NearDisk {
     type Orientation = Angle;
+    type Fast = Self;
 
     fn family(&self) -> &'static str {
         self.name
@@ -804,93 +805,43 @@ impl Shape<2> for NearDisk {
         [self.inertia, 1.0, 1.0]
     }
 
-    fn outline(&self) -> Option<SharedOutline> {
-        Some(std::sync::Arc::new(self.clone()))
-    }
-
     #[inline]
     fn rotate(&self, o: &mut Angle, dq: &[f64]) {
         *o = o.turned(dq[0]);
     }
 
-    fn rattler_threshold(&self) -> usize {
-        3
-    }
-
-    fn expects_isostatic(&self) -> bool {
-        false
-    }
-
-    fn warnings(&self) -> Vec<String> {
-        if self.is_convex() {
-            Vec::new()
-        } else {
-            vec![format!(
+    /// Rattlers below three contacts (`d + 1`); near-disks jam hypostatic;
+    /// a warning where the outline is not convex.
+    fn policy(&self) -> Policy {
+        let mut warnings = Vec::new();
+        if !self.is_convex() {
+            warnings.push(format!(
                 "non-convex outline (Δ = {}): the first-order gap assumes convex bodies with one contact per pair",
                 self.delta
-            )]
+            ));
+        }
+        Policy {
+            rattler_threshold: 3,
+            expects_isostatic: false,
+            warnings,
+            ..Policy::new(2)
         }
     }
 
-    /// At most one contact per pair, for every gap model.
-    const LANE_CONTACTS: bool = true;
-
-    /// Only the first-order gap has a lane kernel.
-    ///
-    /// NOTE: through the lanes (one `contacts` call per pair, apart pairs
-    /// included), second-order packings took 1.40 s user against 0.95 s
-    /// through the generic pass (N = 64, n = 3, Δ = 0.1; same bits).
-    fn use_lanes(&self) -> bool {
-        self.gap == GapModel::FirstOrder
-    }
-
-    /// The first-order contacts by [`NearDisk::first_order_lanes`]; the
-    /// other gap models one pair at a time (correct, though the engine does
-    /// not ask: [`NearDisk::use_lanes`]).
-    ///
-    /// NOTE: one copy of the kernel per mode number n ≤ 6 of the paper's
-    /// family (`n` a literal in each arm, so `e^{inA}`'s products are
-    /// straight-line code); the branch, once per chunk of pairs, goes the
-    /// same way for every call of a run.
-    #[inline(always)]
-    fn contacts_lanes<const W: usize>(
-        &self,
-        pairs: &PairLanes<2, Angle, W>,
-        out: &mut ContactLanes<2, W>,
-    ) {
-        if self.gap != GapModel::FirstOrder {
-            return contacts_one_by_one(self, pairs, out);
-        }
-        if let [m] = self.modes[..]
-            && m.b == 0.0
-        {
-            match m.n {
-                1 => self.single_mode_lanes::<1, W>(m, pairs, out),
-                2 => self.single_mode_lanes::<2, W>(m, pairs, out),
-                3 => self.single_mode_lanes::<3, W>(m, pairs, out),
-                4 => self.single_mode_lanes::<4, W>(m, pairs, out),
-                5 => self.single_mode_lanes::<5, W>(m, pairs, out),
-                6 => self.single_mode_lanes::<6, W>(m, pairs, out),
-                n => self.first_order_lanes(pairs, out, |e_i, e_j| {
-                    single_mode(m, cpow_pair(e_i, e_j, n))
-                }),
-            }
-        } else {
-            self.first_order_lanes(pairs, out, |e_i, e_j| self.f_modes(e_i, e_j));
+    fn look(&self) -> Look {
+        Look {
+            outline: Some(std::sync::Arc::new(self.clone())),
+            ..Look::default()
         }
     }
 
     #[inline(always)]
-    fn contacts<F: FnMut(Contact<2>)>(
-        &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-        mut visit: F,
-    ) {
+    fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, Angle>, max_gap: f64, mut visit: F) {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         let r = r_ij.norm();
         // The gap is at least |r| − bounding radii; skip pairs certainly apart.
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
@@ -912,14 +863,15 @@ impl Shape<2> for NearDisk {
     /// ([`jamkit_planar::first_order`], with `P = F`).
     fn gap_hessians<V: FnMut(GapHessian<2>)>(
         &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
+        pair: &Pair<2, Angle>,
         max_gap: f64,
         mut visit: V,
     ) -> jamkit_core::Result<()> {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         let r = r_ij.norm();
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return Ok(());
@@ -957,10 +909,62 @@ impl Shape<2> for NearDisk {
     }
 }
 
+/// The first-order gap's lane kernel (at most one contact per pair, for
+/// every gap model).
+impl FastContacts<2, NearDisk> for NearDisk {
+    const LANES: bool = true;
+
+    /// Only the first-order gap has a lane kernel.
+    ///
+    /// NOTE: through the lanes (one `contacts` call per pair, apart pairs
+    /// included), second-order packings took 1.40 s user against 0.95 s
+    /// through the generic pass (N = 64, n = 3, Δ = 0.1; same bits).
+    fn use_lanes(shape: &NearDisk) -> bool {
+        shape.gap == GapModel::FirstOrder
+    }
+
+    /// The first-order contacts by [`NearDisk::first_order_lanes`]; the
+    /// other gap models one pair at a time (correct, though the engine does
+    /// not ask: [`NearDisk::use_lanes`]).
+    ///
+    /// NOTE: one copy of the kernel per mode number n ≤ 6 of the paper's
+    /// family (`n` a literal in each arm, so `e^{inA}`'s products are
+    /// straight-line code); the branch, once per chunk of pairs, goes the
+    /// same way for every call of a run.
+    #[inline(always)]
+    fn contacts_lanes<const W: usize>(
+        shape: &NearDisk,
+        pairs: &PairLanes<2, Angle, W>,
+        out: &mut ContactLanes<2, W>,
+    ) {
+        if shape.gap != GapModel::FirstOrder {
+            return contacts_one_by_one(shape, pairs, out);
+        }
+        if let [m] = shape.modes[..]
+            && m.b == 0.0
+        {
+            match m.n {
+                1 => shape.single_mode_lanes::<1, W>(m, pairs, out),
+                2 => shape.single_mode_lanes::<2, W>(m, pairs, out),
+                3 => shape.single_mode_lanes::<3, W>(m, pairs, out),
+                4 => shape.single_mode_lanes::<4, W>(m, pairs, out),
+                5 => shape.single_mode_lanes::<5, W>(m, pairs, out),
+                6 => shape.single_mode_lanes::<6, W>(m, pairs, out),
+                n => shape.first_order_lanes(pairs, out, |e_i, e_j| {
+                    single_mode(m, cpow_pair(e_i, e_j, n))
+                }),
+            }
+        } else {
+            shape.first_order_lanes(pairs, out, |e_i, e_j| shape.f_modes(e_i, e_j));
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use jamkit_core::ShapeExt;
 
     fn fourier(n: u32, delta: f64) -> NearDisk {
         NearDisk::fourier(&FourierParams {
@@ -973,7 +977,11 @@ mod tests {
     }
 
     fn gap(s: &NearDisk, ri: f64, ti: f64, rj: f64, tj: f64, d: Vector<2>) -> f64 {
-        s.pair_contacts(ri, &Angle::new(ti), rj, &Angle::new(tj), &d, f64::INFINITY)[0].gap
+        s.pair_contacts(
+            &Pair::new(ri, Angle::new(ti), rj, Angle::new(tj), d),
+            f64::INFINITY,
+        )[0]
+        .gap
     }
 
     /// The complex-arithmetic gap equals the paper's formula written with
@@ -1202,7 +1210,7 @@ mod tests {
                 gap: [f64::NAN; W],
                 ..Default::default()
             };
-            s.contacts_lanes(&lanes, &mut out);
+            NearDisk::contacts_lanes(s, &lanes, &mut out);
             let bits = |c: Option<Contact<2>>| {
                 c.map(|c| {
                     let mut b = vec![c.gap.to_bits(), c.grad_r[0].to_bits()];
@@ -1220,11 +1228,13 @@ mod tests {
             for l in 0..W {
                 let expected = s
                     .pair_contacts(
-                        lanes.size_i[l],
-                        &lanes.o_i[l],
-                        lanes.size_j[l],
-                        &lanes.o_j[l],
-                        &lanes.separation(l),
+                        &Pair::new(
+                            lanes.size_i[l],
+                            lanes.o_i[l],
+                            lanes.size_j[l],
+                            lanes.o_j[l],
+                            lanes.separation(l),
+                        ),
                         0.0,
                     )
                     .pop();

@@ -8,6 +8,7 @@
 use super::tests::{mixed, orientations, single};
 use super::*;
 use approx::assert_relative_eq;
+use jamkit_core::{Pair, ShapeExt};
 
 const SIZES: (f64, f64) = (0.5, 0.7);
 
@@ -51,7 +52,7 @@ fn separations(s: &Harmonic, o_i: &Quaternion, o_j: &Quaternion) -> Vec<Vector<3
 }
 
 fn contact(s: &Harmonic, o_i: &Quaternion, o_j: &Quaternion, r: &Vector<3>) -> Contact<3> {
-    let c = s.pair_contacts(SIZES.0, o_i, SIZES.1, o_j, r, f64::INFINITY);
+    let c = s.pair_contacts(&Pair::new(SIZES.0, *o_i, SIZES.1, *o_j, *r), f64::INFINITY);
     assert_eq!(c.len(), 1);
     c[0]
 }

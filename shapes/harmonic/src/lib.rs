@@ -116,8 +116,8 @@ pub mod solid;
 use jamkit_core::Error;
 use jamkit_core::gap_model::GapModel;
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, MAX_ROT, Matrix, ParamSpec, Quaternion, RotVec,
-    Shape, ShapeVisitor, Vector,
+    Contact, Dims, Family, FamilyInfo, GapHessian, Look, MAX_ROT, Matrix, NoFastPath, Pair,
+    ParamSpec, Policy, Quaternion, RotVec, Shape, ShapeVisitor, Vector,
 };
 /// How the exact gap is solved (`exact_solver`).
 pub use jamkit_gap3d::ExactSolver;
@@ -1010,6 +1010,7 @@ impl jamkit_core::Surface for HarmonicSurface {
 
 impl Shape<3> for Harmonic {
     type Orientation = Quaternion;
+    type Fast = NoFastPath;
 
     fn family(&self) -> &'static str {
         INFO.name
@@ -1039,45 +1040,47 @@ impl Shape<3> for Harmonic {
         *o = o.stepped(dq, self.axisymmetric);
     }
 
-    /// `1 + Δ F`, for drawing ([`HarmonicSurface`]).
-    fn surface(&self) -> Option<jamkit_core::SharedSurface> {
-        Some(std::sync::Arc::new(HarmonicSurface(self.clone())))
-    }
-
-    /// `d + 1 = 4`, the paper's convention carried to 3D.
-    fn rattler_threshold(&self) -> usize {
-        4
-    }
-
-    /// Near-spheres jam hypostatic, like the paper's near-disks.
-    fn expects_isostatic(&self) -> bool {
-        false
-    }
-
-    /// A non-convex body (sampled on 48 × 96 directions), named: the
-    /// first-order gap assumes convex bodies with one contact per pair.
-    fn warnings(&self) -> Vec<String> {
-        if self.is_convex(48) {
-            Vec::new()
-        } else {
-            vec![format!(
+    /// Rattlers below `d + 1 = 4` contacts, the paper's convention carried
+    /// to 3D; near-spheres jam hypostatic, like the paper's near-disks; a
+    /// warning where the body is not convex (sampled on 48 × 96
+    /// directions): the first-order gap assumes convex bodies with one
+    /// contact per pair.
+    fn policy(&self) -> Policy {
+        let mut warnings = Vec::new();
+        if !self.is_convex(48) {
+            warnings.push(format!(
                 "non-convex body (Δ = {}): the first-order gap assumes convex bodies with one contact per pair",
                 self.delta
-            )]
+            ));
+        }
+        Policy {
+            rattler_threshold: 4,
+            expects_isostatic: false,
+            warnings,
+            ..Policy::new(3)
+        }
+    }
+
+    /// `1 + Δ F`, for drawing ([`HarmonicSurface`]).
+    fn look(&self) -> Look {
+        Look {
+            surface: Some(std::sync::Arc::new(HarmonicSurface(self.clone()))),
+            ..Look::default()
         }
     }
 
     #[inline(always)]
     fn contacts<F: FnMut(Contact<3>)>(
         &self,
-        size_i: f64,
-        o_i: &Quaternion,
-        size_j: f64,
-        o_j: &Quaternion,
-        r_ij: &Vector<3>,
+        pair: &Pair<3, Quaternion>,
         max_gap: f64,
         mut visit: F,
     ) {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if self.gap == GapModel::Exact {
             if let Some(e) = self.exact_gap_with(size_i, o_i, size_j, o_j, r_ij, max_gap, false) {
                 let (c_i, c_j) = (o_i.columns(), o_j.columns());
@@ -1096,14 +1099,15 @@ impl Shape<3> for Harmonic {
     /// sphere's `(1 − r̂ r̂ᵀ)/r` is added; the bodies' rotations do not mix.
     fn gap_hessians<F: FnMut(GapHessian<3>)>(
         &self,
-        size_i: f64,
-        o_i: &Quaternion,
-        size_j: f64,
-        o_j: &Quaternion,
-        r_ij: &Vector<3>,
+        pair: &Pair<3, Quaternion>,
         max_gap: f64,
         mut visit: F,
     ) -> jamkit_core::Result<()> {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if self.gap == GapModel::Exact {
             if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
                 let (c_i, c_j) = (o_i.columns(), o_j.columns());
@@ -1147,6 +1151,7 @@ mod exact_tests;
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use jamkit_core::{Pair, ShapeExt};
 
     pub(crate) fn single(l: u32, m: i32, delta: f64) -> Harmonic {
         Harmonic::single(l, m, delta).unwrap()
@@ -1161,7 +1166,7 @@ mod tests {
     fn the_drawing_surface_is_the_shape() {
         use rand::SeedableRng;
         let h = mixed(0.2);
-        let s = Shape::<3>::surface(&h).unwrap();
+        let s = Shape::<3>::look(&h).surface.unwrap();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let (lo, hi) = s.relative_radius_bounds();
         for _ in 0..50 {
@@ -1369,7 +1374,7 @@ mod tests {
                             - s.delta
                                 * (ri * s.f(&o_i.conjugate().apply(&u))
                                     + rj * s.f(&(-o_j.conjugate().apply(&u))));
-                        let c = s.pair_contacts(ri, &o_i, rj, &o_j, &r, f64::INFINITY);
+                        let c = s.pair_contacts(&Pair::new(ri, o_i, rj, o_j, r), f64::INFINITY);
                         assert_eq!(c.len(), 1);
                         assert_relative_eq!(c[0].gap, want, epsilon = 1e-14);
                     }
@@ -1428,9 +1433,10 @@ mod tests {
         for s in shapes() {
             let os = orientations();
             for r in separations(&os[2]) {
-                let a = s.pair_contacts(0.5, &os[2], 0.7, &os[1], &r, f64::INFINITY)[0];
+                let a = s.pair_contacts(&Pair::new(0.5, os[2], 0.7, os[1], r), f64::INFINITY)[0];
                 let (ti, tj) = (turn.mul(&os[2]), turn.mul(&os[1]));
-                let b = s.pair_contacts(0.5, &ti, 0.7, &tj, &turn.apply(&r), f64::INFINITY)[0];
+                let b =
+                    s.pair_contacts(&Pair::new(0.5, ti, 0.7, tj, turn.apply(&r)), f64::INFINITY)[0];
                 assert_relative_eq!(a.gap, b.gap, epsilon = 1e-14);
                 assert_relative_eq!(turn.apply(&a.grad_r), b.grad_r, epsilon = 1e-14);
                 let (qa, qb) = (a.grad_rot_i, b.grad_rot_i);
@@ -1474,10 +1480,10 @@ mod tests {
         assert!((dc - 3.0 / 7.0).abs() < 2e-3, "threshold {dc}");
         assert!(single(2, 0, dc - 0.005).is_convex(48));
         assert!(!single(2, 0, dc + 0.005).is_convex(48));
-        assert!(Shape::<3>::warnings(&single(2, 0, 0.3)).is_empty());
+        assert!(Shape::<3>::policy(&single(2, 0, 0.3)).warnings.is_empty());
         let bumpy = single(6, 3, 0.2);
         assert!(!bumpy.is_convex(48));
-        assert_eq!(Shape::<3>::warnings(&bumpy).len(), 1);
+        assert_eq!(Shape::<3>::policy(&bumpy).warnings.len(), 1);
     }
 
     /// Bad parameters are refused with the field named (the registry's

@@ -34,7 +34,8 @@
 use crate::orientation::{Angle, Quaternion};
 use crate::{MAX_SPHERES, Nmer};
 use jamkit_core::{
-    Contact, ContactLanes, GapHessian, MAX_ROT, Matrix, RotVec, Shape, SlotPairs, Vector,
+    Contact, ContactLanes, FastContacts, GapHessian, MAX_ROT, Matrix, Pair, Policy, RotVec, Shape,
+    SlotPairs, Vector,
 };
 
 /// FIRE's largest time step for bodies made of spheres in 3D. Two bodies
@@ -210,6 +211,7 @@ impl Nmer<2> {
 
 impl Shape<2> for Nmer<2> {
     type Orientation = Angle;
+    type Fast = Self;
 
     fn family(&self) -> &'static str {
         crate::INFO.name
@@ -231,70 +233,39 @@ impl Shape<2> for Nmer<2> {
         [self.moment_of_inertia(size); 3]
     }
 
-    /// No (the default): in 2D the jammed-only blocks were not faster
-    /// over the dimers measured. Their ensembles are the plain masses'
-    /// (N = 128, α = 1.1 and 1.5, 30 seeds), and at N = 512 they took 0.73×
-    /// the CPU time at α = 1.1 but 1.05× the FIRE steps at α = 1.5 (seeds
-    /// 1–6; docs/reports/minimizers.md, "Block masses only from jammed
-    /// states"). An experiment at small α may ask for them
-    /// (`masses: Blocks((jammed_only: true))`).
-    fn fire_jammed_block_masses(&self) -> bool {
-        false
-    }
-
     fn rotate(&self, o: &mut Angle, dq: &[f64]) {
         *o = o.turned_exact(dq[0]);
     }
 
-    /// `f + 1 = 4`: `f = 3` (two translations, one angle).
-    fn rattler_threshold(&self) -> usize {
-        4
-    }
-
-    /// Bodies made of spheres interlock from an overlapping start.
-    fn overlap_free_start(&self) -> bool {
-        true
+    /// Rattlers below `f + 1 = 4` contacts (`f = 3`: two translations, one
+    /// angle); bodies made of spheres interlock from an overlapping start,
+    /// so the start is free of overlaps. FIRE's masses stay the bodies' own:
+    /// in 2D the jammed-only blocks were not faster over the dimers
+    /// measured. Their ensembles are the plain masses' (N = 128, α = 1.1
+    /// and 1.5, 30 seeds), and at N = 512 they took 0.73× the CPU time at
+    /// α = 1.1 but 1.05× the FIRE steps at α = 1.5 (seeds 1–6;
+    /// docs/reports/minimizers.md, "Block masses only from jammed states").
+    /// An experiment at small α may ask for them
+    /// (`masses: Blocks((jammed_only: true))`).
+    fn policy(&self) -> Policy {
+        Policy {
+            rattler_threshold: 4,
+            overlap_free_start: true,
+            ..Policy::new(2)
+        }
     }
 
     fn sphere_decomposition(&self, size: f64, o: &Angle) -> Option<Vec<(Vector<2>, f64)>> {
         self.spheres_at(size, &self.world::<MAX_SPHERES>(size, o))
     }
 
-    /// `k²` sphere pairs for up to four spheres a body (the engine's slots
-    /// path, `crate::slots`), else 0.
-    fn contact_slots(&self) -> usize {
-        self.slots()
-    }
-
-    fn body_terms_len(&self) -> usize {
-        self.terms_len(0)
-    }
-
-    fn body_terms(&self, size: f64, o: &Angle, out: &mut [f64]) {
-        self.write_body_terms(size, o, out)
-    }
-
     #[inline(always)]
-    fn slot_contacts_lanes<const W: usize>(
-        &self,
-        terms: &[f64],
-        pairs: &SlotPairs<2, W>,
-        out: &mut [ContactLanes<2, W>],
-    ) {
-        self.slot_contacts(terms, pairs, out)
-    }
-
-    #[inline(always)]
-    fn contacts<F: FnMut(Contact<2>)>(
-        &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-        mut visit: F,
-    ) {
+    fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, Angle>, max_gap: f64, mut visit: F) {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if self.apart(size_i, size_j, r_ij, max_gap) {
             return;
         }
@@ -308,14 +279,15 @@ impl Shape<2> for Nmer<2> {
 
     fn gap_hessians<F: FnMut(GapHessian<2>)>(
         &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
+        pair: &Pair<2, Angle>,
         max_gap: f64,
         mut visit: F,
     ) -> jamkit_core::Result<()> {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if self.apart(size_i, size_j, r_ij, max_gap) {
             return Ok(());
         }
@@ -348,6 +320,33 @@ impl Shape<2> for Nmer<2> {
             },
         );
         Ok(())
+    }
+}
+
+/// The engine's slots path: one slot per sphere pair.
+impl FastContacts<2, Nmer<2>> for Nmer<2> {
+    /// `k²` sphere pairs for up to four spheres a body (the engine's slots
+    /// path, `crate::slots`), else 0.
+    fn contact_slots(shape: &Self) -> usize {
+        shape.slots()
+    }
+
+    fn body_terms_len(shape: &Self) -> usize {
+        shape.terms_len(0)
+    }
+
+    fn body_terms(shape: &Self, size: f64, o: &Angle, out: &mut [f64]) {
+        shape.write_body_terms(size, o, out)
+    }
+
+    #[inline(always)]
+    fn slot_contacts_lanes<const W: usize>(
+        shape: &Self,
+        terms: &[f64],
+        pairs: &SlotPairs<2, W>,
+        out: &mut [ContactLanes<2, W>],
+    ) {
+        shape.slot_contacts(terms, pairs, out)
     }
 }
 
@@ -414,6 +413,7 @@ impl Nmer<3> {
 
 impl Shape<3> for Nmer<3> {
     type Orientation = Quaternion;
+    type Fast = Self;
 
     fn family(&self) -> &'static str {
         crate::INFO.name
@@ -436,36 +436,6 @@ impl Shape<3> for Nmer<3> {
         [self.moment_of_inertia(size); 3]
     }
 
-    /// [`FIRE_DT_MAX`].
-    fn fire_dt_max(&self) -> Option<f64> {
-        Some(FIRE_DT_MAX)
-    }
-
-    /// Yes: with each body's stiffness block as its mass in the
-    /// minimisations that start from a decompressed jammed state, 3D dimers
-    /// (N = 128, α = 1.1 and 1.5, 30 seeds) jam into the same ensembles as
-    /// with their own masses (φ_J, z_J, z_corr, rattlers within 1.03
-    /// standard errors, KS p ≥ 0.95) in 1.07–1.23× fewer FIRE steps, none
-    /// left hypostatic (4 of 30 at α = 1.1 with their own masses), and at
-    /// N = 512, α = 1.1 in 0.72× the CPU time (docs/reports/minimizers.md,
-    /// "Block masses only from jammed states").
-    fn fire_jammed_block_masses(&self) -> bool {
-        true
-    }
-
-    /// Yes for dimers (bodies of two spheres): with L-BFGS from the start
-    /// in the block metric (and FIRE's jammed-only block masses where
-    /// L-BFGS gives up), 3D dimers jam into the ensembles of FIRE with those
-    /// masses (N = 512, 20 seeds each at α = 1.1 and 1.5: φ_J and z_J within
-    /// 1.6 standard errors, KS p ≥ 0.14, the same spread of φ_J) in 2.2–3.1×
-    /// less CPU time. No for bodies of three or more spheres: bent trimers
-    /// (N = 128, 40 seeds) kept the means but jammed with a wider spread of
-    /// φ_J (s.d. 0.0050 against 0.0034, F-test p = 0.02);
-    /// docs/reports/minimizers.md, "L-BFGS … the 3D dimer default".
-    fn lbfgs_blocks_by_default(&self) -> bool {
-        self.offsets.len() == 2
-    }
-
     /// `o → exp(ω) ∘ o` with `ω = (dq₀, dq₁, dq₂)` in the world frame, or
     /// `o → o ∘ exp((dq₀, dq₁, 0))` (body frame) for a linear body; then
     /// renormalised.
@@ -473,55 +443,56 @@ impl Shape<3> for Nmer<3> {
         *o = o.stepped(dq, self.linear);
     }
 
-    /// `f + 1` with `f = 3 + rot_dof`: 6 for a linear body, 7 otherwise.
-    fn rattler_threshold(&self) -> usize {
-        3 + self.rot_dof() + 1
-    }
-
-    /// Bodies made of spheres interlock from an overlapping start.
-    fn overlap_free_start(&self) -> bool {
-        true
+    /// Rattlers below `f + 1` contacts with `f = 3 + rot_dof` (6 for a
+    /// linear body, 7 otherwise); a start free of overlaps (bodies made of
+    /// spheres interlock from an overlapping one); FIRE's step at most
+    /// [`FIRE_DT_MAX`].
+    ///
+    /// FIRE's masses: with each body's stiffness block as its mass in the
+    /// minimisations that start from a decompressed jammed state, 3D dimers
+    /// (N = 128, α = 1.1 and 1.5, 30 seeds) jam into the same ensembles as
+    /// with their own masses (φ_J, z_J, z_corr, rattlers within 1.03
+    /// standard errors, KS p ≥ 0.95) in 1.07–1.23× fewer FIRE steps, none
+    /// left hypostatic (4 of 30 at α = 1.1 with their own masses), and at
+    /// N = 512, α = 1.1 in 0.72× the CPU time (docs/reports/minimizers.md,
+    /// "Block masses only from jammed states").
+    ///
+    /// L-BFGS from the start in the block metric for dimers (bodies of two
+    /// spheres): with it (and FIRE's jammed-only block masses where L-BFGS
+    /// gives up), 3D dimers jam into the ensembles of FIRE with those
+    /// masses (N = 512, 20 seeds each at α = 1.1 and 1.5: φ_J and z_J within
+    /// 1.6 standard errors, KS p ≥ 0.14, the same spread of φ_J) in 2.2–3.1×
+    /// less CPU time. Not for bodies of three or more spheres: bent trimers
+    /// (N = 128, 40 seeds) kept the means but jammed with a wider spread of
+    /// φ_J (s.d. 0.0050 against 0.0034, F-test p = 0.02);
+    /// docs/reports/minimizers.md, "L-BFGS … the 3D dimer default".
+    fn policy(&self) -> Policy {
+        Policy {
+            fire_dt_max: Some(FIRE_DT_MAX),
+            jammed_block_masses: true,
+            lbfgs_blocks: self.offsets.len() == 2,
+            overlap_free_start: true,
+            rattler_threshold: 3 + Shape::<3>::rot_dof(self) + 1,
+            ..Policy::new(3)
+        }
     }
 
     fn sphere_decomposition(&self, size: f64, o: &Quaternion) -> Option<Vec<(Vector<3>, f64)>> {
         self.spheres_at(size, &self.world::<MAX_SPHERES>(size, o))
     }
 
-    /// `k²` sphere pairs for up to four spheres a body (the engine's slots
-    /// path, `crate::slots`), else 0.
-    fn contact_slots(&self) -> usize {
-        self.slots()
-    }
-
-    fn body_terms_len(&self) -> usize {
-        Nmer::<3>::body_terms_len(self)
-    }
-
-    fn body_terms(&self, size: f64, o: &Quaternion, out: &mut [f64]) {
-        self.write_body_terms(size, o, out)
-    }
-
-    #[inline(always)]
-    fn slot_contacts_lanes<const W: usize>(
-        &self,
-        terms: &[f64],
-        pairs: &SlotPairs<3, W>,
-        out: &mut [ContactLanes<3, W>],
-    ) {
-        self.slot_contacts(terms, pairs, out)
-    }
-
     #[inline(always)]
     fn contacts<F: FnMut(Contact<3>)>(
         &self,
-        size_i: f64,
-        o_i: &Quaternion,
-        size_j: f64,
-        o_j: &Quaternion,
-        r_ij: &Vector<3>,
+        pair: &Pair<3, Quaternion>,
         max_gap: f64,
         mut visit: F,
     ) {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if self.apart(size_i, size_j, r_ij, max_gap) {
             return;
         }
@@ -537,14 +508,15 @@ impl Shape<3> for Nmer<3> {
 
     fn gap_hessians<F: FnMut(GapHessian<3>)>(
         &self,
-        size_i: f64,
-        o_i: &Quaternion,
-        size_j: f64,
-        o_j: &Quaternion,
-        r_ij: &Vector<3>,
+        pair: &Pair<3, Quaternion>,
         max_gap: f64,
         mut visit: F,
     ) -> jamkit_core::Result<()> {
+        let size_i = pair.size_i;
+        let o_i = &pair.o_i;
+        let size_j = pair.size_j;
+        let o_j = &pair.o_j;
+        let r_ij = &pair.r_ij;
         if self.apart(size_i, size_j, r_ij, max_gap) {
             return Ok(());
         }
@@ -589,5 +561,32 @@ impl Shape<3> for Nmer<3> {
             },
         );
         Ok(())
+    }
+}
+
+/// The engine's slots path: one slot per sphere pair.
+impl FastContacts<3, Nmer<3>> for Nmer<3> {
+    /// `k²` sphere pairs for up to four spheres a body (the engine's slots
+    /// path, `crate::slots`), else 0.
+    fn contact_slots(shape: &Self) -> usize {
+        shape.slots()
+    }
+
+    fn body_terms_len(shape: &Self) -> usize {
+        Nmer::<3>::body_terms_len(shape)
+    }
+
+    fn body_terms(shape: &Self, size: f64, o: &Quaternion, out: &mut [f64]) {
+        shape.write_body_terms(size, o, out)
+    }
+
+    #[inline(always)]
+    fn slot_contacts_lanes<const W: usize>(
+        shape: &Self,
+        terms: &[f64],
+        pairs: &SlotPairs<3, W>,
+        out: &mut [ContactLanes<3, W>],
+    ) {
+        shape.slot_contacts(terms, pairs, out)
     }
 }

@@ -415,6 +415,7 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
     use jamkit_core::Shape;
+    use jamkit_core::{Pair, ShapeExt};
     use std::f64::consts::PI;
 
     fn dimer<const D: usize>(alpha: f64) -> Nmer<D> {
@@ -457,8 +458,8 @@ mod tests {
                 max_relative = 1e-13
             );
             assert!(s3.is_linear() && Shape::<3>::rot_dof(&s3) == 2);
-            assert_eq!(Shape::<3>::rattler_threshold(&s3), 6);
-            assert_eq!(Shape::<2>::rattler_threshold(&s2), 4);
+            assert_eq!(Shape::<3>::policy(&s3).rattler_threshold, 6);
+            assert_eq!(Shape::<2>::policy(&s2).rattler_threshold, 4);
         }
     }
 
@@ -471,7 +472,7 @@ mod tests {
         let oj = Quaternion::normalized(-0.7, 0.1, 0.4, 0.2).unwrap();
         let r = Vector::<3>::new(0.5, 0.6, -0.3);
         let collect = |a: &Quaternion, b: &Quaternion, r: Vector<3>, sa: f64, sb: f64| {
-            s.pair_contacts(sa, a, sb, b, &r, f64::INFINITY)
+            s.pair_contacts(&Pair::new(sa, *a, sb, *b, r), f64::INFINITY)
         };
         let ij = collect(&oi, &oj, r, 0.6, 0.5);
         let ji = collect(&oj, &oi, -r, 0.5, 0.6);

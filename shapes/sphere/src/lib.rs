@@ -14,8 +14,8 @@
 
 use jamkit_core::math::unit_ball_volume;
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, Matrix, RoundOutline, Shape, ShapeVisitor,
-    SharedOutline, Vector,
+    Contact, Dims, Family, FamilyInfo, FastContacts, GapHessian, Look, Matrix, Pair, RoundOutline,
+    Shape, ShapeVisitor, Vector,
 };
 
 /// The family's self-description for the registry.
@@ -72,6 +72,7 @@ pub struct Sphere;
 
 impl<const D: usize> Shape<D> for Sphere {
     type Orientation = ();
+    type Fast = Self;
 
     fn family(&self) -> &'static str {
         "sphere"
@@ -79,10 +80,6 @@ impl<const D: usize> Shape<D> for Sphere {
 
     fn rot_dof(&self) -> usize {
         0
-    }
-
-    fn outline(&self) -> Option<SharedOutline> {
-        Some(std::sync::Arc::new(RoundOutline))
     }
 
     fn volume(&self, size: f64) -> f64 {
@@ -93,21 +90,13 @@ impl<const D: usize> Shape<D> for Sphere {
         size
     }
 
-    const BALL: bool = true;
-
     fn rotate(&self, _orientation: &mut (), _dq: &[f64]) {}
 
     #[inline(always)]
-    fn contacts<F: FnMut(Contact<D>)>(
-        &self,
-        size_i: f64,
-        _o_i: &(),
-        size_j: f64,
-        _o_j: &(),
-        r_ij: &Vector<D>,
-        _max_gap: f64,
-        mut visit: F,
-    ) {
+    fn contacts<F: FnMut(Contact<D>)>(&self, pair: &Pair<D, ()>, _max_gap: f64, mut visit: F) {
+        let size_i = pair.size_i;
+        let size_j = pair.size_j;
+        let r_ij = &pair.r_ij;
         // The exact gap is as cheap as any bound on it: always report it.
         let r = r_ij.norm();
         // NOTE: coincident centres have no direction; any unit vector is a
@@ -122,16 +111,13 @@ impl<const D: usize> Shape<D> for Sphere {
 
     fn gap_hessians<F: FnMut(GapHessian<D>)>(
         &self,
-        size_i: f64,
-        _o_i: &(),
-        size_j: f64,
-        _o_j: &(),
-        r_ij: &Vector<D>,
+        pair: &Pair<D, ()>,
         max_gap: f64,
         mut visit: F,
     ) -> jamkit_core::Result<()> {
+        let r_ij = &pair.r_ij;
         let mut first = None;
-        self.contacts(size_i, &(), size_j, &(), r_ij, max_gap, |c| first = Some(c));
+        self.contacts(pair, max_gap, |c| first = Some(c));
         if let Some(c) = first {
             let r = r_ij.norm();
             // NOTE: at coincident centres the curvature 1/|r| is infinite;
@@ -145,6 +131,19 @@ impl<const D: usize> Shape<D> for Sphere {
         }
         Ok(())
     }
+
+    fn look(&self) -> Look {
+        Look {
+            ball: true,
+            outline: Some(std::sync::Arc::new(RoundOutline)),
+            ..Look::default()
+        }
+    }
+}
+
+/// The engine's kernel for balls, several pairs per instruction.
+impl<const D: usize> FastContacts<D, Sphere> for Sphere {
+    const BALL: bool = true;
 }
 
 #[cfg(test)]
@@ -157,11 +156,7 @@ mod tests {
         let mut h = f64::NAN;
         Shape::<2>::contacts(
             &Sphere,
-            0.5,
-            &(),
-            0.7,
-            &(),
-            &Vector::<2>::new(0.0, 1.2),
+            &Pair::new(0.5, (), 0.7, (), Vector::<2>::new(0.0, 1.2)),
             0.0,
             |c| h = c.gap,
         );
