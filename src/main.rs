@@ -22,6 +22,7 @@ mod bench;
 mod bench_accuracy;
 mod bench_pair;
 mod bench_spectrum;
+mod check;
 mod spectrum;
 
 use anyhow::{Context, Result, bail};
@@ -122,6 +123,19 @@ enum Command {
         /// instead of the plain list.
         #[arg(long)]
         markdown: bool,
+    },
+    /// Run the conformance kit on one family: forces and Hessian against
+    /// finite differences, symmetry, invariances, smoothness, a small jam.
+    Check {
+        /// The family's registered name.
+        family: String,
+        /// Its parameters in RON, e.g. "(delta: 0.2, kappa: 2.0)"; default:
+        /// the family's example.
+        #[arg(long)]
+        params: Option<String>,
+        /// Only this dimension; default: every dimension the family claims.
+        #[arg(long)]
+        dim: Option<usize>,
     },
     /// Time the engine (see docs/reports/performance.md).
     Bench {
@@ -452,6 +466,11 @@ fn real_main() -> Result<()> {
             }
             Ok(())
         }
+        Command::Check {
+            family,
+            params,
+            dim,
+        } => check::run(&family, params.as_deref(), dim),
         Command::Bench { what } => bench::run(what),
         Command::Report {
             dirs,

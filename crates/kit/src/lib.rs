@@ -18,6 +18,9 @@
 //!   orientation by the same angle) leaves the energy unchanged, where the
 //!   family's rotational coordinates allow turning a body about that axis
 //!   (none, one angle in 2D, three world-frame angles in 3D);
+//! * **smooth in the orientation**: the gap's slope, swept over a full
+//!   turn of one body on two grids, has no jump (a profile with a corner
+//!   fails, with its angle named);
 //! * **lanes = generic pass bit for bit**, for families with lane kernels
 //!   (`FastContacts::LANES`) and contact slots (`FastContacts::contact_slots`);
 //! * **a small jamming run**: 16 bodies or more (as many as the box
@@ -98,6 +101,12 @@ pub fn check_family<const D: usize, S: Shape<D>>(shape: S) -> Checked {
             "rotation",
             "its rotational coordinates cannot turn a body about a fixed world axis",
         ));
+    }
+    if check_smooth(&shape) {
+        done.ran.push("smooth");
+    } else {
+        done.skipped
+            .push(("smooth", "the bodies have no rotational coordinate"));
     }
     if matches!(shape.kernel(), Kernel::Lanes | Kernel::Slots(_)) {
         check_lanes(&shape);
@@ -295,6 +304,105 @@ pub fn check_rotation<const D: usize, S: Shape<D>>(shape: &S) -> bool {
             (e1 - e0).abs() < 1e-12 * e0,
             "{name}: turning by {alpha} changes V from {e0} to {e1}"
         );
+    }
+    true
+}
+
+/// Turns of the sweep in [`check_smooth`]: its coarse grid; the fine one
+/// has twice as many.
+const SWEEP: usize = 4096;
+
+/// The gap is smooth as body `i` turns a full turn about its first
+/// rotational coordinate, at two separations and two directions: a
+/// profile with a corner (a jump in its slope, such as `cos 2θ |cos θ|` at
+/// θ = ±π/2) or a step fails here with its angle named, though forces
+/// against finite differences pass everywhere but within the difference
+/// step of the corner.
+///
+/// The sum of the pair's gaps `H(θ)` and its slope `S = Σ ∂h/∂q_i[0]` are
+/// taken on grids of [`SWEEP`] and `2·SWEEP` steps. For a C² gap the
+/// largest change of `S` between neighbours, `max |ΔS| ≈ δθ max|H''|`,
+/// halves with the step; across a corner it stays the jump `J` of the
+/// slope. A corner is declared where the fine grid keeps more than 3/4 of
+/// the coarse grid's `max |ΔS|` (a smooth profile keeps 1/2, to
+/// `O(δθ²)`). And `ΔH` must agree with the trapezoid of the slopes,
+/// `½(S_k + S_{k+1}) δθ`, to within `δθ max |ΔS|` (the rule's error is
+/// `δθ³ max|H'''|/12` for a smooth gap): a jump of `H` itself fails that.
+/// Below `10⁻¹⁰ (R_i + R_j)` changes are round-off (a disk's slope is 0).
+/// False (nothing checked) for bodies without rotational coordinates.
+pub fn check_smooth<const D: usize, S: Shape<D>>(shape: &S) -> bool {
+    if shape.rot_dof() == 0 {
+        return false;
+    }
+    let name = &describe(shape);
+    let (size_i, size_j) = (0.5, 0.7);
+    let reach = shape.bounding_radius(size_i) + shape.bounding_radius(size_j);
+    let floor = 1e-10 * (size_i + size_j);
+    // The pair's summed gap and slope along a sweep of `k` steps, and
+    // where the contact count changes (those steps are not compared).
+    let sweep = |r_ij: Vector<D>, k: usize| {
+        let step = std::f64::consts::TAU / k as f64;
+        let mut dq = [0.0; 3];
+        dq[0] = step;
+        let dq = &dq[..shape.rot_dof()];
+        let mut o = S::Orientation::reference();
+        let o_j = S::Orientation::reference();
+        let mut points = Vec::with_capacity(k + 1);
+        for _ in 0..=k {
+            let found =
+                shape.pair_contacts(&Pair::new(size_i, o, size_j, o_j, r_ij), f64::INFINITY);
+            let h: f64 = found.iter().map(|c| c.gap).sum();
+            let slope: f64 = found.iter().map(|c| c.grad_rot_i[0]).sum();
+            points.push((found.len(), h, slope));
+            shape.rotate(&mut o, dq);
+        }
+        (step, points)
+    };
+    let worst_jump = |points: &[(usize, f64, f64)]| {
+        points
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| w[0].0 == w[1].0)
+            .map(|(k, w)| ((w[1].2 - w[0].2).abs(), k))
+            .fold((0.0_f64, 0), |a, b| if b.0 > a.0 { b } else { a })
+    };
+    for fraction in [0.95, 0.8] {
+        for direction in [0.0, 0.7] {
+            let r_ij = Vector::<D>::from_fn(|a, _| match a {
+                0 => fraction * reach * f64::cos(direction),
+                1 => fraction * reach * f64::sin(direction),
+                _ => 0.0,
+            });
+            let (coarse_step, coarse) = sweep(r_ij, SWEEP);
+            let (fine_step, fine) = sweep(r_ij, 2 * SWEEP);
+            let (jump_coarse, at_coarse) = worst_jump(&coarse);
+            let (jump_fine, _) = worst_jump(&fine);
+            assert!(
+                jump_fine <= floor || jump_fine < 0.75 * jump_coarse,
+                "{name}: the gap's slope jumps by {jump_coarse:.3e} near a turn of {:.4} rad of body i \
+                 (|r_ij| = {:.3}, and by {jump_fine:.3e} at half the step): the outline has a corner \
+                 or its slope is not continuous; the gap, the forces and the Newton finish need a \
+                 profile with continuous first and second derivatives",
+                at_coarse as f64 * coarse_step,
+                r_ij.norm(),
+            );
+            for (k, w) in fine.windows(2).enumerate() {
+                if w[0].0 != w[1].0 {
+                    continue;
+                }
+                let rule = 0.5 * (w[0].2 + w[1].2) * fine_step;
+                let miss = (w[1].1 - w[0].1 - rule).abs();
+                assert!(
+                    miss <= floor + fine_step * jump_fine,
+                    "{name}: the gap changes by {:.3e} over {fine_step:.2e} rad near a turn of {:.4} rad \
+                     of body i (|r_ij| = {:.3}) where its slope says {rule:.3e}: the gap jumps \
+                     there, or its rotational derivative is wrong",
+                    w[1].1 - w[0].1,
+                    k as f64 * fine_step,
+                    r_ij.norm(),
+                );
+            }
+        }
     }
     true
 }
@@ -692,5 +800,58 @@ mod tests {
     #[should_panic(expected = "gradient")]
     fn a_wrong_gradient_fails_the_kit() {
         check_family::<2, _>(WrongDisk);
+    }
+
+    /// `P(A) = cos 2A · |cos A|` (`P(A) = cos 2A` with `smooth`): the
+    /// cornered profile's slope jumps by 2 at `A = ±π/2`, where
+    /// `cos 2A = −1`.
+    #[derive(Clone, Debug, PartialEq)]
+    struct Cornered {
+        smooth: bool,
+    }
+
+    impl jamkit_planar::profiled::NearDiskProfile for Cornered {
+        const FAMILY: &'static str = "cornered";
+        const HALF_TURN_SYMMETRIC: bool = true;
+        fn value_slope(&self, cos: f64, sin: f64) -> (f64, f64) {
+            let (c2, s2) = (cos * cos - sin * sin, 2.0 * sin * cos);
+            if self.smooth {
+                return (c2, -2.0 * s2);
+            }
+            let (a, sign) = (cos.abs(), cos.signum());
+            (c2 * a, -2.0 * s2 * a - c2 * sin * sign)
+        }
+        fn curvature(&self, cos: f64, sin: f64) -> f64 {
+            let (c2, s2) = (cos * cos - sin * sin, 2.0 * sin * cos);
+            if self.smooth {
+                return -4.0 * c2;
+            }
+            let (a, sign) = (cos.abs(), cos.signum());
+            -4.0 * c2 * a + 4.0 * s2 * sin * sign - c2 * cos * sign
+        }
+        fn range(&self) -> (f64, f64) {
+            (-1.0, 1.0)
+        }
+        fn describe(&self) -> String {
+            String::from("cornered")
+        }
+    }
+
+    fn cornered(smooth: bool) -> jamkit_planar::profiled::Profiled<Cornered> {
+        jamkit_planar::profiled::Profiled::new(Cornered { smooth }, 0.1, None).unwrap()
+    }
+
+    #[test]
+    #[should_panic(expected = "the outline has a corner")]
+    fn a_profile_with_a_corner_fails_the_smoothness_check() {
+        check_smooth(&cornered(false));
+    }
+
+    /// The same family without the corner passes, and the cornered one
+    /// passes the force check (which is why the smoothness check exists).
+    #[test]
+    fn the_smooth_profile_passes_and_the_corner_escapes_the_force_check() {
+        assert!(check_smooth(&cornered(true)));
+        check_gradient(&cornered(false));
     }
 }

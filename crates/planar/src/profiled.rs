@@ -98,7 +98,8 @@ pub struct Profiled<P> {
 
 impl<P: NearDiskProfile> Profiled<P> {
     /// The shape of amplitude `delta` and moment of inertia `inertia`
-    /// (`None`: `I = Δ`, the paper's choice), checked: `Δ ≥ 0` finite, `I`
+    /// (`None`: `I = Δ`, the paper's choice, or 1 for the disk `Δ = 0`,
+    /// whose turning changes nothing), checked: `Δ ≥ 0` finite, `I`
     /// positive and finite, and `R(φ) > 0` everywhere. Errors name
     /// `params.delta` or `params.inertia`.
     pub fn new(profile: P, delta: f64, inertia: Option<f64>) -> jamkit_core::Result<Self> {
@@ -109,12 +110,12 @@ impl<P: NearDiskProfile> Profiled<P> {
                 "must be a finite number ≥ 0",
             ));
         }
-        let inertia = inertia.unwrap_or(delta);
+        let inertia = inertia.unwrap_or(if delta > 0.0 { delta } else { 1.0 });
         if !(inertia > 0.0 && inertia.is_finite()) {
             return Err(Error::invalid(
                 "params.inertia",
                 inertia,
-                "must be positive and finite (the default I = Δ needs Δ > 0)",
+                "must be positive and finite",
             ));
         }
         let range = profile.range();

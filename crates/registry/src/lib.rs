@@ -261,3 +261,94 @@ pub fn reference_markdown() -> String {
     }
     md
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Builds the shape and does nothing with it.
+    struct Build;
+
+    impl SceneVisitor for Build {
+        type Output = ();
+        fn visit<const D: usize, S: jamkit_core::Shape<D>>(self, _shape: S) {}
+    }
+
+    fn example(f: &FamilyInfo) -> ParamMap {
+        let at = FAMILIES.iter().position(|g| g.name == f.name).unwrap();
+        with_defaults(f, &params_from_ron(EXAMPLES[at]).unwrap())
+    }
+
+    fn first_dim(f: &FamilyInfo) -> usize {
+        *COMPILED_DIMS.iter().find(|&&d| supports_dim(f, d)).unwrap()
+    }
+
+    /// The names serde's "unknown field" message lists as expected.
+    fn serde_fields(message: &str) -> Vec<String> {
+        match message.split_once("expected") {
+            Some((_, rest)) if !rest.contains("no fields") => rest
+                .split('`')
+                .skip(1)
+                .step_by(2)
+                .map(str::to_string)
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// Each family's parameter table (`FamilyInfo::params`, what `jamkit
+    /// shapes` and the reference page print) names exactly the fields of
+    /// the serde type the experiment file is read into: a field added to
+    /// one and not the other fails here.
+    #[test]
+    fn every_parameter_table_names_the_fields_of_its_serde_type() {
+        for f in FAMILIES {
+            let mut params = example(f);
+            params.insert("not_a_parameter".into(), ron::Value::Bool(true));
+            let message = dispatch(f.name, first_dim(f), &params, Build)
+                .unwrap_err()
+                .to_string();
+            assert!(message.contains("not_a_parameter"), "{}: {message}", f.name);
+            let mut fields = serde_fields(&message);
+            let mut listed: Vec<String> = f.params.iter().map(|p| p.name.to_string()).collect();
+            fields.sort();
+            listed.sort();
+            assert_eq!(
+                fields, listed,
+                "{}: serde's fields against the table ({message})",
+                f.name
+            );
+        }
+    }
+
+    /// A parameter the table calls required is required by serde, and one
+    /// with a default may be left out: the table's default is what the
+    /// family gets (a default that is not a valid value of its field fails
+    /// to build the example).
+    #[test]
+    fn every_parameter_table_says_what_is_required_and_what_has_a_default() {
+        for f in FAMILIES {
+            for p in f.params {
+                let mut params = params_from_ron(
+                    EXAMPLES[FAMILIES.iter().position(|g| g.name == f.name).unwrap()],
+                )
+                .unwrap();
+                params.remove(p.name);
+                let built = dispatch(f.name, first_dim(f), &with_defaults(f, &params), Build);
+                match p.default {
+                    None => {
+                        let e = built.expect_err(p.name).to_string();
+                        assert!(e.contains(p.name), "{}.{}: {e}", f.name, p.name);
+                    }
+                    Some(d) => assert!(
+                        built.is_ok(),
+                        "{}.{} with its default {d}: {:?}",
+                        f.name,
+                        p.name,
+                        built.err()
+                    ),
+                }
+            }
+        }
+    }
+}

@@ -74,7 +74,7 @@ pub const INFO: FamilyInfo = FamilyInfo {
         },
         ParamSpec {
             name: "inertia",
-            about: "moment of inertia I of the angle θ; None: I = Δ (the paper's choice)",
+            about: "moment of inertia I of the angle θ; None: I = Δ (the paper's choice), 1 at Δ = 0",
             is_list: false,
             default: Some("None"),
             absent_is_omitted: false,
@@ -433,10 +433,14 @@ mod tests {
             Some("params.kappa")
         );
         assert_eq!(
-            try_new(0.0, 1.0, None).unwrap_err().field(),
+            try_new(0.1, 1.0, Some(0.0)).unwrap_err().field(),
             Some("params.inertia")
         );
-        assert!(try_new(0.0, 1.0, Some(1.0)).is_ok());
+        // The disk Δ = 0 turns with I = 1 unless told otherwise.
+        assert_eq!(
+            Shape::<2>::rot_inertia(&try_new(0.0, 1.0, None).unwrap(), 1.0)[0],
+            1.0
+        );
         // κ = 1: min G ≈ −0.619, so R > 0 needs Δ < 1.62.
         assert_eq!(
             try_new(1.7, 1.0, None).unwrap_err().field(),
