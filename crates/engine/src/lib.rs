@@ -14,7 +14,9 @@
 //! * [`precon`]: FIRE with each body's own stiffness block as its mass
 //!   (block preconditioning);
 //! * [`protocol`]: the paper's compress/decompress bisection to the jamming
-//!   point, and compression to a packing fraction or a pressure.
+//!   point, compression to a packing fraction or a pressure, and to a
+//!   packing fraction above its own jamming point;
+//! * [`saddle`]: the saddle escape after the bisection.
 //!
 //! Everything is generic over the dimension `D` and the family `S`, so the
 //! pair loop is compiled once per family with no dynamic dispatch.
@@ -29,6 +31,7 @@ pub mod neighbors;
 pub mod newton;
 pub mod precon;
 pub mod protocol;
+pub mod saddle;
 pub mod scene;
 pub mod simd;
 mod slots;
@@ -42,7 +45,7 @@ pub use neighbors::NeighborList;
 pub use newton::NewtonParams;
 pub use precon::PreconParams;
 pub use protocol::{
-    JamParams, JamSearch, PressureParams, ProtocolOutcome, compress_to_phi, compress_to_pressure,
-    energy_slope, extrapolated_step, jam,
+    AboveJamOutcome, AboveJamParams, JamParams, JamSearch, PressureParams, ProtocolOutcome,
+    above_jam, compress_to_phi, compress_to_pressure, energy_slope, extrapolated_step, jam,
 };
 pub use scene::Scene;

@@ -12,6 +12,11 @@
 //! **To a pressure.** The same bisection as for jamming, on the virial
 //! pressure: compress while `P < P*`, reverse and halve on every crossing,
 //! stop when `|P − P*| < tol · P*`.
+//!
+//! **Above the jamming point.** Jam, then compress by `δφ` to
+//! `φ_J + δφ`. A compression can rearrange the packing into a state that
+//! jams above `φ_J + δφ`; it is jammed again from there, at most `rejams`
+//! times.
 
 use crate::fire::{Fire, Objective};
 use crate::scene::Scene;
@@ -316,6 +321,98 @@ pub fn jam<const D: usize, S: Shape<D>>(
             JamSearch::Extrapolated => extrapolated_step(scene, e, target.max(e * LEAP)),
         },
     )
+}
+
+/// Parameters of [`above_jam`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct AboveJamParams {
+    /// The jamming bisection.
+    pub jam: JamParams,
+    /// `δφ`: how far above its jamming point the packing ends.
+    pub delta_phi: f64,
+    /// Step of `φ` on the way up.
+    pub compress_eps: f64,
+    /// How many times a packing that unjammed on its way up is jammed again
+    /// from there before the protocol gives up.
+    pub rejams: u32,
+}
+
+/// What [`above_jam`] ended with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AboveJamOutcome {
+    /// The packing at `φ_J + δφ`: its `φ` and `V/N`, with the work of
+    /// every pass.
+    pub above: ProtocolOutcome,
+    /// `φ_J`, the jamming point it was compressed from.
+    pub phi_j: f64,
+    /// The jamming points left because the packing unjammed on its way up.
+    pub left: Vec<f64>,
+}
+
+/// Jam, then compress to `φ_J + δφ` (module documentation). `at_jam` is
+/// called at every jamming point, before the compression, with the scene,
+/// the bisection's outcome and the jamming points left so far: the place to
+/// measure the jamming point (it must not move a body).
+pub fn above_jam<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+    fire: &mut Fire,
+    params: &AboveJamParams,
+    mut at_jam: impl FnMut(&mut Scene<D, S>, &ProtocolOutcome, &[f64]),
+) -> Result<AboveJamOutcome> {
+    let AboveJamParams {
+        delta_phi,
+        compress_eps,
+        rejams,
+        ..
+    } = *params;
+    let energy_high = params.jam.energy_high;
+    let mut left = Vec::new();
+    let mut spent: Option<ProtocolOutcome> = None;
+    loop {
+        let jammed = jam(scene, fire, &params.jam)?;
+        at_jam(scene, &jammed, &left);
+        let climb = compress_to_phi(scene, fire, jammed.phi + delta_phi, compress_eps)?;
+        // φ and V/N of the compression, the work of every pass.
+        let mut above = climb;
+        above.add_work(&jammed);
+        if let Some(spent) = &spent {
+            above.add_work(spent);
+        }
+        if above.energy_per_particle > energy_high {
+            return Ok(AboveJamOutcome {
+                above,
+                phi_j: jammed.phi,
+                left,
+            });
+        }
+        // NOTE: a compression step followed by FIRE can rearrange the
+        // packing into a state that jams above φ_J + δφ (measured: N = 64
+        // disks, seed 1, δφ = 3e-3 ended with V/N = 7e-17 and no contact).
+        // That is not a packing at δφ above its jamming point: jam it again
+        // from there (`rejams` times at most), or fail, naming it.
+        if left.len() as u32 >= rejams {
+            return Err(Error::JammingFailed {
+                phi: climb.phi,
+                // The compression's density changes: one minimisation more
+                // (the first, at φ_J).
+                steps: climb.minimizations.saturating_sub(1),
+                reason: format!(
+                    "the packing unjammed while compressed by delta_phi = {delta_phi:e} from phi_J = {:.12} (V/N = {:.3e}, not above energy_high = {energy_high:e}): a rearrangement found a state that jams above phi_J + delta_phi{}",
+                    jammed.phi,
+                    climb.energy_per_particle,
+                    if rejams == 0 {
+                        "; try protocol.rejams (jam it again from there), a smaller protocol.compress_eps or another seed".to_string()
+                    } else {
+                        format!(
+                            ", after protocol.rejams = {rejams} earlier jamming points ({left:?}) left the same way"
+                        )
+                    }
+                ),
+            });
+        }
+        left.push(jammed.phi);
+        spent = Some(above);
+    }
 }
 
 /// `d(V/N)/dφ` of a relaxed state under affine compression, from the

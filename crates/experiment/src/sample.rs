@@ -1,13 +1,14 @@
 //! One sample, from start to end: the family's shape for its point, the
-//! random start from its seed, the protocol (`jam`, `compress_to_phi`,
-//! `compress_to_pressure`, with the saddle escape when asked), the
-//! observables (contacts and rattlers, pressure, spectrum, gaps), and the
-//! packing file that records it all. The observables are measured on the
-//! configuration as its file records it (`measure_saved`), by the same
-//! code as the re-measurement of a saved packing (`remeasure`), so the
-//! two agree bit for bit. The parallel, resumable loop over samples is the
-//! runner's (`runner`); nothing here knows about threads, locks or other
-//! samples, so a sample is the same bits whoever runs it.
+//! random start from its seed, the protocol (the engine's `jam`,
+//! `compress_to_phi`, `compress_to_pressure` or `above_jam`, with the saddle
+//! escape when asked), the observables (contacts and rattlers, pressure,
+//! spectrum, gaps), and the packing file that records it all. The
+//! observables are measured on the configuration as its file records it
+//! (`measure_saved`), by the same code as the re-measurement of a saved
+//! packing (`remeasure`), so the two agree bit for bit. The parallel,
+//! resumable loop over samples is the runner's (`runner`); nothing here
+//! knows about threads, locks or other samples, so a sample is the same
+//! bits whoever runs it.
 
 use crate::error::ExperimentError;
 use crate::grid::{Job, Point};
@@ -15,15 +16,15 @@ use crate::reload::{PackingVisitor, reload};
 use crate::schema::{Experiment, Observable, Protocol, SpectrumRequest};
 use jamkit_core::BodyOrientation;
 use jamkit_core::{Packing, Shape};
+use jamkit_engine::saddle::{self, SaddleParams};
 use jamkit_engine::{
-    Fire, FireParams, JamParams, PressureParams, Progress, Scene, compress_to_phi,
-    compress_to_pressure, jam,
+    AboveJamParams, Fire, FireParams, JamParams, PressureParams, Progress, Scene, above_jam,
+    compress_to_phi, compress_to_pressure, jam,
 };
 use jamkit_format::{JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures};
 use jamkit_observe::gaps::GapCounts;
-use jamkit_observe::saddle::{self, SaddleParams};
 use jamkit_observe::spectrum::{self, Spectrum};
-use jamkit_observe::{JammingSummary, RattlerRule, summarize_with};
+use jamkit_observe::{JammingSummary, RattlerRule, summarize, summarize_with};
 use jamkit_registry::{self as registry, SceneVisitor};
 use rand::SeedableRng;
 use std::sync::Arc;
@@ -173,7 +174,7 @@ impl SceneVisitor for SampleVisitor<'_> {
                             &mut fire,
                             &params,
                             &SaddleParams::default(),
-                            threshold,
+                            |scene| summarize(scene, threshold).rattler,
                         )?;
                         outcome.phi = s.phi;
                         outcome.energy_per_particle = s.energy_per_particle;
@@ -196,79 +197,34 @@ impl SceneVisitor for SampleVisitor<'_> {
                 rejams,
                 ..
             } => {
-                let delta_phi = target(delta_phi);
-                let params = JamParams {
-                    eps,
-                    energy_low,
-                    energy_high,
-                    max_density_steps,
-                    search,
+                let params = AboveJamParams {
+                    jam: JamParams {
+                        eps,
+                        energy_low,
+                        energy_high,
+                        max_density_steps,
+                        search,
+                    },
+                    delta_phi: target(delta_phi),
+                    compress_eps,
+                    rejams,
                 };
-                // The jamming points left when the packing unjammed on its
-                // way up (with `rejams`), and the work of those passes.
-                let mut left = Vec::new();
-                let mut spent: Option<jamkit_engine::ProtocolOutcome> = None;
-                loop {
-                    let jammed = match jam(&mut scene, &mut fire, &params) {
-                        Ok(jammed) => jammed,
-                        Err(err) => break Err(err),
-                    };
+                above_jam(&mut scene, &mut fire, &params, |scene, jammed, left| {
                     // The jamming point's contacts, before the compression
                     // (reading them moves no body: same packing after).
                     let at_jam = e.needs_contacts().then(|| {
                         let rule = rattler_rule(e, scene.packing());
-                        summarize_with(&mut scene, rule)
+                        summarize_with(scene, rule)
                     });
                     jam_point = Some(JamPoint {
                         phi: jammed.phi,
                         z: at_jam.as_ref().map(|s| s.z_j),
                         n_rattlers: at_jam.as_ref().map(|s| s.n_rattlers),
                         iso_margin: at_jam.as_ref().map(|s| s.iso_margin),
-                        left: left.clone(),
+                        left: left.to_vec(),
                     });
-                    let target = jammed.phi + delta_phi;
-                    let climb = match compress_to_phi(&mut scene, &mut fire, target, compress_eps) {
-                        Ok(climb) => climb,
-                        Err(err) => break Err(err),
-                    };
-                    // φ and V/N of the compression, the work of every pass.
-                    let mut above = climb;
-                    above.add_work(&jammed);
-                    if let Some(spent) = &spent {
-                        above.add_work(spent);
-                    }
-                    if above.energy_per_particle > energy_high {
-                        break Ok(above);
-                    }
-                    // NOTE: a compression step followed by FIRE can rearrange
-                    // the packing into a state that jams above φ_J + δφ
-                    // (measured: N = 64 disks, seed 1, δφ = 3e-3 ended with
-                    // V/N = 7e-17 and no contact). That is not a packing at
-                    // δφ above its jamming point: jam it again from there
-                    // (`rejams` times at most), or fail, naming it.
-                    if left.len() as u32 >= rejams {
-                        break Err(jamkit_core::Error::JammingFailed {
-                            phi: climb.phi,
-                            // The compression's density changes: one
-                            // minimisation more (the first, at φ_J).
-                            steps: climb.minimizations.saturating_sub(1),
-                            reason: format!(
-                                "the packing unjammed while compressed by delta_phi = {delta_phi:e} from phi_J = {:.12} (V/N = {:.3e}, not above energy_high = {energy_high:e}): a rearrangement found a state that jams above phi_J + delta_phi{}",
-                                jammed.phi,
-                                climb.energy_per_particle,
-                                if rejams == 0 {
-                                    "; try protocol.rejams (jam it again from there), a smaller protocol.compress_eps or another seed".to_string()
-                                } else {
-                                    format!(
-                                        ", after protocol.rejams = {rejams} earlier jamming points ({left:?}) left the same way"
-                                    )
-                                }
-                            ),
-                        });
-                    }
-                    left.push(jammed.phi);
-                    spent = Some(above);
-                }
+                })
+                .map(|o| o.above)
             }
             Protocol::Phi { ref phi, eps, .. } => {
                 compress_to_phi(&mut scene, &mut fire, target(phi), eps)

@@ -150,7 +150,7 @@ pub enum Protocol {
         #[serde(default = "default_max_density_steps")]
         max_density_steps: u64,
         /// After the bisection, push the packing off saddles of the true
-        /// Hessian and re-jam (`jamkit_observe::saddle`). Off by default,
+        /// Hessian and re-jam (`jamkit_engine::saddle`). Off by default,
         /// and not written out when off, so that settings (and the resume
         /// check) of earlier runs are unchanged: on 2D dimers the end
         /// states of the bisection are true minima

@@ -21,7 +21,6 @@ pub mod gaps;
 pub mod moduli;
 mod pinverse;
 pub use jamkit_engine::hessian;
-pub mod saddle;
 pub mod spectrum;
 pub mod summary;
 

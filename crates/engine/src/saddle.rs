@@ -21,16 +21,14 @@
 //! same window `E_low < V/N < E_high` with the same FIRE tolerances. Stop
 //! after `max_rounds` rounds.
 //!
-//! It lives here rather than in the engine because the engine cannot see
-//! the Hessian. The push and the re-jam are sequential and depend on the
-//! configuration only; the eigenvector comes from faer's dense solver,
+//! The push and the re-jam are sequential and depend on the configuration
+//! only; the eigenvector comes from faer's dense solver,
 //! whose thread-count independence was not checked (with no push made, as
 //! measured, the packing is the bisection's, bit for bit).
 
 use crate::hessian::{Hessian, HessianOptions};
-use crate::summary::summarize;
+use crate::{Fire, JamParams, Objective, Scene, jam};
 use jamkit_core::{Error, Result, Shape};
-use jamkit_engine::{Fire, JamParams, Objective, Scene, jam};
 
 /// Parameters of the saddle escape.
 #[derive(Clone, Debug, PartialEq)]
@@ -100,14 +98,10 @@ pub struct SaddleOutcome {
 /// flat coordinates (zero on removed rattlers).
 fn lowest_mode<const D: usize, S: Shape<D>>(
     scene: &mut Scene<D, S>,
-    threshold: usize,
+    rattlers: &mut impl FnMut(&mut Scene<D, S>) -> Vec<bool>,
     full: bool,
 ) -> Result<(f64, f64, Vec<f64>)> {
-    let rattler = if full {
-        Vec::new()
-    } else {
-        summarize(scene, threshold).rattler
-    };
+    let rattler = if full { Vec::new() } else { rattlers(scene) };
     let h = Hessian::of_scene(
         scene,
         &rattler,
@@ -135,14 +129,14 @@ fn lowest_mode<const D: usize, S: Shape<D>>(
 }
 
 /// Push `scene` off saddles of `K + T` and re-jam, as described in the
-/// module documentation; `rattler_threshold` is the family's contact count
-/// below which a body rattles.
+/// module documentation; `rattlers` marks the rattlers of a scene (asked
+/// only without [`SaddleParams::full_hessian`]).
 pub fn escape_saddles<const D: usize, S: Shape<D>>(
     scene: &mut Scene<D, S>,
     fire: &mut Fire,
     jam_params: &JamParams,
     params: &SaddleParams,
-    rattler_threshold: usize,
+    mut rattlers: impl FnMut(&mut Scene<D, S>) -> Vec<bool>,
 ) -> Result<SaddleOutcome> {
     let mut out = SaddleOutcome {
         phi: scene.phi(),
@@ -160,7 +154,7 @@ pub fn escape_saddles<const D: usize, S: Shape<D>>(
         ..jam_params.clone()
     };
     loop {
-        let (lmin, lmax, mode) = lowest_mode(scene, rattler_threshold, params.full_hessian)?;
+        let (lmin, lmax, mode) = lowest_mode(scene, &mut rattlers, params.full_hessian)?;
         out.lambda_min_rel = if lmax > 0.0 { lmin / lmax } else { 0.0 };
         let saddle = lmin < -params.threshold * lmax;
         out.still_saddle = saddle;
