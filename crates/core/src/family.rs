@@ -14,16 +14,14 @@
 //! the sphere). Everything that needs a shape from a name (the runner,
 //! `jamkit draw`, `draw-shape`, `report`) asks the registry, an explicit
 //! list of these implementations, and is handed the typed shape through a
-//! [`ShapeVisitor`], after which all is statically dispatched. What a
-//! family can do beyond the [`Shape`] contract is an optional ability of
-//! its shape: a planar [`Outline`] for drawing
-//! ([`Shape::outline`]), a 3D [`Surface`] ([`Shape::surface`]), a sphere
-//! decomposition, second derivatives.
+//! [`ShapeVisitor`], after which all is statically dispatched. The
+//! parameter table ([`FamilyInfo::params`]) is written beside the serde
+//! struct it describes; the registry's tests check that the two name the
+//! same fields and agree on which are required.
 
 use crate::Shape;
 use serde::de::DeserializeOwned;
 use std::fmt::Debug;
-use std::sync::Arc;
 
 /// One parameter of a family.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,58 +102,6 @@ pub trait Family {
         visitor: V,
     ) -> crate::Result<V::Output>;
 }
-
-/// The outline of a planar body, for drawing: its radius in the direction
-/// at angle `ψ` from its body frame, in units of its size `R⁰`. A body of
-/// size `R⁰` and orientation `θ` reaches `R⁰ ρ(θ − φ)` in the lab direction
-/// `φ` (the convention of the near-disks, `R(φ) = R⁰ [1 + Δ F(θ − φ)]`).
-/// Only star-shaped bodies have one; a body made of spheres is drawn from
-/// its [`Shape::sphere_decomposition`] instead.
-pub trait Outline: Debug + Send + Sync {
-    /// `ρ(ψ) = R(ψ)/R⁰`.
-    fn relative_radius(&self, psi: f64) -> f64;
-}
-
-/// A disk's outline: `ρ = 1`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RoundOutline;
-
-impl Outline for RoundOutline {
-    fn relative_radius(&self, _psi: f64) -> f64 {
-        1.0
-    }
-}
-
-/// A shared outline (what [`Shape::outline`] returns).
-pub type SharedOutline = Arc<dyn Outline>;
-
-/// The surface of a star-shaped 3D body, for drawing (the 3D counterpart
-/// of [`Outline`]): its radius in the body-frame direction `y` (a unit
-/// vector), in units of its size `R⁰`, and how the body frame is turned
-/// by the orientation a packing file stores. A body of size `R⁰`, centre
-/// `c` and rotation `M` (body to world) is the set of points `c + s M y`
-/// with `0 ≤ s ≤ R⁰ ρ(y)`. Bodies made of spheres have none; they are
-/// drawn from [`Shape::sphere_decomposition`](crate::Shape::sphere_decomposition).
-pub trait Surface: Debug + Send + Sync {
-    /// `ρ(y) = R(y)/R⁰` at the body-frame unit vector `y`.
-    fn relative_radius(&self, y: [f64; 3]) -> f64;
-    /// Certain bounds `(min, max)` on `ρ` over the unit sphere, with
-    /// `0 < min ≤ max`.
-    fn relative_radius_bounds(&self) -> (f64, f64);
-    /// The rotation from body to world frame, as a matrix (rows), of a body
-    /// whose orientation is written `coords`
-    /// ([`BodyOrientation::to_coords`](crate::BodyOrientation::to_coords));
-    /// `None` if the numbers are not an orientation. By default the
-    /// orientation is a unit quaternion `[w, x, y, z]`
-    /// ([`Quaternion::from_coords`](crate::Quaternion::from_coords)), as
-    /// for every 3D family that turns.
-    fn rotation(&self, coords: &[f64]) -> Option<[[f64; 3]; 3]> {
-        crate::Quaternion::from_coords(coords).map(|q| q.rows())
-    }
-}
-
-/// A shared surface (what [`Shape::surface`](crate::Shape::surface) returns).
-pub type SharedSurface = Arc<dyn Surface>;
 
 impl FamilyInfo {
     /// The spec of parameter `name`, if the family has one.

@@ -7,13 +7,15 @@
 //! * [`periodic`]: the periodic box and its minimum-image convention;
 //! * [`shape`]: the [`Shape`] trait a shape family implements, its geometry
 //!   (volume, bounding radius, rotational coordinates and the *contacts*
-//!   of a [`Pair`] of bodies, each a gap `h` with its derivatives);
-//! * [`fast`]: the engine's optional fast paths ([`FastContacts`]);
-//! * [`policy`]: what a family says as plain data: the minimiser's and the
-//!   analysis' [`Policy`], and the [`Look`] the drawing and export read;
+//!   of a [`Pair`] of bodies), and the engine's optional fast paths
+//!   ([`FastContacts`]);
+//! * [`contact`]: a [`Pair`] of bodies and its [`Contact`]s, each a gap `h`
+//!   with its derivatives; [`lanes`]: the same, several pairs side by side;
+//! * [`policy`] and [`look`]: what a family says as plain data, the
+//!   minimiser's and the analysis' [`Policy`] and the [`Look`] the drawing
+//!   and export read;
 //! * [`family`]: a family's one registration ([`Family`]), the
-//!   [`ShapeVisitor`] the registry hands shapes to, and the optional
-//!   [`Outline`] ability;
+//!   [`ShapeVisitor`] the registry hands shapes to;
 //! * [`rotation`]: [`Rotation2`] and [`Angle`], the planar orientations shared by the 2D
 //!   families (the 2D near-disk gaps live in `jamkit-planar`);
 //! * [`orientation`]: [`BodyOrientation`], what every orientation type does
@@ -30,10 +32,12 @@
 //! Geometry (the gap) belongs to shapes, energy to potentials: a new family
 //! never touches the potential, and a new potential never touches a family.
 
+pub mod contact;
 pub mod error;
 pub mod family;
-pub mod fast;
 pub mod gap_model;
+pub mod lanes;
+pub mod look;
 pub mod math;
 pub mod orientation;
 pub mod packing;
@@ -46,21 +50,18 @@ pub mod shape;
 pub mod sizes;
 pub mod stats;
 
+pub use contact::{Contact, GapHessian, Pair};
 pub use error::{Error, Result};
-pub use family::{
-    Dims, Family, FamilyInfo, Outline, ParamSpec, RoundOutline, ShapeVisitor, SharedOutline,
-    SharedSurface, Surface,
-};
-pub use fast::{
-    ContactLanes, FastContacts, MAX_SLOTS, NoFastPath, PairLanes, SlotPairs, contacts_one_by_one,
-};
+pub use family::{Dims, Family, FamilyInfo, ParamSpec, ShapeVisitor};
+pub use lanes::{ContactLanes, MAX_SLOTS, PairLanes, SlotPairs};
+pub use look::{Look, Outline, RoundOutline, SharedOutline, SharedSurface, Surface};
 pub use math::{MAX_ROT, Matrix, RotVec, Vector};
 pub use orientation::BodyOrientation;
 pub use packing::Packing;
 pub use periodic::PeriodicBox;
-pub use policy::{Look, Policy};
+pub use policy::Policy;
 pub use potential::Potential;
 pub use quaternion::Quaternion;
 pub use rotation::{Angle, Rotation2};
-pub use shape::{Contact, GapHessian, Kernel, Pair, Shape, ShapeExt};
+pub use shape::{FastContacts, Kernel, NoFastPath, Shape, ShapeExt, contacts_one_by_one};
 pub use sizes::SizeDistribution;

@@ -8,11 +8,12 @@
 //! [`Shape::rotate`], so a family can keep a quaternion while FIRE sees three
 //! small angles.
 
+use crate::contact::Pair;
 use crate::error::{Error, Result};
 use crate::math::Vector;
 use crate::orientation::BodyOrientation;
 use crate::periodic::PeriodicBox;
-use crate::shape::{Pair, Shape};
+use crate::shape::Shape;
 use rand::{Rng, RngExt};
 
 /// Most random draws for one body of an overlap-free start

@@ -1,8 +1,5 @@
-//! What a family says about its packings besides their geometry, as plain
-//! data returned once: the minimiser's and the analysis' [`Policy`], and
-//! the [`Look`] the drawing and export crates read.
-
-use crate::family::{SharedOutline, SharedSurface};
+//! How the minimiser and the analysis treat a family's packings: its
+//! [`Policy`], plain data returned once.
 
 /// How the minimiser and the analysis treat a family's packings
 /// ([`Shape::policy`](crate::Shape::policy)). [`Policy::new`] gives the
@@ -77,23 +74,4 @@ impl Policy {
             warnings: Vec::new(),
         }
     }
-}
-
-/// How a family's bodies are drawn and exported
-/// ([`Shape::look`](crate::Shape::look)): read by `jamkit-draw` (pictures)
-/// and the extended XYZ export. Bodies made of spheres need none of it: they
-/// are drawn from [`Shape::sphere_decomposition`](crate::Shape::sphere_decomposition).
-#[derive(Clone, Debug, Default)]
-pub struct Look {
-    /// Balls of radius `R⁰` (drawn as circles or spheres).
-    pub ball: bool,
-    /// The planar outline of a 2D body.
-    pub outline: Option<SharedOutline>,
-    /// The surface of a star-shaped 3D body.
-    pub surface: Option<SharedSurface>,
-    /// The semi-axes of an ellipse or ellipsoid body along its body axes,
-    /// per unit size `R⁰`. Exporters write them where a viewer draws
-    /// ellipsoids (extended XYZ's `aspherical_shape`, OVITO); a planar body
-    /// gives its third axis as the second.
-    pub ellipsoid_axes: Option<[f64; 3]>,
 }

@@ -15,129 +15,20 @@
 //!   the Hessian, their second derivatives ([`Shape::gap_hessians`]).
 //!
 //! Three optional abilities stand beside it: the engine's fast paths
-//! ([`Shape::Fast`], see [`crate::fast`]), the minimiser's and the analysis'
+//! ([`Shape::Fast`], a [`FastContacts`]), the minimiser's and the analysis'
 //! [`Policy`] and the drawing's and export's [`Look`], both plain data.
 //!
 //! A near-disk yields one contact per pair, a dimer up to four; the energy is
 //! then `Σ v(h)` over all contacts, with `v` a [`Potential`](crate::Potential).
-//!
-//! Gaps depend on the two centres only through `r_ij = r_j − r_i` (minimum
-//! image), so `∂h/∂r_i = −∂h/∂r_j` and a [`Contact`] stores one of them.
 
+use crate::contact::{Contact, GapHessian, Pair};
 use crate::error::{Error, Result};
-use crate::fast::FastContacts;
-use crate::math::{MAX_ROT, Matrix, RotVec, Vector};
+use crate::lanes::{ContactLanes, PairLanes, SlotPairs};
+use crate::look::Look;
+use crate::math::{RotVec, Vector};
 use crate::orientation::BodyOrientation;
-use crate::policy::{Look, Policy};
+use crate::policy::Policy;
 use std::fmt::Debug;
-
-/// One contact between bodies `i` and `j`: a gap with its first derivatives.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Contact<const D: usize> {
-    /// The gap `h_ij` (negative for an overlap).
-    pub gap: f64,
-    /// `∂h/∂r_j = −∂h/∂r_i`.
-    pub grad_r: Vector<D>,
-    /// `∂h/∂q_i` for the rotational coordinates of body `i` (first `rot_dof` entries).
-    pub grad_rot_i: RotVec,
-    /// `∂h/∂q_j` for the rotational coordinates of body `j`.
-    pub grad_rot_j: RotVec,
-}
-
-impl<const D: usize> Contact<D> {
-    /// A contact between bodies without rotational coordinates.
-    #[inline(always)]
-    pub fn translational(gap: f64, grad_r: Vector<D>) -> Self {
-        Self {
-            gap,
-            grad_r,
-            grad_rot_i: [0.0; 3],
-            grad_rot_j: [0.0; 3],
-        }
-    }
-}
-
-/// One contact's gap with its first **and second** derivatives, for the
-/// Hessian of the energy.
-///
-/// The gap depends on the centres only through `r_ij = r_j − r_i`, so with
-/// `∂/∂r_i = −∂/∂r_j` every second derivative involving `r_i` follows from
-/// the ones stored here:
-///
-/// ```text
-/// ∂²h/∂r_i∂r_i = ∂²h/∂r_j∂r_j = −∂²h/∂r_i∂r_j = rr,
-/// ∂²h/∂r_j∂q_i[a] = r_qi[a],   ∂²h/∂r_i∂q_i[a] = −r_qi[a]   (same for q_j).
-/// ```
-///
-/// Rotational derivatives are taken with respect to the increments that
-/// [`Shape::rotate`] applies, at zero increment.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GapHessian<const D: usize> {
-    /// The gap and its first derivatives.
-    pub contact: Contact<D>,
-    /// `∂²h/∂r_j∂r_j` (symmetric).
-    pub rr: Matrix<D>,
-    /// `∂²h/∂r_j∂q_i[a]` for each rotational coordinate `a` of body `i`.
-    pub r_qi: [Vector<D>; MAX_ROT],
-    /// `∂²h/∂r_j∂q_j[a]`.
-    pub r_qj: [Vector<D>; MAX_ROT],
-    /// `∂²h/∂q_i[a]∂q_i[b]` (symmetric).
-    pub qi_qi: [RotVec; MAX_ROT],
-    /// `∂²h/∂q_j[a]∂q_j[b]` (symmetric).
-    pub qj_qj: [RotVec; MAX_ROT],
-    /// `∂²h/∂q_i[a]∂q_j[b]`, indexed `[a][b]`.
-    pub qi_qj: [RotVec; MAX_ROT],
-}
-
-impl<const D: usize> GapHessian<D> {
-    /// A contact between bodies without rotational coordinates.
-    pub fn translational(gap: f64, grad_r: Vector<D>, rr: Matrix<D>) -> Self {
-        Self {
-            contact: Contact::translational(gap, grad_r),
-            rr,
-            r_qi: [Vector::<D>::zeros(); MAX_ROT],
-            r_qj: [Vector::<D>::zeros(); MAX_ROT],
-            qi_qi: [[0.0; MAX_ROT]; MAX_ROT],
-            qj_qj: [[0.0; MAX_ROT]; MAX_ROT],
-            qi_qj: [[0.0; MAX_ROT]; MAX_ROT],
-        }
-    }
-}
-
-/// What a family is asked about one pair of bodies: body `i` (size
-/// `size_i`, orientation `o_i`) and body `j`, whose centre is at
-/// `r_ij = r_j − r_i` (minimum image) from `i`'s.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Pair<const D: usize, O> {
-    /// `R⁰_i`.
-    pub size_i: f64,
-    /// Orientation of body `i`.
-    pub o_i: O,
-    /// `R⁰_j`.
-    pub size_j: f64,
-    /// Orientation of body `j`.
-    pub o_j: O,
-    /// `r_ij = r_j − r_i`.
-    pub r_ij: Vector<D>,
-}
-
-impl<const D: usize, O: Copy> Pair<D, O> {
-    /// Body `i` (`size_i`, `o_i`) and body `j` (`size_j`, `o_j`) at `r_ij`.
-    pub fn new(size_i: f64, o_i: O, size_j: f64, o_j: O, r_ij: Vector<D>) -> Self {
-        Self {
-            size_i,
-            o_i,
-            size_j,
-            o_j,
-            r_ij,
-        }
-    }
-
-    /// The same pair seen from `j`: `i` and `j` swapped, `r_ij → −r_ij`.
-    pub fn swapped(&self) -> Self {
-        Self::new(self.size_j, self.o_j, self.size_i, self.o_i, -self.r_ij)
-    }
-}
 
 /// A family of bodies, generic over the dimension `D`: its geometry.
 ///
@@ -151,7 +42,7 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     /// the type's own ([`BodyOrientation`]).
     type Orientation: BodyOrientation;
 
-    /// The engine's fast paths for this family ([`crate::fast`]):
+    /// The engine's fast paths for this family ([`FastContacts`]):
     /// [`NoFastPath`](crate::NoFastPath) for none.
     type Fast: FastContacts<D, Self>;
 
@@ -236,7 +127,7 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
 }
 
 /// Which of the engine's energy kernels a family's packings take (see
-/// [`crate::fast`]).
+/// [`FastContacts`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kernel {
     /// Every pair through [`Shape::contacts`].
@@ -277,3 +168,134 @@ pub trait ShapeExt<const D: usize>: Shape<D> {
 }
 
 impl<const D: usize, S: Shape<D>> ShapeExt<D> for S {}
+
+/// [`FastContacts::contacts_lanes`] one pair at a time through
+/// [`Shape::contacts`] (its default; a family that overrides it for some
+/// parameters calls this for the others). A pair with more than one contact
+/// keeps the last: only families with [`FastContacts::LANES`] are asked.
+#[inline(always)]
+pub fn contacts_one_by_one<const D: usize, S: Shape<D>, const W: usize>(
+    shape: &S,
+    pairs: &PairLanes<D, S::Orientation, W>,
+    out: &mut ContactLanes<D, W>,
+) {
+    for l in 0..W {
+        out.found[l] = false;
+        let pair = Pair {
+            size_i: pairs.size_i[l],
+            o_i: pairs.o_i[l],
+            size_j: pairs.size_j[l],
+            o_j: pairs.o_j[l],
+            r_ij: pairs.separation(l),
+        };
+        shape.contacts(&pair, 0.0, |c| out.set(l, &c));
+    }
+}
+
+/// The engine's fast paths for the family `S`: optional abilities that let
+/// the energy pass compute several pairs per call. A family names them in
+/// [`Shape::Fast`]: [`NoFastPath`] for none (every pair through
+/// [`Shape::contacts`], which is always correct), or a type implementing
+/// this trait (usually the shape itself) that switches on one of three
+/// kernels:
+///
+/// * **balls** ([`FastContacts::BALL`]): one contact per pair, the sphere
+///   family's, several pairs per instruction;
+/// * **lanes** ([`FastContacts::LANES`]): at most one contact per pair,
+///   computed `W` pairs at a time ([`FastContacts::contacts_lanes`]);
+/// * **slots** ([`FastContacts::contact_slots`]): up to
+///   [`MAX_SLOTS`](crate::MAX_SLOTS) contacts per pair, each at a fixed
+///   place (sphere `a` of one body against sphere `b` of the other), from
+///   terms computed once per body ([`FastContacts::body_terms`]).
+///
+/// Each kernel must give the same bits as the pass through
+/// [`Shape::contacts`]; the conformance kit (`jamkit-kit`) and the engine's
+/// tests check it. Every item has a default that leaves the path off, so an
+/// implementation names only the kernel it switches on.
+pub trait FastContacts<const D: usize, S: Shape<D>> {
+    /// True only for a family of balls: no rotational coordinates, bounding
+    /// radius = size, and one contact per pair, exactly
+    /// `Contact::translational(|r| − R_i − R_j, r/|r|)` as computed by the
+    /// `sphere` family (`(1/|r|) r`, and the first axis at `r = 0`). The
+    /// engine then evaluates the energy with a kernel of its own that
+    /// handles several pairs per instruction.
+    const BALL: bool = false;
+
+    /// True when every pair has at most one contact and the family computes
+    /// them several pairs at a time in [`FastContacts::contacts_lanes`].
+    /// Where [`FastContacts::use_lanes`] agrees, the engine's energy pass
+    /// then asks for a chunk of pairs per call and sums with no branch per
+    /// pair.
+    const LANES: bool = false;
+
+    /// Whether the energy pass should use [`FastContacts::contacts_lanes`]
+    /// for these parameters (only asked when [`FastContacts::LANES`]).
+    /// Default true; a family says no where its lanes would only call
+    /// [`Shape::contacts`] one pair after the other, which the generic pass
+    /// does with less overhead.
+    fn use_lanes(_shape: &S) -> bool {
+        true
+    }
+
+    /// The contacts of `W` pairs with `max_gap = 0` (the energy's): lane `l`
+    /// gets the contact [`Shape::contacts`] visits for pair `l`, bit for
+    /// bit, or none where it visits none. Every lane of `out` must be
+    /// written (`found` at least): it holds the previous call's contacts.
+    /// The default calls [`Shape::contacts`] for one pair after the other.
+    #[inline(always)]
+    fn contacts_lanes<const W: usize>(
+        shape: &S,
+        pairs: &PairLanes<D, S::Orientation, W>,
+        out: &mut ContactLanes<D, W>,
+    ) {
+        contacts_one_by_one(shape, pairs, out);
+    }
+
+    /// Contacts per pair on the engine's *slots* path (default 0: not on
+    /// it). A family whose pair of bodies has at most this many contacts,
+    /// each at a fixed place `s` (a *slot*), visited by [`Shape::contacts`]
+    /// in slot order, may compute them a chunk of pairs at a time in
+    /// [`FastContacts::slot_contacts_lanes`], from terms of each body
+    /// computed once per energy evaluation ([`FastContacts::body_terms`]).
+    /// At most [`MAX_SLOTS`](crate::MAX_SLOTS).
+    fn contact_slots(_shape: &S) -> usize {
+        0
+    }
+
+    /// Numbers per body for [`FastContacts::body_terms`] (only asked when
+    /// [`FastContacts::contact_slots`] is not 0).
+    fn body_terms_len(_shape: &S) -> usize {
+        0
+    }
+
+    /// Write the terms of one body (size `size`, orientation `o`) that
+    /// [`FastContacts::slot_contacts_lanes`] reads,
+    /// [`FastContacts::body_terms_len`] numbers, into `out`: what
+    /// [`Shape::contacts`] computes anew for every pair (e.g. the rotated
+    /// sphere offsets), once per evaluation.
+    fn body_terms(_shape: &S, _size: f64, _o: &S::Orientation, _out: &mut [f64]) {}
+
+    /// The contacts of `W` pairs with `max_gap = 0`, slot by slot: lane `l`
+    /// of `out[s]` gets the contact [`Shape::contacts`] visits at slot `s`
+    /// of pair `l`, bit for bit, or none (`found` false) where it visits
+    /// none. `terms` holds [`FastContacts::body_terms`] of every body of the
+    /// scene, in body order. `out` has [`FastContacts::contact_slots`]
+    /// entries; every lane's `found` must be written.
+    #[inline(always)]
+    fn slot_contacts_lanes<const W: usize>(
+        _shape: &S,
+        _terms: &[f64],
+        _pairs: &SlotPairs<D, W>,
+        out: &mut [ContactLanes<D, W>],
+    ) {
+        for slots in out {
+            slots.found = [false; W];
+        }
+    }
+}
+
+/// No fast path: every pair goes through [`Shape::contacts`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoFastPath;
+
+impl<const D: usize, S: Shape<D>> FastContacts<D, S> for NoFastPath {}

@@ -5,7 +5,7 @@
 //! every generalised coordinate (rotations included, applied through the
 //! family's `rotate`). Tests of each family call it; so should a new family.
 
-use crate::fire::Objective;
+use crate::objective::Objective;
 use crate::scene::Scene;
 use jamkit_core::Shape;
 

@@ -259,7 +259,7 @@ pub fn finite_difference<const D: usize, S: Shape<D>>(
     scene: &Scene<D, S>,
     step: f64,
 ) -> Vec<Vec<f64>> {
-    use crate::fire::Objective;
+    use crate::objective::Objective;
     let n = scene.dof();
     let mut columns = Vec::with_capacity(n);
     let mut dq = vec![0.0; n];

@@ -37,7 +37,7 @@
 //! comes after twice as many FIRE steps as before. The stopping criteria
 //! are FIRE's ([`crate::FireParams::stop`]).
 
-use crate::fire::{Objective, StopReason};
+use crate::objective::{Objective, StopReason};
 use crate::precon::{BlockMasses, PreconParams};
 use jamkit_core::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -178,7 +178,7 @@ impl LbfgsParams {
                 "must be at least 1 (iterations between rebuilds of the blocks)",
             ));
         }
-        crate::fire::require_positive_finite(prefix, "max_step", self.max_step)
+        crate::objective::require_positive_finite(prefix, "max_step", self.max_step)
     }
 }
 

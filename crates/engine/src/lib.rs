@@ -7,6 +7,7 @@
 //!   body has moved more than half the skin, so one evaluation costs `O(N)`;
 //! * [`scene`]: the energy `V = Σ v(h)` and its gradient in all generalised
 //!   coordinates, in one fused pass over the neighbour list;
+//! * [`objective`]: what the minimisers see of a scene ([`Objective`]);
 //! * [`fire`]: the FIRE minimiser (Bitzek et al. 2006) and FIRE 2.0
 //!   (Guénolé et al. 2020), with a mass per coordinate;
 //! * [`newton`]: a second-order finish for FIRE (Newton steps with the
@@ -29,20 +30,23 @@ mod lanes;
 pub mod lbfgs;
 pub mod neighbors;
 pub mod newton;
+pub mod objective;
 pub mod precon;
 pub mod protocol;
 pub mod saddle;
 pub mod scene;
+mod scene_objective;
 pub mod simd;
 mod slots;
 
 pub use fire::{
-    Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Objective, Progress,
-    ProgressSnapshot, StopReason,
+    Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Progress,
+    ProgressSnapshot,
 };
 pub use lbfgs::{LbfgsChoice, LbfgsParams};
 pub use neighbors::NeighborList;
 pub use newton::NewtonParams;
+pub use objective::{Objective, StopReason};
 pub use precon::PreconParams;
 pub use protocol::{
     AboveJamOutcome, AboveJamParams, JamParams, JamSearch, PressureParams, ProtocolOutcome,

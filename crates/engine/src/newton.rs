@@ -48,7 +48,7 @@
 //! Iterations (counted in [`crate::MinimizeOutcome::newton_iterations`]) are
 //! Hessian factorisations, including the ones that gave up.
 
-use crate::fire::{Objective, StopReason};
+use crate::objective::{Objective, StopReason};
 use faer::sparse::linalg::solvers::Llt;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side, linalg::solvers::Solve};
@@ -105,7 +105,7 @@ impl NewtonParams {
                 "must lie strictly between 0 and 1 (relative to the mean diagonal of the Hessian)",
             ));
         }
-        crate::fire::require_positive_finite(prefix, "max_step", self.max_step)
+        crate::objective::require_positive_finite(prefix, "max_step", self.max_step)
     }
 }
 
@@ -287,7 +287,8 @@ pub fn sparse_cholesky(n: usize, upper: &[Triplet<usize, usize, f64>]) -> Option
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::fire::{Fire, FireParams, StopReason};
+    use crate::fire::{Fire, FireParams};
+    use crate::objective::StopReason;
 
     /// `V = Σ_a k_a (x_a − c_a)² / 2 + Σ_a (x_a − x_{a+1})⁴ / 4`: an
     /// anisotropic well (stiffnesses over four decades) with a quartic

@@ -54,7 +54,7 @@
 //! and at the start of every minimisation. The stopping rules do not look
 //! at `M`, so a minimisation ends in the same window of energy or force.
 
-use crate::fire::Objective;
+use crate::objective::Objective;
 use jamkit_core::{Error, Result};
 use serde::{Deserialize, Serialize};
 

@@ -18,7 +18,8 @@
 //! jams above `φ_J + δφ`; it is jammed again from there, at most `rejams`
 //! times.
 
-use crate::fire::{Fire, Objective};
+use crate::fire::Fire;
+use crate::objective::Objective;
 use crate::scene::Scene;
 use jamkit_core::{Error, Potential, Result, Shape};
 use serde::{Deserialize, Serialize};

@@ -10,27 +10,26 @@
 //!
 //! computed with the energy in one pass over the neighbour list.
 
-use crate::fire::Objective;
 use crate::neighbors::NeighborList;
 use jamkit_core::{Contact, FastContacts, GapHessian, Packing, Pair, Potential, Shape, Vector};
 
 /// A packing ready to be relaxed.
 #[derive(Clone, Debug)]
 pub struct Scene<const D: usize, S: Shape<D>> {
-    packing: Packing<D, S>,
-    potential: Potential,
-    neighbors: NeighborList<D>,
+    pub(crate) packing: Packing<D, S>,
+    pub(crate) potential: Potential,
+    pub(crate) neighbors: NeighborList<D>,
     reach: Vec<f64>,
-    inverse_masses: Vec<f64>,
-    evaluations: u64,
+    pub(crate) inverse_masses: Vec<f64>,
+    pub(crate) evaluations: u64,
     /// Scratch: the contacts of one chunk of the list, `(pair, contact)`.
     found: Vec<(u32, Contact<D>)>,
     /// Scratch: `FastContacts::body_terms` of every body (the slots kernel).
     body_terms: Vec<f64>,
     /// Scratch: the slots kernel's buffers.
     slot_scratch: crate::slots::Scratch<D>,
-    /// Centres and orientations of the last [`Objective::save`].
-    saved: (Vec<Vector<D>>, Vec<S::Orientation>),
+    /// Centres and orientations of the last [`Objective::save`](crate::Objective::save).
+    pub(crate) saved: (Vec<Vector<D>>, Vec<S::Orientation>),
 }
 
 impl<const D: usize, S: Shape<D>> Scene<D, S> {
@@ -118,7 +117,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         self.rebuild_neighbors();
     }
 
-    fn rebuild_neighbors(&mut self) {
+    pub(crate) fn rebuild_neighbors(&mut self) {
         self.packing.wrap_positions();
         self.neighbors
             .build(&self.packing.bbox, &self.packing.positions, &self.reach);
@@ -446,66 +445,5 @@ fn add_body<const D: usize>(
     }
     for a in D..stride {
         g[a] += g_q[a - D];
-    }
-}
-
-impl<const D: usize, S: Shape<D>> Objective for Scene<D, S> {
-    fn dof(&self) -> usize {
-        self.packing.dof()
-    }
-
-    fn bodies(&self) -> usize {
-        self.packing.len()
-    }
-
-    fn inverse_masses(&self) -> &[f64] {
-        &self.inverse_masses
-    }
-
-    fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
-        Scene::energy_gradient(self, grad)
-    }
-
-    fn displace(&mut self, dq: &[f64]) {
-        let max_sq = self.packing.displace(dq);
-        self.neighbors.record_motion(max_sq.sqrt());
-    }
-
-    fn phi(&self) -> f64 {
-        self.packing.phi()
-    }
-
-    fn translations_per_body(&self) -> usize {
-        D
-    }
-
-    fn hessian_entries(&mut self, entries: &mut Vec<(u32, u32, f64)>) -> jamkit_core::Result<bool> {
-        // A family without second derivatives is minimised by FIRE alone.
-        match crate::hessian::Hessian::of_scene(self, &[], Default::default()) {
-            Ok(h) => {
-                entries.extend_from_slice(&h.entries);
-                Ok(true)
-            }
-            Err(jamkit_core::Error::Unsupported(_)) => Ok(false),
-            Err(e) => Err(e),
-        }
-    }
-
-    fn stiffness_blocks(&mut self, blocks: &mut Vec<f64>) -> bool {
-        crate::hessian::stiffness_blocks(self, blocks);
-        true
-    }
-
-    fn save(&mut self) {
-        let (positions, orientations) = &mut self.saved;
-        positions.clone_from(&self.packing.positions);
-        orientations.clone_from(&self.packing.orientations);
-    }
-
-    fn restore(&mut self) {
-        let (positions, orientations) = &self.saved;
-        self.packing.positions.clone_from(positions);
-        self.packing.orientations.clone_from(orientations);
-        self.rebuild_neighbors();
     }
 }
