@@ -120,7 +120,9 @@ fn a_packing_whose_box_does_not_give_its_phi_is_refused() {
         std::fs::write(&path, serde_json::to_string(&copy).unwrap()).unwrap();
         path
     };
-    let tiny_box = corrupt("tiny_box.json", &|f| f["box"][0] = serde_json::json!(1e-300));
+    let tiny_box = corrupt("tiny_box.json", &|f| {
+        f["box"][0] = serde_json::json!(1e-300)
+    });
     let larger = corrupt("larger.json", &|f| {
         for r in f["radii"].as_array_mut().unwrap() {
             *r = serde_json::json!(r.as_f64().unwrap() * 1.001);
@@ -170,7 +172,12 @@ fn a_spectrum_that_cannot_fit_in_memory_is_refused_at_validation() {
     let out = tmp.path().join("out");
     for args in [
         vec!["validate", file.to_str().unwrap()],
-        vec!["run", file.to_str().unwrap(), "--out", out.to_str().unwrap()],
+        vec![
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
     ] {
         let (code, _, err) = jamkit(&args);
         assert_ne!(code, 0, "{args:?}");

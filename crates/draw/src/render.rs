@@ -114,7 +114,10 @@ pub(crate) fn check_output(path: &Path) -> Result<(), DrawError> {
         return Ok(());
     };
     let problem = if !dir.exists() {
-        format!("the directory {} does not exist (create it first)", dir.display())
+        format!(
+            "the directory {} does not exist (create it first)",
+            dir.display()
+        )
     } else if !dir.is_dir() {
         format!("{} is not a directory", dir.display())
     } else {

@@ -109,7 +109,7 @@ pub fn dense_solves(experiment: &Experiment, protocol: &Protocol) -> Vec<DenseSo
             what: VECTORS,
             alternative: |n| {
                 format!(
-                    "use Moduli(solver: Sparse) (a sparse Cholesky factorisation, no dense matrix; it falls back to the dense path, which would not fit either, only for a packing with zero modes besides the translations, a negative mode or a softest mode below 2 omega_zero²), or at most particles = {n} here"
+                    "use Moduli(solver: Sparse) (a sparse Cholesky factorisation, no dense matrix; it falls back to the dense path, which would not fit either, only for a packing with zero modes besides the translations, a negative mode or a softest mode with λ ≤ 2 omega_zero²), or at most particles = {n} here"
                 )
             },
         });
