@@ -317,7 +317,9 @@ fn real_main() -> Result<()> {
             let mut text = String::new();
             for f in &files {
                 let file = jamkit_format::PackingFile::load_checked(f)?;
-                text.push_str(&jamkit_experiment::extxyz::frame(&file)?);
+                let frame = jamkit_experiment::extxyz::frame(&file)
+                    .with_context(|| f.display().to_string())?;
+                text.push_str(&frame);
             }
             jamkit_format::write_atomic(&out, text.as_bytes())?;
             out!("{} frames in {}", files.len(), out.display());

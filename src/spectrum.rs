@@ -19,7 +19,9 @@ pub fn of_file(path: &Path, options: HessianOptions, modes: bool) -> Result<(Str
         options,
         modes,
     };
-    let s = reload(&file, visitor)?.with_context(|| format!("spectrum of {}", path.display()))?;
+    let s = reload(&file, visitor)
+        .with_context(|| path.display().to_string())?
+        .with_context(|| format!("spectrum of {}", path.display()))?;
     let text = if modes {
         jamkit_experiment::sample::eigenvalue_table(&s)
     } else {

@@ -105,6 +105,33 @@ pub(crate) fn check_size(size: u32) -> Result<(), DrawError> {
     }
 }
 
+/// The picture `path` can be written where the user asked: its directory
+/// exists (it is not created). Checked before anything is drawn, so that a
+/// missing directory is named, by the user's path, instead of surfacing as
+/// the plotting library's error after the drawing.
+pub(crate) fn check_output(path: &Path) -> Result<(), DrawError> {
+    let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) else {
+        return Ok(());
+    };
+    let problem = if !dir.exists() {
+        format!(
+            "the directory {} does not exist (create it first)",
+            dir.display()
+        )
+    } else if !dir.is_dir() {
+        format!("{} is not a directory", dir.display())
+    } else {
+        return Ok(());
+    };
+    Err(DrawError::Io {
+        path: path.to_path_buf(),
+        error: std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            format!("cannot write the picture: {problem}"),
+        ),
+    })
+}
+
 pub(crate) fn render_error(path: &Path, e: impl std::fmt::Display) -> DrawError {
     DrawError::Render {
         path: path.to_path_buf(),
@@ -253,7 +280,9 @@ pub fn packing_svg(packing: &Packing2d, size: u32) -> Result<String, DrawError> 
 /// Draw a packing to `path` (`.svg` or `.png`, see [`Format`]); the longer
 /// side of the picture is `size` pixels.
 pub fn draw_packing(packing: &Packing2d, path: &Path, size: u32) -> Result<(), DrawError> {
-    match Format::from_path(path)? {
+    let format = Format::from_path(path)?;
+    check_output(path)?;
+    match format {
         Format::Svg => write_file(path, packing_svg(packing, size)?.as_bytes()),
         Format::Png => {
             check_size(size)?;
@@ -421,7 +450,9 @@ pub fn shapes_svg(panels: &[ShapePanel], panel_size: u32) -> Result<String, Draw
 /// Draw shape panels to `path` (`.svg` or `.png`; text in PNG uses the
 /// bundled DejaVu Sans).
 pub fn draw_shapes(panels: &[ShapePanel], path: &Path, panel_size: u32) -> Result<(), DrawError> {
-    match Format::from_path(path)? {
+    let format = Format::from_path(path)?;
+    check_output(path)?;
+    match format {
         Format::Svg => write_file(path, shapes_svg(panels, panel_size)?.as_bytes()),
         Format::Png => {
             crate::fonts::register();

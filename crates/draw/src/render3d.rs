@@ -231,7 +231,9 @@ pub fn draw_packing_3d(
     path: &Path,
     size: u32,
 ) -> Result<(), DrawError> {
-    match Format::from_path(path)? {
+    let format = Format::from_path(path)?;
+    crate::render::check_output(path)?;
+    match format {
         Format::Svg => write_file(path, packing_3d_svg(packing, view, size)?.as_bytes()),
         Format::Png => {
             let pic = picture_3d(packing, view, size)?;
@@ -463,6 +465,7 @@ fn bodies_size(panels: &[BodyPanel], cell: u32) -> (u32, u32) {
 /// the sphere of radius `R⁰` dashed for reference.
 pub fn draw_bodies(panels: &[BodyPanel], path: &Path, cell: u32) -> Result<(), DrawError> {
     let format = Format::from_path(path)?;
+    crate::render::check_output(path)?;
     check_size(cell)?;
     let (w, h) = bodies_size(panels, cell);
     let err = |e: DrawingAreaErrorKind<_>| render_error(path, e);

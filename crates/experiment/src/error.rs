@@ -40,8 +40,12 @@ pub enum ExperimentError {
     /// `jamkit merge` cannot gather these parts.
     #[error("merge refused: {message}")]
     Merge { message: String },
-    /// The engine failed on one sample.
-    #[error("sample {sample}: {source}{}", saved_note(saved))]
+    /// The engine failed on one sample, making it or measuring it.
+    #[error(
+        "sample {sample}: {}{source}{}",
+        measuring_note(observable),
+        saved_note(saved, kept)
+    )]
     Sample {
         sample: String,
         #[source]
@@ -52,14 +56,42 @@ pub enum ExperimentError {
         state: Option<Box<jamkit_format::PackingFile>>,
         /// Where `state` was saved.
         saved: Option<String>,
+        /// The observable whose measurement failed (`Spectrum`, `Moduli`),
+        /// when the packing was made and its measuring failed.
+        observable: Option<String>,
+        /// Where the packing stays without the observables that failed
+        /// (`packings/<id>.json`): a rerun measures them on it without
+        /// making it again.
+        kept: Option<String>,
     },
 }
 
-fn saved_note(saved: &Option<String>) -> String {
-    saved
+fn measuring_note(observable: &Option<String>) -> String {
+    observable
         .as_ref()
-        .map(|p| format!(" (the configuration it stopped at is in {p})"))
+        .map(|o| format!("measuring {o}: "))
         .unwrap_or_default()
+}
+
+fn saved_note(saved: &Option<String>, kept: &Option<String>) -> String {
+    let notes: Vec<String> = [
+        saved
+            .as_ref()
+            .map(|p| format!("the configuration it stopped at is in {p}")),
+        kept.as_ref().map(|p| {
+            format!(
+                "the packing is kept in {p} without the observables that failed; a rerun measures them on it without making it again"
+            )
+        }),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if notes.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", notes.join("; "))
+    }
 }
 
 impl ExperimentError {
@@ -83,6 +115,24 @@ impl ExperimentError {
             source: Box::new(source),
             state: None,
             saved: None,
+            observable: None,
+            kept: None,
+        }
+    }
+
+    /// A sample's error while measuring `observable` on its packing.
+    pub fn measuring(
+        sample: impl Into<String>,
+        observable: impl Into<String>,
+        source: jamkit_core::Error,
+    ) -> Self {
+        Self::Sample {
+            sample: sample.into(),
+            source: Box::new(source),
+            state: None,
+            saved: None,
+            observable: Some(observable.into()),
+            kept: None,
         }
     }
 

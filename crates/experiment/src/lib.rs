@@ -7,6 +7,8 @@
 //! * [`schema`]: the experiment file's fields, defaults and validation;
 //! * [`overrides`]: `--set KEY=VALUE` edits of any field;
 //! * [`grid`]: expansion of lists into parameter points and samples;
+//! * [`memory`]: the dense eigen-solves of an experiment against the
+//!   machine's memory, checked at validation;
 //! * [`registry`]: the explicit list of shape families, and the one place
 //!   where a family name becomes a typed `Scene<D, S>`;
 //! * [`runner`]: runs the samples in parallel, resumes, collects records;
@@ -26,6 +28,7 @@ pub mod error;
 pub mod extxyz;
 pub mod grid;
 pub mod lock;
+pub mod memory;
 pub mod merge;
 pub mod overrides;
 pub mod reload;

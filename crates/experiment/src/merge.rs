@@ -113,6 +113,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeReport, ExperimentErro
                     path.display()
                 )));
             }
+            // A packing saved before its observables (their measuring
+            // failed, or its process was killed) is unfinished.
+            if !runner::covers(&runner::stored(&file), &experiment) {
+                continue;
+            }
             match &found {
                 None => found = Some((file, d)),
                 Some((kept, from)) => {

@@ -18,6 +18,16 @@ use jamkit_engine::Scene;
 use jamkit_format::PackingFile;
 use jamkit_registry::{self as registry, SceneVisitor};
 
+/// How far the packing fraction of a reloaded packing may differ from the
+/// one its file records, relative. The file records φ computed from the
+/// same box edges, sizes and family volume, and its numbers read back to
+/// the same bits, so the two agree to the rounding of the volume sum (a
+/// few ulps, `~10⁻¹⁵`, for a file from `jamkit analyze`, which sums the
+/// volumes by its own formula; exactly for a file jamkit made). `10⁻⁹`
+/// leaves six orders of magnitude for that rounding, and a file that
+/// passes holds its φ to far better than a jamming search resolves it.
+pub const PHI_TOLERANCE: f64 = 1e-9;
+
 /// Something to do with a reloaded scene.
 pub trait PackingVisitor {
     /// What the visit returns.
@@ -117,6 +127,23 @@ impl<V: PackingVisitor> SceneVisitor for Builder<'_, V> {
             orientations,
             sizes: f.radii.clone(),
         };
+        // The box, the sizes and the family's volume give the φ the file
+        // records: a box or a size changed after the file was written (by
+        // hand, or a corrupted copy) is refused before anything is
+        // computed on it.
+        let phi = packing.phi();
+        if !((phi - f.phi).abs() <= PHI_TOLERANCE * f.phi.abs()) {
+            return Err(ExperimentError::invalid(
+                format!("packing {}: phi", f.id),
+                f.phi,
+                format!(
+                    "the file's box {:?}, sizes and family `{}` give phi = {phi:e} (relative difference {:.1e}, more than {PHI_TOLERANCE:e}): its box or its sizes are not the ones it was written with",
+                    f.box_edges,
+                    f.family,
+                    (phi - f.phi).abs() / f.phi.abs()
+                ),
+            ));
+        }
         let scene = Scene::new(packing, self.potential, self.skin * min_reach);
         Ok(self.visitor.visit(scene))
     }

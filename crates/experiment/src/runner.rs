@@ -12,7 +12,7 @@ use crate::batchlog::{BatchLog, Log};
 use crate::error::ExperimentError;
 use crate::grid::{self, Job, Point};
 use crate::lock;
-use crate::sample::{remeasure, run_job_watched, settings};
+use crate::sample::{jam_job_watched, measure_jammed, remeasure, settings};
 use crate::schema::{Experiment, Observable};
 use jamkit_format::{self as format, PackingFile};
 use rayon::prelude::*;
@@ -144,16 +144,25 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             Some(done) if done.positions.len() == done.particles => {
                 let mut merged = experiment.clone();
                 merged.observables = union(&stored(&done), &experiment.observables);
-                let (file, eigen) = remeasure(&merged, done)?;
+                let (file, eigen) =
+                    remeasure(&merged, done).map_err(|err| kept_unmeasured(err, &path))?;
                 (file, eigen, true)
             }
             _ => {
-                let (file, eigen) = run_job_watched(experiment, point, job, log.begin(&job.id))
+                let jammed = jam_job_watched(experiment, point, job, log.begin(&job.id))
                     .map_err(|err| keep_failed_state(err, &packing_dir))?;
+                // The packing first, without observables (its file lists
+                // none, so a rerun measures them on it instead of taking
+                // it for finished): a measurement that fails, or a process
+                // killed while measuring, leaves it on disk.
+                jammed.file.save(&path)?;
+                let (file, eigen) = measure_jammed(experiment, jammed)
+                    .map_err(|err| measuring_failed(err, &packing_dir, &path))?;
                 (file, eigen, false)
             }
         };
-        // The eigenvalues first: a packing file on disk means its sample is done.
+        // The eigenvalues first: a packing file that holds every observable
+        // of the run means its sample is done.
         if let Some(table) = eigen {
             let dir = options.out.join("eigenvalues");
             std::fs::create_dir_all(&dir).map_err(|e| ExperimentError::io(&dir, e))?;
@@ -300,6 +309,49 @@ pub fn failed_path(packing_dir: &Path, id: &str) -> PathBuf {
     packing_dir.join(format!("{id}.failed.json"))
 }
 
+/// A sample whose observables failed on its freshly saved packing. A
+/// failed shear stabilisation (an error carrying the fixed-box packing as
+/// its `state`) leaves no packing file, as a failed minimisation does: its
+/// state is kept as `<id>.failed.json`, and a rerun, with other
+/// `protocol.stabilise` settings too, tries the sample again. Any other
+/// failure keeps the packing at `path` and says so.
+fn measuring_failed(err: ExperimentError, packing_dir: &Path, path: &Path) -> ExperimentError {
+    match err {
+        ExperimentError::Sample {
+            state: Some(_),
+            saved: None,
+            ..
+        } => {
+            let _ = std::fs::remove_file(path);
+            keep_failed_state(err, packing_dir)
+        }
+        other => kept_unmeasured(other, path),
+    }
+}
+
+/// A measuring error with the path of the packing it leaves on disk
+/// without the observables that failed.
+fn kept_unmeasured(err: ExperimentError, path: &Path) -> ExperimentError {
+    match err {
+        ExperimentError::Sample {
+            sample,
+            source,
+            state,
+            saved,
+            observable: Some(observable),
+            kept: None,
+        } => ExperimentError::Sample {
+            sample,
+            source,
+            state,
+            saved,
+            observable: Some(observable),
+            kept: Some(path.display().to_string()),
+        },
+        other => other,
+    }
+}
+
 /// Save the configuration a failed sample stopped at (if it carries one)
 /// as `<id>.failed.json` and say where in the error. A failure to save it
 /// is mentioned instead; the sample's own error is what matters.
@@ -310,6 +362,8 @@ fn keep_failed_state(err: ExperimentError, packing_dir: &Path) -> ExperimentErro
             source,
             state: Some(state),
             saved: None,
+            observable,
+            kept,
         } => {
             let path = failed_path(packing_dir, &sample);
             let saved = match state.save(&path) {
@@ -321,6 +375,8 @@ fn keep_failed_state(err: ExperimentError, packing_dir: &Path) -> ExperimentErro
                 source,
                 state: None,
                 saved: Some(saved),
+                observable,
+                kept,
             }
         }
         other => other,
@@ -486,13 +542,13 @@ fn group_by_point<'a>(
 }
 
 /// The observables a packing file holds (none if they do not parse).
-fn stored(file: &PackingFile) -> Vec<Observable> {
+pub(crate) fn stored(file: &PackingFile) -> Vec<Observable> {
     serde_json::from_value(file.observables.clone()).unwrap_or_default()
 }
 
 /// Whether `have` holds every observable `experiment` asks for, with the
 /// same options.
-fn covers(have: &[Observable], experiment: &Experiment) -> bool {
+pub(crate) fn covers(have: &[Observable], experiment: &Experiment) -> bool {
     experiment.observables.iter().all(|o| have.contains(o))
 }
 
@@ -512,4 +568,141 @@ fn union(have: &[Observable], wanted: &[Observable]) -> Vec<Observable> {
 /// The default output directory of an experiment: `out/<name>`.
 pub fn default_out(experiment: &Experiment) -> PathBuf {
     Path::new("out").join(experiment.name.replace(['/', '\\', ' '], "_"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn options(out: &Path) -> RunOptions {
+        RunOptions {
+            out: out.to_path_buf(),
+            jobs: Some(1),
+            log: Log::Quiet,
+            shard: None,
+        }
+    }
+
+    /// 2D dimers at pressure 10⁻³, `observables` measured, `extra` added
+    /// to the protocol.
+    fn dimers(observables: &str, extra: &str) -> Experiment {
+        let e = Experiment::from_ron(
+            &format!(
+                r#"(name: "keep", family: "nmer", dim: 2, params: {{"alpha": 1.5}},
+                particles: 32, seed: 1,
+                protocol: Pressure(pressure: 1e-3, tol: 1e-2{extra}),
+                observables: [{observables}])"#
+            ),
+            "keep",
+        )
+        .unwrap();
+        e.validate().unwrap();
+        e
+    }
+
+    /// A measurement that fails after the packing is made leaves the
+    /// packing on disk, readable, listing no observable: here the moduli of
+    /// a shear-stabilised cell of dimers, whose rattlers go by rank, without
+    /// `rattlers.min_contacts` (the stabilised cell finds rattlers by
+    /// count). The error names the sample, the observable and the kept
+    /// file; the configuration is the one a run without the stabilisation
+    /// makes, bit for bit. A rerun does not take the file for finished: it
+    /// measures the packing again without making it again, and fails the
+    /// same way.
+    #[test]
+    fn a_failed_measurement_keeps_the_packing_it_was_measuring() {
+        let e = dimers("Contacts, Moduli()", ", shear_stabilised: true");
+        let dir = tempfile::tempdir().unwrap();
+        let report = run(&e, &options(dir.path())).unwrap();
+        assert!(report.packings.is_empty());
+        assert_eq!(report.failures.len(), 1);
+        let id = "nmer_d2_N32_alpha1.5_s1";
+        let path = dir.path().join("packings").join(format!("{id}.json"));
+        let message = report.failures[0].to_string();
+        for part in [
+            &format!("sample {id}: measuring Moduli: "),
+            "rattlers.min_contacts",
+            &format!("the packing is kept in {}", path.display()),
+        ] {
+            assert!(message.contains(part), "{part:?} missing from: {message}");
+        }
+        let kept = PackingFile::load_checked(&path).unwrap();
+        assert_eq!(kept.observables, serde_json::json!([]));
+        assert_eq!(kept.positions.len(), 32);
+        assert_eq!(kept.orientations.len(), 32);
+        assert!(kept.measures.n_contacts.is_none() && kept.measures.moduli.is_none());
+        assert!(kept.measures.fire_steps > 0);
+        assert!(!failed_path(&dir.path().join("packings"), id).exists());
+
+        // The same packing as a run that measures what it can.
+        let plain_dir = tempfile::tempdir().unwrap();
+        let plain = run(
+            &dimers("Contacts, Moduli()", ""),
+            &options(plain_dir.path()),
+        )
+        .unwrap();
+        assert!(plain.failures.is_empty(), "{:?}", plain.failures);
+        let made = &plain.packings[0];
+        assert_eq!(kept.positions, made.positions);
+        assert_eq!(kept.orientations, made.orientations);
+        assert_eq!(kept.phi.to_bits(), made.phi.to_bits());
+        assert_eq!(kept.measures.fire_steps, made.measures.fire_steps);
+
+        // A rerun measures it again, and only measures it.
+        let again = run(&e, &options(dir.path())).unwrap();
+        assert_eq!(again.failures.len(), 1);
+        let message = again.failures[0].to_string();
+        assert!(message.contains("measuring Moduli"), "{message}");
+        let still = PackingFile::load_checked(&path).unwrap();
+        assert_eq!(still.positions, kept.positions);
+        assert_eq!(still.measures.fire_steps, kept.measures.fire_steps);
+        assert_eq!(still.observables, serde_json::json!([]));
+    }
+
+    /// A run killed while measuring leaves the packing saved before its
+    /// observables (as the runner saves it when the protocol ends); a
+    /// rerun does not take it for finished, measures it without making it
+    /// again, and gets the measures of an uninterrupted run bit for bit
+    /// (timings aside).
+    #[test]
+    fn a_packing_saved_before_its_observables_is_measured_by_a_rerun() {
+        let e = Experiment::from_ron(
+            r#"(name: "killed", family: "sphere", particles: 32, seed: 3,
+            observables: [Contacts, Pressure, Spectrum()])"#,
+            "killed",
+        )
+        .unwrap();
+        let points = grid::points(&e).unwrap();
+        let jobs = grid::jobs(&e, &points);
+        let dir = tempfile::tempdir().unwrap();
+        let packings = dir.path().join("packings");
+        std::fs::create_dir_all(&packings).unwrap();
+        let path = packings.join(format!("{}.json", jobs[0].id));
+        let jammed = jam_job_watched(&e, &points[0], &jobs[0], None).unwrap();
+        jammed.file.save(&path).unwrap();
+
+        let resumed = run(&e, &options(dir.path())).unwrap();
+        assert!(resumed.failures.is_empty(), "{:?}", resumed.failures);
+        assert_eq!(resumed.reused, 1, "measured on the saved packing");
+        let whole_dir = tempfile::tempdir().unwrap();
+        let whole = run(&e, &options(whole_dir.path())).unwrap();
+        assert_eq!(whole.reused, 0);
+        let (a, b) = (&resumed.packings[0], &whole.packings[0]);
+        assert_eq!(a.positions, b.positions);
+        assert_eq!(a.observables, b.observables);
+        let untimed = |f: &PackingFile| {
+            let mut m = f.measures.clone();
+            m.wall_s = 0.0;
+            if let Some(s) = m.spectrum.as_mut() {
+                s.wall_s = 0.0;
+            }
+            m
+        };
+        assert_eq!(untimed(a), untimed(b));
+        assert!(a.measures.spectrum.is_some() && a.measures.n_contacts.is_some());
+        assert_eq!(
+            PackingFile::load_checked(&path).unwrap().observables,
+            b.observables
+        );
+    }
 }

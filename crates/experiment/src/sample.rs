@@ -104,6 +104,31 @@ pub fn run_job_watched(
     job: &Job,
     progress: Option<Arc<Progress>>,
 ) -> Result<(PackingFile, Option<String>), ExperimentError> {
+    let jammed = jam_job_watched(experiment, point, job, progress)?;
+    measure_jammed(experiment, jammed)
+}
+
+/// A packing at the end of its protocol, before its observables: `file`
+/// holds its configuration and the protocol's figures, and no observable
+/// (`observables` is empty), so a rerun that finds it saved measures them
+/// on it instead of taking it for finished. The runner saves it as soon as
+/// the protocol ends, so a measurement that fails (or a process killed
+/// while measuring) leaves the packing on disk.
+pub struct Jammed {
+    /// The packing file without observables.
+    pub file: PackingFile,
+    /// The protocol's figures, for the measures.
+    run: Protocolled,
+}
+
+/// The first half of [`run_job_watched`]: the packing of `job` at the end
+/// of its protocol, unmeasured ([`measure_jammed`] measures it).
+pub fn jam_job_watched(
+    experiment: &Experiment,
+    point: &Point,
+    job: &Job,
+    progress: Option<Arc<Progress>>,
+) -> Result<Jammed, ExperimentError> {
     let visitor = SampleVisitor {
         experiment,
         point,
@@ -121,7 +146,7 @@ struct SampleVisitor<'a> {
 }
 
 impl SceneVisitor for SampleVisitor<'_> {
-    type Output = Result<(PackingFile, Option<String>), ExperimentError>;
+    type Output = Result<Jammed, ExperimentError>;
 
     fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Self::Output {
         let (e, job) = (self.experiment, self.job);
@@ -256,6 +281,8 @@ impl SceneVisitor for SampleVisitor<'_> {
                     source: Box::new(source),
                     state: state.map(Box::new),
                     saved: None,
+                    observable: None,
+                    kept: None,
                 });
             }
         };
@@ -285,38 +312,57 @@ impl SceneVisitor for SampleVisitor<'_> {
         };
         let shape = &scene.packing().shape;
         let unmeasured = Observed::unmeasured().measures(e, run.clone(), shape);
-        let saved = self.file(scene.packing(), true, unmeasured);
-        let (mut file, mut observed) = measure_saved(e, saved, run)?;
-        if let Some(source) = observed.stabilisation_failed.take() {
-            // The packing the stabilisation started from, with its
-            // fixed-box measures, kept as `<id>.failed.json` (the runner's
-            // convention for failed samples): no packing file, so a rerun
-            // tries the sample again.
-            let why = format!(
-                "shear stabilisation failed: {source}; this is the fixed-box packing it started from, with the fixed box's moduli"
-            );
-            let measures = &mut file.measures;
-            measures.flag = if measures.flag.is_empty() {
-                why
-            } else {
-                format!("{}; {why}", measures.flag)
-            };
-            return Err(ExperimentError::Sample {
-                sample: job.id.clone(),
-                source: Box::new(source),
-                state: Some(Box::new(file)),
-                saved: None,
-            });
-        }
-        if !e.output.packings {
-            // The rattler flags stay, as in every file.
-            file = PackingFile {
-                rattler: std::mem::take(&mut file.rattler),
-                ..jamkit_format::without_configuration(&file)
-            };
-        }
-        Ok((file, observed.eigenvalue_table))
+        let mut file = self.file(scene.packing(), true, unmeasured);
+        file.observables = serde_json::json!([]);
+        Ok(Jammed { file, run })
     }
+}
+
+/// The second half of [`run_job_watched`]: the observables of `experiment`
+/// measured on the jammed packing (as its file records it), and the
+/// eigenvalue table if asked for. A failed shear stabilisation is an error
+/// carrying the fixed-box packing as its `state` (the runner keeps it as
+/// `<id>.failed.json`).
+pub fn measure_jammed(
+    experiment: &Experiment,
+    jammed: Jammed,
+) -> Result<(PackingFile, Option<String>), ExperimentError> {
+    let e = experiment;
+    let Jammed { file, run } = jammed;
+    let id = file.id.clone();
+    let (mut file, mut observed) = measure_saved(e, file, run)?;
+    if let Some(source) = observed.stabilisation_failed.take() {
+        // The packing the stabilisation started from, with its
+        // fixed-box measures, kept as `<id>.failed.json` (the runner's
+        // convention for failed samples); the runner removes the packing
+        // it saved before its observables, so a rerun (with other
+        // `protocol.stabilise` settings too) tries the sample again.
+        let why = format!(
+            "shear stabilisation failed: {source}; this is the fixed-box packing it started from, with the fixed box's moduli"
+        );
+        let measures = &mut file.measures;
+        measures.flag = if measures.flag.is_empty() {
+            why
+        } else {
+            format!("{}; {why}", measures.flag)
+        };
+        return Err(ExperimentError::Sample {
+            sample: id,
+            source: Box::new(source),
+            state: Some(Box::new(file)),
+            saved: None,
+            observable: Some("Moduli".into()),
+            kept: None,
+        });
+    }
+    if !e.output.packings {
+        // The rattler flags stay, as in every file.
+        file = PackingFile {
+            rattler: std::mem::take(&mut file.rattler),
+            ..jamkit_format::without_configuration(&file)
+        };
+    }
+    Ok((file, observed.eigenvalue_table))
 }
 
 impl SampleVisitor<'_> {
@@ -538,11 +584,12 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
     })
 }
 
-/// Measure what `e` asks for on a relaxed scene.
+/// Measure what `e` asks for on a relaxed scene. A failure names the
+/// observable being measured (`Spectrum`, `Moduli`).
 fn observe<const D: usize, S: Shape<D>>(
     e: &Experiment,
     scene: &mut Scene<D, S>,
-) -> jamkit_core::Result<Observed> {
+) -> Result<Observed, (&'static str, jamkit_core::Error)> {
     let contacts = e
         .needs_contacts()
         .then(|| summarize_with(scene, rattler_rule(e, scene.packing())));
@@ -550,7 +597,8 @@ fn observe<const D: usize, S: Shape<D>>(
     let rattler = contacts.as_ref().map_or(&[][..], |s| &s.rattler[..]);
     let (spectrum, eigenvalue_table) = match e.spectrum() {
         Some(request) => {
-            let (m, table) = measure_spectrum(scene, rattler, &request)?;
+            let (m, table) =
+                measure_spectrum(scene, rattler, &request).map_err(|err| ("Spectrum", err))?;
             (Some(m), table)
         }
         None => (None, None),
@@ -562,7 +610,8 @@ fn observe<const D: usize, S: Shape<D>>(
     let moduli = match e.moduli() {
         Some(params) => {
             let start = Instant::now();
-            let moduli = jamkit_observe::moduli::measure(scene, rattler, &params)?;
+            let moduli = jamkit_observe::moduli::measure(scene, rattler, &params)
+                .map_err(|err| ("Moduli", err))?;
             let wall_s = start.elapsed().as_secs_f64();
             let fixed_box = |moduli| ModuliMeasures {
                 moduli,
@@ -571,7 +620,8 @@ fn observe<const D: usize, S: Shape<D>>(
                 stabilisation: None,
             };
             if e.protocol.shear_stabilised() {
-                let threshold = stabilisation_threshold(e, scene.packing())?;
+                let threshold =
+                    stabilisation_threshold(e, scene.packing()).map_err(|err| ("Moduli", err))?;
                 match stabilised_moduli(e, scene, threshold, moduli.clone(), params.clone()) {
                     Ok(m) => Some(m),
                     // The fixed box's moduli, and the failure for the
@@ -683,7 +733,7 @@ pub(crate) fn remeasure(
     let (file, observed) = measure_saved(e, file, run)?;
     // The saved packing stays as it was.
     if let Some(source) = observed.stabilisation_failed {
-        return Err(ExperimentError::sample(id, source));
+        return Err(ExperimentError::measuring(id, "Moduli", source));
     }
     Ok((file, observed.eigenvalue_table))
 }
@@ -710,8 +760,9 @@ fn measure_saved(
         fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> Self::Output {
             let (e, mut file, mut run) = (self.e, self.file, self.run);
             let start = Instant::now();
-            let observed = observe(e, &mut scene)
-                .map_err(|source| ExperimentError::sample(file.id.clone(), source))?;
+            let observed = observe(e, &mut scene).map_err(|(observable, source)| {
+                ExperimentError::measuring(file.id.clone(), observable, source)
+            })?;
             run.wall_s += start.elapsed().as_secs_f64();
             file.measures = observed.measures(e, run, &scene.packing().shape);
             file.phi = file.measures.phi;

@@ -766,7 +766,9 @@ impl Experiment {
     }
 
     /// Check every range that serde cannot; the family's own parameters are
-    /// checked by the registry when the grid is expanded.
+    /// checked by the registry when the grid is expanded. Last, a dense
+    /// eigen-solve (`Spectrum`, dense `Moduli`, `escape_saddles`) that
+    /// cannot fit in this machine's memory is refused ([`crate::memory`]).
     pub fn validate(&self) -> Result<(), ExperimentError> {
         if self.name.trim().is_empty() {
             return Err(ExperimentError::invalid(
@@ -848,6 +850,12 @@ impl Experiment {
                 0,
                 "must be at least 1, or None for the family's default",
             ));
+        }
+        // Last, on the grid's points (a scan's points are checked as each
+        // is validated, by `scanned` above): the dense eigen-solves against
+        // the machine's memory.
+        if self.scan.is_empty() {
+            crate::memory::check(self)?;
         }
         Ok(())
     }
