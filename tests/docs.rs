@@ -5,8 +5,8 @@
 //! The commands are the ```sh blocks of `docs/tutorials/*.md` and
 //! `docs/how-to/*.md`. The blocks of one page run in order in one
 //! `bash -euo pipefail`, in a scratch directory where the repository's
-//! `experiments/`, `data/`, `docs/`, `scripts/` and `shapes/` are visible
-//! and `jamkit` is this build's binary. The line before a block may carry
+//! `experiments/`, `docs/` and `shapes/` are visible and `jamkit` is this
+//! build's binary. The line before a block may carry
 //! a directive for this test:
 //!
 //! * `<!-- ci: --set particles=32 --set samples=1 -->`: appended to every
@@ -181,7 +181,7 @@ fn every_tutorial_and_how_to_command_runs() {
             ran += 1;
         }
         let scratch = tempfile::tempdir().unwrap();
-        for dir in ["experiments", "data", "docs", "scripts", "shapes"] {
+        for dir in ["experiments", "docs", "shapes"] {
             std::os::unix::fs::symlink(root.join(dir), scratch.path().join(dir)).unwrap();
         }
         let out = Command::new("bash")

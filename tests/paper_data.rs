@@ -1,15 +1,21 @@
-//! The committed paper-size data (`data/`, docs/reports/paper-2d.md and
+//! The committed paper-size data (`experiments/paper/data/` and
+//! `experiments/paper3d/data/`, docs/reports/paper-2d.md and
 //! docs/reports/paper-3d.md): every archived packing loads and is a jammed packing of the
 //! profile, and `jamkit report` regenerates the report from a slice of
 //! them (the n = 2 packings), with φ_J as the files say; the same for the
-//! 3D near-spheres at N = 512 (`data/paper3d-n512`) and their finite-size
-//! set (`data/paper3d-finite-size`).
+//! 3D near-spheres at N = 512 (`experiments/paper3d/data/paper3d-n512`)
+//! and their finite-size set (`experiments/paper3d/data/paper3d-finite-size`).
 
 use jamkit_format::PackingFile;
 use std::path::{Path, PathBuf};
 
-fn data(dir: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(dir)
+/// The committed run `run` of `experiments/<experiment>/`.
+fn data(experiment: &str, run: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("experiments")
+        .join(experiment)
+        .join("data")
+        .join(run)
 }
 
 fn packing_files(dir: &Path) -> Vec<PathBuf> {
@@ -64,7 +70,7 @@ fn load_archived(path: &Path, kind: (&str, usize), particles: &[usize]) -> Packi
 /// its contacts, gaps and spectrum measured.
 #[test]
 fn the_archived_packings_are_jammed_packings_of_the_profile() {
-    let files = packing_files(&data("paper-full"));
+    let files = packing_files(&data("paper", "paper-full"));
     assert!(files.len() >= 32, "{} files", files.len());
     for path in &files {
         let f = load_archived(path, ("fourier", 2), &[1024]);
@@ -85,7 +91,7 @@ fn the_report_regenerates_from_a_slice_of_the_data() {
     let slice = tempfile::tempdir().unwrap();
     std::fs::create_dir(slice.path().join("packings")).unwrap();
     let mut phis: Vec<(f64, f64)> = Vec::new();
-    for path in packing_files(&data("paper-full")) {
+    for path in packing_files(&data("paper", "paper-full")) {
         let f = PackingFile::load_checked(&path).unwrap();
         if f.params["n"] == 2 {
             phis.push((f.params["delta"].as_f64().unwrap(), f.phi));
@@ -128,14 +134,14 @@ fn the_report_regenerates_from_a_slice_of_the_data() {
     );
 }
 
-/// The committed 3D data (`data/paper3d-n512`): every archived
-/// packing is a jammed `harmonic` packing at N = 512 with its contacts,
-/// gaps and spectrum, and `jamkit report` regenerates `report/paper3d`'s
-/// fits from it, named by `l`, with ω_* read off below ω = 1 as the
-/// experiment file asks.
+/// The committed 3D data (`experiments/paper3d/data/paper3d-n512`): every
+/// archived packing is a jammed `harmonic` packing at N = 512 with its
+/// contacts, gaps and spectrum, and `jamkit report` regenerates
+/// `experiments/paper3d/report`'s fits from it, named by `l`, with ω_* read
+/// off below ω = 1 as the experiment file asks.
 #[test]
 fn the_3d_data_regenerates_its_report() {
-    let dir = data("paper3d-n512");
+    let dir = data("paper3d", "paper3d-n512");
     let files = packing_files(&dir);
     assert!(files.len() >= 12, "{} files", files.len());
     for path in &files {
@@ -164,7 +170,8 @@ fn the_3d_data_regenerates_its_report() {
     }
 }
 
-/// The committed 3D finite-size set (`data/paper3d-finite-size`, l = 2,
+/// The committed 3D finite-size set
+/// (`experiments/paper3d/data/paper3d-finite-size`, l = 2,
 /// N = 64, 128, 256, Δ = 10⁻⁵ … 0.1). Every packing is jammed
 /// and has at least one contact more than the translations of its
 /// non-rattlers can take, `N_c ≥ 3 (N_nr − 1) + 1` (the rigidity of a
@@ -174,7 +181,7 @@ fn the_3d_data_regenerates_its_report() {
 /// (one extra contact: 2/N_nr in any dimension, as z_iso = 2d − 2d/N_nr).
 #[test]
 fn the_3d_finite_size_set_collapses_to_one_extra_contact() {
-    let dir = data("paper3d-finite-size");
+    let dir = data("paper3d", "paper3d-finite-size");
     let files = packing_files(&dir);
     assert!(files.len() >= 30, "{} files", files.len());
     for path in &files {
@@ -184,7 +191,7 @@ fn the_3d_finite_size_set_collapses_to_one_extra_contact() {
         let extra = nc as i64 - 3 * (f.particles - nr - 1) as i64;
         assert!(extra >= 1, "{}: {extra} contacts beyond 3 (N_nr − 1)", f.id);
     }
-    let r = report(&[data("paper3d-n512"), dir]);
+    let r = report(&[data("paper3d", "paper3d-n512"), dir]);
     for fig in ["fig09a_dz_finite_size", "fig09b_dz_collapse"] {
         assert!(
             r.figures.iter().any(|f| f.to_string_lossy().contains(fig)),
@@ -206,7 +213,8 @@ fn the_3d_finite_size_set_collapses_to_one_extra_contact() {
     assert!((value - 2.0).abs() <= 0.5, "{line}");
 }
 
-/// The committed Fig. 5 gap models (`data/paper-full-gap-models`: n = 2
+/// The committed Fig. 5 gap models
+/// (`experiments/paper/data/paper-full-gap-models`: n = 2
 /// near-disks at N = 512 with the second-order and the exact gap): every
 /// packing is a jammed near-disk packing of the profile, and
 /// with the Fig. 5 set `jamkit report` keeps them apart from the
@@ -215,8 +223,8 @@ fn the_3d_finite_size_set_collapses_to_one_extra_contact() {
 /// gap-model table quotes each model's own mean φ_J at Δ = 0.3.
 #[test]
 fn the_fig05_gap_models_stay_apart_from_the_first_order_packings() {
-    let gm = data("paper-full-gap-models");
-    let f5 = data("paper-full-fig05");
+    let gm = data("paper", "paper-full-gap-models");
+    let f5 = data("paper", "paper-full-fig05");
     let mut phis: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
     for path in packing_files(&gm) {
         let f = load_archived(&path, ("fourier", 2), &[512]);
@@ -259,8 +267,9 @@ fn the_fig05_gap_models_stay_apart_from_the_first_order_packings() {
 
 /// The committed 3D gap comparison at N = 64: `harmonic` l = 2
 /// near-spheres with the first-order and the exact gap at Δ = 0.1 and 0.3
-/// (`data/paper3d-exact-n64`) and spheroids of equal asphericity with
-/// their exact gap (`data/paper3d-spheroids-n64`), 10 seeds each. Every
+/// (`experiments/paper3d/data/paper3d-exact-n64`) and spheroids of equal
+/// asphericity with their exact gap
+/// (`experiments/paper3d/data/paper3d-spheroids-n64`), 10 seeds each. Every
 /// packing is jammed; and what docs/reports/paper-3d.md reads from them holds:
 /// at Δ = 0.3 the first-order packing is denser than the exact one grown
 /// from the same start on every seed, and the exact near-spheres' mean φ_J
@@ -269,7 +278,7 @@ fn the_fig05_gap_models_stay_apart_from_the_first_order_packings() {
 #[test]
 fn the_3d_exact_gap_packings_follow_the_spheroids() {
     let mut phi: std::collections::BTreeMap<(String, u64), f64> = Default::default();
-    for path in packing_files(&data("paper3d-exact-n64")) {
+    for path in packing_files(&data("paper3d", "paper3d-exact-n64")) {
         let f = load_archived(&path, ("harmonic", 3), &[64]);
         if f.params["delta"] == 0.3 {
             let gap = f.params["gap"].as_str().unwrap_or("FirstOrder").to_string();
@@ -277,7 +286,7 @@ fn the_3d_exact_gap_packings_follow_the_spheroids() {
         }
     }
     let mut spheroid = Vec::new();
-    for path in packing_files(&data("paper3d-spheroids-n64")) {
+    for path in packing_files(&data("paper3d", "paper3d-spheroids-n64")) {
         let f = load_archived(&path, ("ellipsoid", 3), &[64]);
         if f.params["alpha"] == 1.348 {
             spheroid.push(f.phi);
@@ -297,7 +306,8 @@ fn the_3d_exact_gap_packings_follow_the_spheroids() {
 }
 
 /// The committed exact-gap packing at N = 512 (the benchmark of the exact
-/// gap in docs/reports/performance.md, `data/paper3d-exact-n512`): the
+/// gap in docs/reports/performance.md,
+/// `experiments/paper3d/data/paper3d-exact-n512`): the
 /// first-order and the exact packing of seed 1 (l = 2, Δ = 0.1) both ended
 /// in the paper's window, from the same start, and their φ_J differ by
 /// less than 0.005. The bound: at N = 64 the
@@ -308,7 +318,7 @@ fn the_3d_exact_gap_packings_follow_the_spheroids() {
 #[test]
 fn the_3d_exact_gap_packing_at_n512_is_jammed_next_to_its_first_order_twin() {
     let mut phi = std::collections::BTreeMap::new();
-    for path in packing_files(&data("paper3d-exact-n512")) {
+    for path in packing_files(&data("paper3d", "paper3d-exact-n512")) {
         let f = load_archived(&path, ("harmonic", 3), &[512]);
         assert_eq!((f.seed, f.params["delta"].as_f64()), (1, Some(0.1)));
         let gap = f.params["gap"].as_str().unwrap_or("FirstOrder").to_string();

@@ -121,7 +121,8 @@ fn files_without_provenance_load_resume_and_merge() {
 /// version was recorded, loads.
 #[test]
 fn a_committed_old_packing_loads() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/paper3d-n512/packings");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("experiments/paper3d/data/paper3d-n512/packings");
     let path = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())

@@ -1,8 +1,8 @@
 //! The Slurm path of docs/how-to/slurm.md on a real one-node cluster:
 //! `tests/slurm/run.sh` installs Slurm and MUNGE from Debian's packages if
 //! needed, starts slurmctld and slurmd on this machine, runs
-//! `scripts/slurm-jam-array.sbatch` as a 4-task array, gathers, and compares
-//! with one plain run (timing aside).
+//! `experiments/slurm/jam-array.sbatch` as a 4-task array, gathers, and
+//! compares with one plain run (timing aside).
 //!
 //! It needs root (it starts the daemons). Under CI (`CI` set), which runs as
 //! root, a missing root is a failure; on a developer's machine without root

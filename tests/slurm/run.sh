@@ -2,7 +2,7 @@
 # A real Slurm test of docs/how-to/slurm.md: install Slurm and MUNGE from
 # Debian's packages if they are missing, start a one-node cluster on this
 # machine (as root: slurmctld + slurmd, proctrack/linuxproc, task/none, a
-# MUNGE key of its own), submit scripts/slurm-jam-array.sbatch as a 4-task
+# MUNGE key of its own), submit experiments/slurm/jam-array.sbatch as a 4-task
 # array on a small experiment, wait for it, gather the tables with a plain
 # run, and check them against one plain run (bit for bit, timing aside).
 # Stops its daemons on exit. Needs root; run from the repository root:
@@ -99,7 +99,7 @@ ARGS="--set particles=64 --set samples=8"
 start=$(date +%s)
 JOB=$(EXPERIMENT=$EXPERIMENT OUT=$OUT JAMKIT=$JAMKIT JAMKIT_ARGS=$ARGS \
     sbatch --parsable --array=1-4 --cpus-per-task=1 --chdir="$WORK" \
-    --output="$WORK/jamkit-%A_%a.log" "$ROOT/scripts/slurm-jam-array.sbatch")
+    --output="$WORK/jamkit-%A_%a.log" "$ROOT/experiments/slurm/jam-array.sbatch")
 JOB=${JOB%%;*}
 echo "slurm test: submitted array job $JOB"
 for _ in $(seq 240); do
