@@ -71,7 +71,11 @@ fn fourier_sum_with_several_modes_and_phases() {
 
 #[test]
 fn lobed_from_blunt_to_sharp_lobes() {
-    for params in ["(delta: 0.3, kappa: 0.3)", "(delta: 0.05, kappa: 20.0)"] {
+    for params in [
+        "(delta: 0.3, kappa: 0.3)",
+        "(delta: 0.05, kappa: 20.0)",
+        "(delta: 0.0)",
+    ] {
         check_registered("lobed", 2, params);
     }
     check_bad_params(
@@ -80,7 +84,7 @@ fn lobed_from_blunt_to_sharp_lobes() {
         &[
             ("(delta: -0.1)", "params.delta"),
             ("(delta: 0.1, kappa: 50.0)", "params.kappa"),
-            ("(delta: 0.0)", "params.inertia"),
+            ("(delta: 0.0, inertia: Some(0.0))", "params.inertia"),
             ("(delta: 1.7, kappa: 1.0)", "params.delta"),
         ],
     );

@@ -13,7 +13,7 @@
 //!   chosen `dt_max`.
 //!
 //! ```sh
-//! cargo run --release -p jamkit-experiment --example diagnose -- out/x/packings/ID.failed.json [STEPS [DT_MAX]]
+//! cargo run --release --example diagnose -- out/x/packings/ID.failed.json [STEPS [DT_MAX]]
 //! ```
 //!
 //! Dense eigendecomposition: fine up to a few thousand coordinates.
