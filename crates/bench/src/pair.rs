@@ -9,7 +9,7 @@
 //! (the orders 2 and 3 of the two approximate models). It times a
 //! function, so it has no run directory and no experiment file: whole
 //! packings are the business of `experiments/accuracy/*.ron`, the runner and
-//! `jamkit report --accuracy` ([`crate::accuracy`] chains them and puts
+//! `jamkit report --accuracy` (`jamkit bench accuracy` chains them and puts
 //! this benchmark's tables in front).
 
 use crate::output::{Print, environment, write};

@@ -27,6 +27,7 @@ pub mod extxyz;
 pub mod grid;
 pub mod lock;
 pub mod merge;
+mod outcome;
 pub mod overrides;
 pub mod reload;
 pub mod runner;
