@@ -36,6 +36,7 @@ pub mod packing;
 pub mod periodic;
 pub mod potential;
 pub mod quaternion;
+pub mod records;
 pub mod rotation;
 pub mod shape;
 pub mod sizes;
