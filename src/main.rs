@@ -19,9 +19,6 @@ macro_rules! out {
 }
 
 mod bench;
-mod bench_accuracy;
-mod bench_pair;
-mod bench_spectrum;
 mod check;
 mod spectrum;
 

@@ -45,6 +45,7 @@ pub mod periodic;
 pub mod policy;
 pub mod potential;
 pub mod quaternion;
+pub mod records;
 pub mod rotation;
 pub mod shape;
 pub mod sizes;

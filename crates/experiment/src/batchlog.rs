@@ -11,7 +11,7 @@
 //! the lines on a terminal too, and the in-progress ones every 10 s.
 
 use crate::error::ExperimentError;
-use crate::runner::Outcome;
+use crate::outcome::Outcome;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use jamkit_engine::Progress;
 use std::collections::BTreeMap;

@@ -30,6 +30,7 @@ pub mod grid;
 pub mod lock;
 pub mod memory;
 pub mod merge;
+mod outcome;
 pub mod overrides;
 pub mod reload;
 pub mod runner;

@@ -8,13 +8,20 @@
 //!
 //! The experiment is turned into a JSON tree, edited, and read back through
 //! the same typed schema, so an override is checked exactly like the file.
+//! Nothing here knows the experiment's fields: any type with a serde
+//! schema is edited the same way (the scan of an experiment file,
+//! `Experiment::scanned`, applies its settings through [`apply_values`]).
 
 use crate::error::ExperimentError;
-use crate::schema::Experiment;
+use serde::Serialize;
+use serde::de::DeserializeOwned;
 use serde_json::Value;
 
 /// Apply `KEY=VALUE` overrides in order.
-pub fn apply(experiment: &Experiment, sets: &[String]) -> Result<Experiment, ExperimentError> {
+pub fn apply<T>(experiment: &T, sets: &[String]) -> Result<T, ExperimentError>
+where
+    T: Clone + Serialize + DeserializeOwned,
+{
     let values = sets
         .iter()
         .map(|set| {
@@ -32,10 +39,10 @@ pub fn apply(experiment: &Experiment, sets: &[String]) -> Result<Experiment, Exp
 
 /// Set each `KEY` (a dotted path, as in [`apply`]) to its value (in serde's
 /// JSON form), in order, and read the result back through the schema.
-pub fn apply_values(
-    experiment: &Experiment,
-    sets: &[(String, Value)],
-) -> Result<Experiment, ExperimentError> {
+pub fn apply_values<T>(experiment: &T, sets: &[(String, Value)]) -> Result<T, ExperimentError>
+where
+    T: Clone + Serialize + DeserializeOwned,
+{
     edit(experiment, sets, || {
         sets.iter()
             .map(|(k, v)| format!("{k}={v}"))
@@ -45,11 +52,14 @@ pub fn apply_values(
 }
 
 /// [`apply_values`], `text` naming the overrides in an error.
-fn edit(
-    experiment: &Experiment,
+fn edit<T>(
+    experiment: &T,
     sets: &[(String, Value)],
     text: impl Fn() -> String,
-) -> Result<Experiment, ExperimentError> {
+) -> Result<T, ExperimentError>
+where
+    T: Clone + Serialize + DeserializeOwned,
+{
     if sets.is_empty() {
         return Ok(experiment.clone());
     }
@@ -309,91 +319,47 @@ fn known_fields(node: &Value) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde::Deserialize;
 
-    fn base() -> Experiment {
-        Experiment::from_ron(r#"(name: "t", family: "sphere", particles: 16)"#, "t").unwrap()
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Settings {
+        n: u32,
+        shape: Shape,
+    }
+
+    #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+    enum Shape {
+        Disk,
+        Ellipse { aspect: f64 },
     }
 
     #[test]
-    fn sets_top_level_nested_and_enum_fields() {
-        let sets = [
-            "particles=[8, 16]",
-            "protocol.eps=1e-4",
-            "minimizer.variant=Fire2",
-            "samples=3",
-            "rattlers.min_contacts=Some(2)",
-            "potential=Hertzian",
-            "observables=[Contacts]",
-            "name=trial",
-        ];
-        let e = apply(&base(), &sets.map(String::from)).unwrap();
-        assert_eq!(e.particles.values(), vec![8, 16]);
-        assert_eq!(e.samples, 3);
-        assert_eq!(e.minimizer.variant, jamkit_engine::FireVariant::Fire2);
-        assert_eq!(e.rattlers.min_contacts, Some(2));
-        assert_eq!(e.potential, jamkit_core::Potential::Hertzian);
-        assert_eq!(e.observables, vec![crate::schema::Observable::Contacts]);
-        // `Gaps()`: a struct variant with its defaults, as in a file.
-        let g = apply(
-            &base(),
-            &["observables=[Contacts, Gaps(), Spectrum(modes: true)]".into()],
-        )
-        .unwrap();
-        assert_eq!(g.gaps(), Some(jamkit_observe::gaps::GapParams::default()));
-        assert!(g.spectrum().is_some_and(|s| s.modes));
-        assert_eq!(e.name, "trial");
-        match e.protocol {
-            crate::schema::Protocol::Jam { eps, .. } => assert_eq!(eps, 1e-4),
-            other => panic!("{other:?}"),
-        }
-        let sets = [
-            "protocol=Phi(phi: 0.9, eps: 0.01)",
-            "sizes=Mono(radius: 0.5)",
-            "rattlers.min_contacts=None",
-        ];
-        let e = apply(&e, &sets.map(String::from)).unwrap();
-        assert_eq!(
-            e.protocol,
-            crate::schema::Protocol::Phi {
-                phi_start: 0.1,
-                phi: crate::schema::OneOrMany::One(0.9),
-                eps: 0.01
-            }
+    fn any_serde_type_is_edited_and_read_back_through_its_schema() {
+        let base = Settings {
+            n: 4,
+            shape: Shape::Disk,
+        };
+        let sets = ["n=8".to_string(), "shape=Ellipse(aspect: 1.5)".to_string()];
+        let edited = apply(&base, &sets).unwrap();
+        assert_eq!(edited.n, 8);
+        assert_eq!(edited.shape, Shape::Ellipse { aspect: 1.5 });
+        // A variant's field is reached through the variant's name.
+        let again = apply(&edited, &["shape.aspect=2.0".to_string()]).unwrap();
+        assert_eq!(again.shape, Shape::Ellipse { aspect: 2.0 });
+        // A new last field is refused by the schema, a path through a
+        // field that is not there by the editing, each naming the fields.
+        let err = apply(&base, &["m=1".to_string()]).unwrap_err().to_string();
+        assert!(
+            err.contains("unknown field `m`") && err.contains("`shape`"),
+            "{err}"
         );
-        assert_eq!(e.sizes, jamkit_core::SizeDistribution::Mono { radius: 0.5 });
-        assert_eq!(e.rattlers.min_contacts, None);
-    }
-
-    /// `dim` takes a value or a list, like `particles`; a list back to one
-    /// value is the plain number again (what the settings record).
-    #[test]
-    fn dim_takes_a_value_or_a_list() {
-        use crate::schema::OneOrMany;
-        let both = apply(&base(), &["dim=[2, 3]".into()]).unwrap();
-        assert_eq!(both.dim, OneOrMany::Many(vec![2, 3]));
-        let three = apply(&both, &["dim=3".into()]).unwrap();
-        assert_eq!(three.dim, OneOrMany::One(3));
-        assert_eq!(
-            serde_json::to_value(&three.dim).unwrap(),
-            serde_json::json!(3)
-        );
-        let err = apply(&base(), &["dim=two".into()]).unwrap_err().to_string();
-        assert!(err.contains("a value or a list of values"), "{err}");
-    }
-
-    #[test]
-    fn unknown_key_is_named() {
-        let err = apply(&base(), &["protocol.epz=1".into()])
+        let err = apply(&base, &["m.k=1".to_string()])
             .unwrap_err()
             .to_string();
-        assert!(err.contains("epz") && err.contains("eps"), "{err}");
-        let err = apply(&base(), &["output.nothing.deeper=1".into()])
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("nothing") && err.contains("packings"), "{err}");
-        let err = apply(&base(), &["particles=-3".into()])
-            .unwrap_err()
-            .to_string();
+        assert!(err.contains("no field `m` here (known: n, shape)"), "{err}");
+        let err = apply(&base, &["n=-1".to_string()]).unwrap_err().to_string();
         assert!(err.contains("not a valid experiment"), "{err}");
+        assert_eq!(apply(&base, &[]).unwrap(), base);
     }
 }

@@ -12,6 +12,7 @@ use crate::batchlog::{BatchLog, Log};
 use crate::error::ExperimentError;
 use crate::grid::{self, Job, Point};
 use crate::lock;
+use crate::outcome::Outcome;
 use crate::sample::{jam_job_watched, measure_jammed, remeasure, settings};
 use crate::schema::{Experiment, Observable};
 use jamkit_format::{self as format, PackingFile};
@@ -51,15 +52,6 @@ pub struct RunReport {
     /// Packings another process was making (their lock was held): left to
     /// it; a later run gathers them. No tables are written while any is.
     pub elsewhere: Vec<String>,
-}
-
-/// How one job ended in this process.
-pub(crate) enum Outcome {
-    /// Made here (`false`) or read back / measured on a saved packing
-    /// (`true`).
-    Done(Box<PackingFile>, bool),
-    /// Another process holds its lock (the lock file's contents).
-    Elsewhere(String),
 }
 
 /// Run an experiment into `options.out`.

@@ -22,7 +22,7 @@ use jamkit_engine::{
     compress_to_phi, compress_to_pressure, jam,
 };
 use jamkit_format::{JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures};
-use jamkit_observe::gaps::GapCounts;
+use jamkit_observe::gaps::{CountGaps, GapCounts};
 use jamkit_observe::spectrum::{self, Spectrum};
 use jamkit_observe::{JammingSummary, RattlerRule, summarize, summarize_with};
 use jamkit_registry::{self as registry, SceneVisitor};

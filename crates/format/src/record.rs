@@ -5,9 +5,7 @@
 //! checkpoint from which a rerun resumes. Format: `docs/reference/output-files.md`.
 
 use crate::error::FormatError;
-use jamkit_observe::gaps::GapCounts;
-use jamkit_observe::moduli::{Moduli, ModuliParams};
-use jamkit_observe::spectrum::{DosHistogram, DosParams, ZeroModes};
+use jamkit_core::records::{DosHistogram, DosParams, GapCounts, Moduli, ModuliParams, ZeroModes};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

@@ -6,8 +6,8 @@
 //! `csv` crate's. Columns: `docs/reference/output-files.md`.
 
 use crate::record::{ModuliMeasures, PackingFile, SpectrumMeasures};
+use jamkit_core::records::DosHistogram;
 use jamkit_core::stats::mean_sem;
-use jamkit_observe::spectrum::DosHistogram;
 
 /// `head` and `rows` as CSV text: a cell is quoted where it holds a comma,
 /// a quote or a line end; every row has the header's columns.

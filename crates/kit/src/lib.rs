@@ -365,7 +365,11 @@ pub fn check_smooth<const D: usize, S: Shape<D>>(shape: &S) -> bool {
             let shallow = found.iter().all(|c| c.gap > -SHALLOW * (size_i + size_j));
             // Steps whose two ends have a different contact count, or a
             // deep overlap, are not compared (`usize::MAX` never matches).
-            let class = if shallow { found.len() } else { usize::MAX - at };
+            let class = if shallow {
+                found.len()
+            } else {
+                usize::MAX - at
+            };
             points.push((class, h, slope));
             shape.rotate(&mut o, dq);
         }

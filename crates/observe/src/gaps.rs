@@ -14,6 +14,7 @@
 //! Each packing stores counts, not ratios, so that samples add exactly:
 //! `Z` of a parameter point is the summed counts over the summed total.
 
+pub use jamkit_core::records::GapCounts;
 use jamkit_core::{Error, Result, Shape};
 use jamkit_engine::Scene;
 use serde::{Deserialize, Serialize};
@@ -80,24 +81,26 @@ impl GapParams {
     }
 }
 
-/// Counts of gaps below each sample point, for one packing or summed.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct GapCounts {
-    /// Sample points (the last is `h_cut`).
-    pub h: Vec<f64>,
-    /// Number of gaps with `0 < gap < h[k]`.
-    pub below: Vec<u64>,
-}
-
-impl GapCounts {
+/// Counting the gaps of a scene into [`GapCounts`] (stored data, defined
+/// in `jamkit_core::records`): `GapCounts::of_scene(…)` with this trait
+/// in scope.
+pub trait CountGaps {
     /// The gaps `0 < h < h_cut` between non-rattlers of `scene`, counted
     /// below each sample point. Every contact point a family reports is a
     /// gap of its own (bodies made of spheres have several per pair).
-    pub fn of_scene<const D: usize, S: Shape<D>>(
+    fn of_scene<const D: usize, S: Shape<D>>(
         scene: &mut Scene<D, S>,
         rattler: &[bool],
         params: &GapParams,
-    ) -> Self {
+    ) -> GapCounts;
+}
+
+impl CountGaps for GapCounts {
+    fn of_scene<const D: usize, S: Shape<D>>(
+        scene: &mut Scene<D, S>,
+        rattler: &[bool],
+        params: &GapParams,
+    ) -> GapCounts {
         let mut gaps = Vec::new();
         scene.for_each_contact(params.h_cut, |i, j, _, c| {
             let rattles = |b: usize| rattler.get(b).copied().unwrap_or(false);
@@ -111,47 +114,7 @@ impl GapCounts {
             .iter()
             .map(|&x| gaps.partition_point(|&g| g < x) as u64)
             .collect();
-        Self { h, below }
-    }
-
-    /// Number of gaps below `h_cut`.
-    pub fn total(&self) -> u64 {
-        self.below.last().copied().unwrap_or(0)
-    }
-
-    /// Add the counts of another packing sampled at the same points.
-    pub fn merge(&mut self, other: &GapCounts) -> Result<()> {
-        if other.h != self.h {
-            return Err(Error::Unsupported(
-                "gap counts sampled at different points cannot be merged".into(),
-            ));
-        }
-        for (a, b) in self.below.iter_mut().zip(&other.below) {
-            *a += b;
-        }
-        Ok(())
-    }
-
-    /// `Z(h[k])` (NaN when there are no gaps at all).
-    pub fn cumulative(&self) -> Vec<f64> {
-        let total = self.total() as f64;
-        self.below.iter().map(|&b| b as f64 / total).collect()
-    }
-
-    /// `g(h)` between consecutive sample points, normalised like `Z`
-    /// (`∫₀^{h_cut} g = 1`): `(points, density)` at geometric midpoints.
-    pub fn density(&self) -> (Vec<f64>, Vec<f64>) {
-        let total = self.total() as f64;
-        self.h
-            .windows(2)
-            .zip(self.below.windows(2))
-            .map(|(h, b)| {
-                (
-                    (h[0] * h[1]).sqrt(),
-                    (b[1] - b[0]) as f64 / (total * (h[1] - h[0])),
-                )
-            })
-            .unzip()
+        GapCounts { h, below }
     }
 }
 
@@ -171,18 +134,5 @@ mod tests {
         assert_eq!(h[0], 1e-3);
         assert!((h[2] / h[0] - 10.0).abs() < 1e-12);
         assert!(h.windows(2).all(|w| w[1] > w[0]));
-    }
-
-    #[test]
-    fn cumulative_and_density_agree() {
-        let c = GapCounts {
-            h: vec![0.1, 1.0, 2.0],
-            below: vec![2, 6, 10],
-        };
-        assert_eq!(c.cumulative(), vec![0.2, 0.6, 1.0]);
-        let (_, g) = c.density();
-        // ∫ g over [0.1, 2] = Z(2) − Z(0.1).
-        let integral = g[0] * 0.9 + g[1] * 1.0;
-        assert!((integral - 0.8).abs() < 1e-12);
     }
 }

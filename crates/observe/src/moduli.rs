@@ -63,6 +63,7 @@ use crate::hessian::{Hessian, HessianOptions, add_contact};
 use crate::pinverse::SparseInverse;
 use crate::spectrum::ZeroModes;
 use jamkit_core::Pair;
+pub use jamkit_core::records::{Moduli, ModuliParams, ModuliSolver};
 use jamkit_core::{Error, Matrix, Packing, PeriodicBox, Potential, Result, Shape, Vector};
 use jamkit_engine::{Fire, FireParams, Objective, Scene};
 use serde::{Deserialize, Serialize};
@@ -269,51 +270,6 @@ fn first_rows(hessian: &Hessian, bodies: usize) -> Vec<u32> {
     first
 }
 
-/// How `Ξᵀ H⁺ Ξ` is computed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub enum ModuliSolver {
-    /// The dense eigendecomposition of the Hessian (`O(n³)` in its `n`
-    /// rows): every mode, the zero modes and negative ones counted. The
-    /// default, bit for bit the moduli measured before the sparse path.
-    #[default]
-    Dense,
-    /// A sparse Cholesky factorisation with one body's translations
-    /// pinned, and Lanczos for the softest mode (`crate::pinverse`): for a
-    /// packing whose only zero modes are the translations and whose
-    /// softest other mode has `λ > 2 ω_zero²`; otherwise the dense path is
-    /// taken, and [`Moduli::dense_fallback`] says why.
-    Sparse,
-}
-
-impl ModuliSolver {
-    /// Whether this is the default (left out of written settings).
-    pub fn is_dense(&self) -> bool {
-        *self == Self::Dense
-    }
-}
-
-/// How the moduli are computed.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ModuliParams {
-    /// Modes with `ω = √λ` at or below this are zero modes, left out of
-    /// `H⁺` (the same threshold as the spectrum's `dos.omega_zero`).
-    pub omega_zero: f64,
-    /// How `H⁺` is applied (left out of files when `Dense`, so settings
-    /// written before it existed read back the same).
-    #[serde(skip_serializing_if = "ModuliSolver::is_dense")]
-    pub solver: ModuliSolver,
-}
-
-impl Default for ModuliParams {
-    fn default() -> Self {
-        Self {
-            omega_zero: 1e-5,
-            solver: ModuliSolver::Dense,
-        }
-    }
-}
-
 /// Relative residual to which Lanczos finds the softest mode for
 /// [`measure`] (its eigenvector gives `soft_share`).
 const LANCZOS_TOL: f64 = 1e-9;
@@ -321,74 +277,6 @@ const LANCZOS_TOL: f64 = 1e-9;
 /// eigenvalue is needed (to know that no mode but the translations is at
 /// or below `ω_zero²`).
 const LANCZOS_TOL_STEP: f64 = 1e-4;
-
-impl ModuliParams {
-    /// Check ranges; names the offending field.
-    pub fn validate(&self, prefix: &str) -> Result<()> {
-        if !(self.omega_zero > 0.0 && self.omega_zero.is_finite()) {
-            return Err(Error::invalid(
-                format!("{prefix}.omega_zero"),
-                self.omega_zero,
-                "must be positive and finite",
-            ));
-        }
-        Ok(())
-    }
-}
-
-/// The elastic moduli of one packing.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Moduli {
-    /// `G`: the mean of `shear_planes`.
-    pub shear: f64,
-    /// `G_ab` for the planes `(0,1)` in 2D; `(0,1)`, `(0,2)`, `(1,2)` in 3D.
-    pub shear_planes: Vec<f64>,
-    /// `B = −V dp/dV`.
-    pub bulk: f64,
-    /// The affine parts `A/V` (mean over planes) of `G` …
-    pub shear_affine: f64,
-    /// … and `A/(D²V) + (D−1)p/D` of `B`.
-    pub bulk_affine: f64,
-    /// `p = −tr σ / D`.
-    pub pressure: f64,
-    /// Rows of the Hessian (rattlers removed).
-    pub coordinates: usize,
-    /// Zero modes (`ω ≤ omega_zero`, negative `λ` included, as the
-    /// spectrum counts them); rattlers are removed, so `rattlers` is 0.
-    pub zero_modes: ZeroModes,
-    /// Modes with `λ < −omega_zero²`: the state is a saddle, not a minimum,
-    /// and the moduli of the positive modes alone do not describe it.
-    pub negative_modes: u64,
-    /// The largest share of `|Ξ|²` (over the strains) on zero modes other
-    /// than translations: a strain that such a floppy mode accommodates
-    /// meets no resistance there, which `H⁺` leaves out.
-    pub floppy_share: f64,
-    /// For the plane of the smallest `G_ab`, the share of its non-affine
-    /// term `Ξᵀ H⁺ Ξ` carried by the softest mode above the zero modes
-    /// (`λ_1`, the smallest `λ > omega_zero²`). `G_ab` without that mode
-    /// is `G_ab + soft_share · (non-affine term)/V`: even a small share can
-    /// be what makes a small `G_ab` negative (docs/reports/elasticity.md,
-    /// "Negative G in the fixed box"). `None` in packing files written
-    /// before it was measured, and with no mode above the zero modes.
-    #[serde(default)]
-    pub soft_share: Option<f64>,
-    /// With `solver: Sparse`, why the dense path was taken instead (the
-    /// Cholesky factorisation failed, the softest mode is at the zero-mode
-    /// threshold, …); absent when the sparse path was taken or not asked.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dense_fallback: Option<String>,
-}
-
-impl Moduli {
-    /// The smallest plane modulus `G_ab` (`G` in 2D): negative when the
-    /// packing, stable at fixed box, is unstable to the shear of that plane.
-    pub fn shear_min(&self) -> f64 {
-        self.shear_planes
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min)
-    }
-}
 
 /// The linear-response moduli of a relaxed scene; `rattler` marks the
 /// rattlers, whose rows and contacts are removed.

@@ -205,6 +205,26 @@ pub fn dispatch<V: SceneVisitor>(
     dispatch_by_name(family, dim, params, visitor)
 }
 
+/// The asphericity `A = P²/(4πS)` (1 for a disk) of the body of a 2D
+/// family that defines it, its shape built from `params` as for a run:
+/// `fourier` and `fourier_sum` (near-disks) and `ellipse`, each by its own
+/// computation. `Ok(None)` for the other families; an unknown family or
+/// parameters the family refuses are errors.
+pub fn asphericity(family: &str, params: &ParamMap) -> Result<Option<f64>, Error> {
+    family_info(family)?;
+    let a = match family {
+        "fourier" => {
+            jamkit_fourier::NearDisk::fourier(&parse_params(family, params)?)?.asphericity()
+        }
+        "fourier_sum" => {
+            jamkit_fourier::NearDisk::fourier_sum(&parse_params(family, params)?)?.asphericity()
+        }
+        "ellipse" => jamkit_ellipse::Ellipse::new(&parse_params(family, params)?)?.asphericity(),
+        _ => return Ok(None),
+    };
+    Ok(Some(a))
+}
+
 /// The families' reference page, `docs/reference/families.md`, as
 /// `jamkit shapes --markdown` prints it: every registered family with its
 /// dimensions, an example parameter set and a table of its parameters.
@@ -350,5 +370,61 @@ mod tests {
                 }
             }
         }
+    }
+
+    fn params(json: serde_json::Value) -> ParamMap {
+        params_from_json(&json).unwrap()
+    }
+
+    #[test]
+    fn asphericity_is_the_familys_own_computation() {
+        let near_disk = jamkit_fourier::NearDisk::fourier(&jamkit_fourier::FourierParams {
+            n: 2,
+            delta: 0.3,
+            inertia: Some(1.0),
+            gap: Default::default(),
+        })
+        .unwrap();
+        let a = asphericity(
+            "fourier",
+            &params(serde_json::json!({"n": 2, "delta": 0.3, "inertia": 1.0})),
+        )
+        .unwrap()
+        .unwrap();
+        assert_eq!(a.to_bits(), near_disk.asphericity().to_bits());
+        assert!(a > 1.0);
+        let ellipse = jamkit_ellipse::Ellipse::new(&jamkit_ellipse::EllipseParams {
+            aspect: 1.5,
+            inertia: None,
+        })
+        .unwrap();
+        let a = asphericity("ellipse", &params(serde_json::json!({"aspect": 1.5})))
+            .unwrap()
+            .unwrap();
+        assert_eq!(a.to_bits(), ellipse.asphericity().to_bits());
+        let sum = asphericity(
+            "fourier_sum",
+            &params_from_ron("(delta: 0.1, modes: [(n: 3, a: 1.0)])").unwrap(),
+        )
+        .unwrap()
+        .unwrap();
+        assert!(sum > 1.0, "{sum}");
+    }
+
+    #[test]
+    fn asphericity_of_other_families_is_none_and_bad_input_an_error() {
+        assert_eq!(asphericity("sphere", &ParamMap::new()).unwrap(), None);
+        let err = asphericity("blob", &ParamMap::new())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("must be one of"), "{err}");
+        let err = asphericity("ellipse", &params(serde_json::json!({"aspect": 0.5})))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("aspect"), "{err}");
+        let err = asphericity("fourier", &params(serde_json::json!({"n": 2})))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("delta"), "{err}");
     }
 }

@@ -96,26 +96,24 @@ fn load(dirs: &[PathBuf]) -> (Vec<EllipsePoint>, usize) {
     (points, files.len())
 }
 
+/// `A` of the body of `family` with `params` (JSON), as the registry
+/// builds it; `None` where the family refuses them.
+fn asphericity(family: &str, params: serde_json::Value) -> Option<f64> {
+    let params = jamkit_registry::params_from_json(&params).ok()?;
+    jamkit_registry::asphericity(family, &params).ok().flatten()
+}
+
 /// `A` of the `n = 2` near-disk of amplitude `delta`.
 fn near_disk_asphericity(delta: f64) -> Option<f64> {
-    jamkit_fourier::NearDisk::fourier(&jamkit_fourier::FourierParams {
-        n: 2,
-        delta,
-        inertia: Some(1.0),
-        gap: Default::default(),
-    })
-    .ok()
-    .map(|s| s.asphericity())
+    asphericity(
+        "fourier",
+        serde_json::json!({"n": 2, "delta": delta, "inertia": 1.0}),
+    )
 }
 
 /// `A` of the ellipse of aspect ratio `aspect`.
 fn ellipse_asphericity(aspect: f64) -> Option<f64> {
-    jamkit_ellipse::Ellipse::new(&jamkit_ellipse::EllipseParams {
-        aspect,
-        inertia: None,
-    })
-    .ok()
-    .map(|s| s.asphericity())
+    asphericity("ellipse", serde_json::json!({ "aspect": aspect }))
 }
 
 /// What Fig. 5 produced: figure stems, the markdown section, and the

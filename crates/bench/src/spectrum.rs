@@ -5,6 +5,7 @@
 //! cost of a dense eigensolver depends on the matrix size, not on where the
 //! bodies sit, and the stress part T is then exercised too.
 
+use crate::output::Print;
 use anyhow::Result;
 use jamkit_core::{Packing, Potential, SizeDistribution};
 use jamkit_engine::Scene;
@@ -14,12 +15,24 @@ use jamkit_observe::spectrum::{eigenmodes, eigenvalues};
 use rand::SeedableRng;
 use std::time::Instant;
 
-/// Time each stage; `nalgebra` adds nalgebra's own symmetric eigensolver.
-pub fn run(particles: &[usize], nalgebra: bool) -> Result<()> {
-    out!(
-        "particles,coordinates,assembly_s,faer_values_s,faer_vectors_s,nalgebra_values_s,max_rel_diff"
+/// What `jamkit bench spectrum` was asked for.
+#[derive(Clone, Debug, clap::Args)]
+pub struct Options {
+    /// Particle numbers (3 coordinates each).
+    #[arg(long, value_delimiter = ',', default_value = "256,512,1024")]
+    pub particles: Vec<usize>,
+    /// Also time nalgebra's symmetric eigensolver (slow at N = 1024).
+    #[arg(long)]
+    pub nalgebra: bool,
+}
+
+/// Time each stage, a header and one line per particle number; with
+/// `nalgebra`, nalgebra's own symmetric eigensolver too.
+pub fn run(o: &Options, print: Print) -> Result<()> {
+    print(
+        "particles,coordinates,assembly_s,faer_values_s,faer_vectors_s,nalgebra_values_s,max_rel_diff",
     );
-    for &n in particles {
+    for &n in &o.particles {
         let shape = NearDisk::fourier(&FourierParams {
             n: 2,
             delta: 0.1,
@@ -46,7 +59,7 @@ pub fn run(particles: &[usize], nalgebra: bool) -> Result<()> {
             .iter()
             .zip(&with_vectors)
             .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        let nalgebra_values = if nalgebra {
+        let nalgebra_values = if o.nalgebra {
             let dense = h.dense();
             let m = nalgebra::DMatrix::from_fn(h.size, h.size, |i, j| dense[(i, j)]);
             let t = Instant::now();
@@ -61,11 +74,11 @@ pub fn run(particles: &[usize], nalgebra: bool) -> Result<()> {
         } else {
             String::new()
         };
-        out!(
+        print(&format!(
             "{n},{},{assembly:.4},{faer_values:.3},{faer_vectors:.3},{nalgebra_values},{:.1e}",
             h.size,
             diff / scale
-        );
+        ));
     }
     Ok(())
 }

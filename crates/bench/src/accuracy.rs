@@ -6,7 +6,7 @@
 //! one document:
 //!
 //! 1. **Pairs**: the micro-benchmark of one pair evaluation per gap model
-//!    (`bench_pair.rs`, also `jamkit bench pair` on its own).
+//!    ([`crate::pair`], also `jamkit bench pair` on its own).
 //! 2. **Packings**: the experiment file `experiments/accuracy/gap_models.ron`
 //!    (whole jammed packings per gap model and `Δ`, `n = 2`, the same seeds,
 //!    hence the same random starts, at every point), run by the runner into
@@ -24,9 +24,11 @@
 //! The two files are compiled in, so the command runs from any directory;
 //! `--set-gap-models` / `--set-tolerances` edit them as `jamkit run --set`
 //! does (`--quick` is a few such overrides). Everything else goes to `DIR`
-//! (CSV, PNG + SVG figures, `tables.md`); with the default `DIR` the
-//! generated block of `docs/reports/speed-vs-error.md` is rewritten too.
+//! (CSV, PNG + SVG figures, `tables.md`, default [`DEFAULT_OUT`]), and only
+//! there: the manual's copy in `docs/speed-vs-error/` is that directory,
+//! copied by hand.
 
+use crate::output::{Print, environment, write};
 use anyhow::{Context, Result, bail};
 use jamkit_experiment::grid::{self, value_text};
 use jamkit_experiment::runner::{self, RunOptions};
@@ -37,45 +39,53 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The default output directory; writing there also rewrites the
-/// generated block of [`DOC`].
-pub const DEFAULT_OUT: &str = "docs/speed-vs-error";
+/// The default output directory of the tables and figures.
+pub const DEFAULT_OUT: &str = "out/bench-accuracy";
 /// The default directory of the runner's runs (parts 2 and 3).
 pub const DEFAULT_RUNS: &str = "out/accuracy";
-/// The document whose generated block the default run rewrites.
-const DOC: &str = "docs/reports/speed-vs-error.md";
-/// [`DEFAULT_OUT`] relative to the directory of [`DOC`].
-const LINK_DIR: &str = "../speed-vs-error";
-const BEGIN: &str = "<!-- generated: jamkit bench accuracy -->";
-const END: &str = "<!-- end generated -->";
 
 /// The experiment file of part 2: its path in the repository and its text.
 const GAP_MODELS_FILE: (&str, &str) = (
     "experiments/accuracy/gap_models.ron",
-    include_str!("../experiments/accuracy/gap_models.ron"),
+    include_str!("../../../experiments/accuracy/gap_models.ron"),
 );
 /// The experiment file of part 3 (one setting of the ladder).
 const TOLERANCES_FILE: (&str, &str) = (
     "experiments/accuracy/tolerances.ron",
-    include_str!("../experiments/accuracy/tolerances.ron"),
+    include_str!("../../../experiments/accuracy/tolerances.ron"),
 );
 /// `--quick`: the overrides of the two files (before the user's own).
 const QUICK_GAP_MODELS: [&str; 3] = ["particles=10", "samples=1", "params.delta=0.1"];
 const QUICK_TOLERANCES: [&str; 2] = ["particles=12", "samples=2"];
 
 /// What `jamkit bench accuracy` was asked for.
+#[derive(Clone, Debug, clap::Args)]
 pub struct Options {
-    /// Output directory of the tables and figures.
+    /// Output directory of the tables (tables.md), CSV files and figures;
+    /// nothing else is written but the runs (--runs).
+    #[arg(short, long, value_name = "DIR", default_value = DEFAULT_OUT)]
     pub out: PathBuf,
-    /// Directory of the runner's runs (parts 2 and 3); a rerun resumes.
+    /// Directory of the runner's runs of experiments/accuracy/*.ron
+    /// (the gap models and the tolerances); a rerun into it resumes,
+    /// reading back every packing it holds.
+    #[arg(long, value_name = "DIR", default_value = DEFAULT_RUNS)]
     pub runs: PathBuf,
-    /// Small sizes, for a smoke test.
+    /// Small sizes, for a smoke test (seconds): fewer pairs, and the
+    /// files with --set particles=10 samples=1 params.delta=0.1 (gap
+    /// models) and particles=12 samples=2 (tolerances).
+    #[arg(long)]
     pub quick: bool,
-    /// `KEY=VALUE` overrides of `experiments/accuracy/gap_models.ron`.
+    /// Override a field of experiments/accuracy/gap_models.ron, as
+    /// `jamkit run --set` does: --set-gap-models samples=1.
+    #[arg(long = "set-gap-models", value_name = "KEY=VALUE")]
     pub set_gap_models: Vec<String>,
-    /// `KEY=VALUE` overrides of `experiments/accuracy/tolerances.ron`.
+    /// Override a field of experiments/accuracy/tolerances.ron (every
+    /// setting of the ladder): --set-tolerances particles=64.
+    #[arg(long = "set-tolerances", value_name = "KEY=VALUE")]
     pub set_tolerances: Vec<String>,
-    /// Worker threads of the runs (1: the wall times of one core).
+    /// Worker threads of the runs (packings in parallel; 1 keeps the
+    /// wall times of one core). Results do not depend on it.
+    #[arg(long, default_value_t = 1)]
     pub jobs: usize,
 }
 
@@ -222,48 +232,17 @@ fn run_into(e: &Experiment, out: &Path, jobs: usize) -> Result<()> {
     Ok(())
 }
 
-/// The commit (marked when the tree has uncommitted changes) and the
-/// machine (CPU model and cores) a benchmark ran on.
-pub(crate) fn environment() -> (String, String) {
-    let cmd = |prog: &str, args: &[&str]| {
-        std::process::Command::new(prog)
-            .args(args)
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-    };
-    let mut commit =
-        cmd("git", &["rev-parse", "--short", "HEAD"]).unwrap_or_else(|| "unknown".into());
-    if cmd("git", &["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty())
-    {
-        commit.push_str(" (with uncommitted changes)");
-    }
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(0);
-    (commit, format!("{cpu}, {cores} cores"))
-}
-
-/// Run the whole benchmark: part 1 by `bench_pair`, parts 2 and 3 by the
-/// runner and `jamkit_report::accuracy`.
-pub fn run(o: &Options) -> Result<()> {
+/// Run the whole benchmark: part 1 by [`crate::pair`], parts 2 and 3 by
+/// the runner and `jamkit_report::accuracy`; print the tables and write
+/// them to `OUT/tables.md`.
+pub fn run(o: &Options, print: Print) -> Result<()> {
     let plan = Plan::of(o)?;
     std::fs::create_dir_all(&o.out).with_context(|| format!("creating {}", o.out.display()))?;
     let (commit, machine) = environment();
     let t0 = Instant::now();
 
     eprintln!("part 1: pair evaluations");
-    let pair_md = crate::bench_pair::measure(&o.out, o.quick)?;
+    let pair_md = crate::pair::measure(&o.out, o.quick, print)?;
     let studies = [
         (
             GAP_MODELS_FILE.0,
@@ -290,6 +269,30 @@ pub fn run(o: &Options) -> Result<()> {
     }
 
     let mut md = String::new();
+    let args = arguments(o);
+    let _ = writeln!(
+        md,
+        "Generated by `jamkit bench accuracy{args}` at commit `{commit}`, {machine}, one \
+         thread per packing; {total:.0} s in all (packings the runs of `{}` already held \
+         were read back, not timed again). Compare wall times within one run.",
+        o.runs.display()
+    );
+    md.push('\n');
+    md.push_str(&pair_md);
+    md.push_str(&sections);
+    print(&md);
+    write(&o.out.join("tables.md"), &md)?;
+    print(&format!(
+        "written to {} (the runs: {})",
+        o.out.display(),
+        o.runs.display()
+    ));
+    Ok(())
+}
+
+/// The options that change the study, as the command line gives them
+/// (` --quick --set-gap-models 'samples=1'`), for the tables' first line.
+fn arguments(o: &Options) -> String {
     let mut args = String::new();
     if o.quick {
         args.push_str(" --quick");
@@ -302,83 +305,7 @@ pub fn run(o: &Options) -> Result<()> {
             let _ = write!(args, " {flag} '{s}'");
         }
     }
-    let _ = writeln!(
-        md,
-        "Generated by `jamkit bench accuracy{args}` at commit `{commit}`, {machine}, one \
-         thread per packing; {total:.0} s in all (packings the runs of `{}` already held \
-         were read back, not timed again). Compare wall times within one run.",
-        o.runs.display()
-    );
-    md.push('\n');
-    md.push_str(&pair_md);
-    md.push_str(&sections);
-    out!("{md}");
-    write(&o.out.join("tables.md"), &md)?;
-    if o.out == Path::new(DEFAULT_OUT) {
-        rewrite_doc(Path::new(DOC), &md)?;
-    }
-    out!(
-        "written to {} (the runs: {})",
-        o.out.display(),
-        o.runs.display()
-    );
-    Ok(())
-}
-
-fn write(path: &Path, text: &str) -> Result<()> {
-    jamkit_format::write_atomic(path, text.as_bytes())
-        .with_context(|| format!("writing {}", path.display()))
-}
-
-/// Replace the text between the markers of `doc` by `md`.
-fn rewrite_doc(doc: &Path, md: &str) -> Result<()> {
-    let Ok(text) = std::fs::read_to_string(doc) else {
-        eprintln!(
-            "note: {} not found; only the tables were written",
-            doc.display()
-        );
-        return Ok(());
-    };
-    // Headings of the tables are one level below the document's sections,
-    // and the links of tables.md (to files next to it) go into the
-    // output directory.
-    let body = md
-        .replace("\n## ", "\n### ")
-        .replace("](", &format!("]({LINK_DIR}/"));
-    match splice(&text, &body) {
-        Ok(new) => {
-            write(doc, &new)?;
-            eprintln!("rewrote the generated block of {}", doc.display());
-        }
-        Err(why) => eprintln!("note: {}: {why}; left alone", doc.display()),
-    }
-    Ok(())
-}
-
-/// `text` with the lines strictly between the line `BEGIN` and the line
-/// `END` replaced by `body`. Only whole lines count as markers, so that
-/// prose may quote them; exactly one pair must exist.
-fn splice(text: &str, body: &str) -> std::result::Result<String, String> {
-    let mut begin = Vec::new();
-    let mut end = Vec::new();
-    let mut at = 0;
-    for line in text.split_inclusive('\n') {
-        match line.trim_end() {
-            BEGIN => begin.push(at + line.len()),
-            END => end.push(at),
-            _ => {}
-        }
-        at += line.len();
-    }
-    match (begin.as_slice(), end.as_slice()) {
-        ([b], [e]) if b <= e => Ok(format!("{}\n{body}\n{}", &text[..*b], &text[*e..])),
-        ([_], [_]) => Err(format!("`{END}` comes before `{BEGIN}`")),
-        _ => Err(format!(
-            "needs exactly one line `{BEGIN}` and one line `{END}` (found {} and {})",
-            begin.len(),
-            end.len()
-        )),
-    }
+    args
 }
 
 fn window(protocol: &Protocol) -> (f64, f64) {
@@ -395,20 +322,78 @@ fn window(protocol: &Protocol) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        options: Options,
+    }
+
+    fn options(args: &[&str]) -> Options {
+        let argv = std::iter::once("accuracy").chain(args.iter().copied());
+        Cli::try_parse_from(argv).unwrap().options
+    }
 
     #[test]
-    fn only_whole_marker_lines_delimit_the_generated_block() {
-        let doc =
-            format!("prose quoting `{BEGIN}` and `{END}`\n{BEGIN}\nold\ntables\n{END}\nafter\n");
-        let new = splice(&doc, "NEW").unwrap();
+    fn the_default_output_is_outside_the_manual() {
+        let o = options(&[]);
+        assert_eq!(o.out, Path::new(DEFAULT_OUT));
+        assert_eq!(o.runs, Path::new(DEFAULT_RUNS));
+        assert!(!o.out.starts_with("docs") && !o.runs.starts_with("docs"));
+        assert_eq!(o.jobs, 1);
+    }
+
+    #[test]
+    fn quick_and_the_users_overrides_apply_in_that_order() {
+        let sizes = |e: &Experiment| (e.particles.values(), e.samples);
+        let plan = Plan::of(&options(&["--quick"])).unwrap();
+        assert_eq!(sizes(&plan.gap_models), (vec![10], 1));
+        assert_eq!(sizes(&plan.tolerances), (vec![12], 2));
+        let o = options(&["--quick", "--set-gap-models", "particles=16"]);
+        assert_eq!(sizes(&Plan::of(&o).unwrap().gap_models), (vec![16], 1));
+        // Without --quick, the files as committed.
+        let full = Plan::of(&options(&[])).unwrap();
+        assert_eq!(sizes(&full.gap_models), (vec![64], 3));
+        assert_eq!(sizes(&full.tolerances), (vec![256], 4));
+    }
+
+    #[test]
+    fn a_plan_the_comparison_cannot_group_is_refused() {
+        for (args, names) in [
+            (vec!["--jobs", "0"], "--jobs 0"),
+            (
+                vec!["--set-gap-models", "particles=[8, 10]"],
+                "params.delta and params.gap",
+            ),
+            (
+                vec!["--set-gap-models", "observables=[Pressure]"],
+                "Contacts",
+            ),
+            (
+                vec!["--set-tolerances", "params.delta=[0.1, 0.2]"],
+                "--set-tolerances",
+            ),
+        ] {
+            let err = Plan::of(&options(&args)).err().map(|e| format!("{e:#}"));
+            let err = err.unwrap_or_else(|| panic!("{args:?}: accepted"));
+            assert!(err.contains(names), "{args:?}: {err}");
+        }
+    }
+
+    #[test]
+    fn the_tables_name_the_options_that_changed_the_study() {
+        assert_eq!(arguments(&options(&["--jobs", "2"])), "");
+        let o = options(&[
+            "--quick",
+            "--set-tolerances",
+            "particles=64",
+            "--set-gap-models",
+            "samples=1",
+        ]);
         assert_eq!(
-            new,
-            format!("prose quoting `{BEGIN}` and `{END}`\n{BEGIN}\n\nNEW\n{END}\nafter\n")
+            arguments(&o),
+            " --quick --set-gap-models 'samples=1' --set-tolerances 'particles=64'"
         );
-        // Idempotent: a second run replaces the block it wrote.
-        assert_eq!(splice(&new, "NEW").unwrap(), new);
-        assert!(splice("no markers\n", "x").is_err());
-        assert!(splice(&format!("{END}\n{BEGIN}\n"), "x").is_err());
-        assert!(splice(&format!("{BEGIN}\n{END}\n{BEGIN}\n{END}\n"), "x").is_err());
     }
 }
