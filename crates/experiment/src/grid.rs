@@ -172,6 +172,7 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
             .collect();
     }
     let scanned = experiment.scanned()?;
+    let memory = crate::memory::machine_memory();
     let mut out = Vec::new();
     for dim in experiment.dim.values() {
         for particles in experiment.particles.values() {
@@ -189,9 +190,16 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
                         hessian,
                         minimizer: &e.minimizer,
                     };
-                    let minimizer = registry::dispatch(&e.family, dim, params, check)??;
+                    let (minimizer, rot_dof) = registry::dispatch(&e.family, dim, params, check)??;
                     let (protocols, target_label) = e.protocol.targets();
                     for protocol in protocols {
+                        // The dense eigen-solves against the machine's memory.
+                        crate::memory::check_point(
+                            e,
+                            &protocol,
+                            (dim, particles, rot_dof),
+                            memory,
+                        )?;
                         out.push(Point {
                             index: out.len(),
                             dim,
@@ -323,7 +331,7 @@ struct CheckOnly<'a> {
 }
 
 impl registry::SceneVisitor for CheckOnly<'_> {
-    type Output = Result<FireParams, ExperimentError>;
+    type Output = Result<(FireParams, usize), ExperimentError>;
     fn visit<const D: usize, S: jamkit_core::Shape<D>>(self, shape: S) -> Self::Output {
         if let Some(observable) = self.hessian {
             let o = <S::Orientation as jamkit_core::BodyOrientation>::reference();
@@ -332,7 +340,7 @@ impl registry::SceneVisitor for CheckOnly<'_> {
                 .gap_hessians(&Pair::new(1.0, o, 1.0, o, apart), f64::INFINITY, |_| {})
                 .map_err(|e| ExperimentError::invalid("observables", observable, e.to_string()))?;
         }
-        Ok(self.minimizer.for_family(&shape))
+        Ok((self.minimizer.for_family(&shape), shape.rot_dof()))
     }
 }
 

@@ -24,10 +24,7 @@
 //! count. Where `/proc/meminfo` is absent (not Linux) nothing is checked.
 
 use crate::error::ExperimentError;
-use crate::grid;
 use crate::schema::{Experiment, Protocol};
-use jamkit_core::Shape;
-use jamkit_registry as registry;
 
 /// Bytes of one matrix entry (`f64`).
 const ENTRY: u64 = 8;
@@ -196,47 +193,31 @@ pub fn check_dense_solves(
     Ok(())
 }
 
-/// The dense eigen-solves of every grid point of `experiment` checked
-/// against this machine's memory ([`machine_memory`]; nothing is checked
-/// where it cannot be read). Part of [`Experiment::validate`].
-pub(crate) fn check(experiment: &Experiment) -> Result<(), ExperimentError> {
-    let may_escape = matches!(
-        experiment.protocol,
-        Protocol::Jam {
-            escape_saddles: true,
-            ..
-        }
-    );
-    if experiment.spectrum().is_none() && experiment.moduli().is_none() && !may_escape {
-        return Ok(());
-    }
-    let Some(memory) = machine_memory() else {
+/// The dense eigen-solves of one grid point (`experiment`'s observables,
+/// its `protocol`, `dim`, `particles`, and the family's `rot_dof` there)
+/// checked against `memory`, this machine's ([`machine_memory`]; nothing
+/// is checked where it cannot be read). Asked for every point as the grid
+/// is built ([`crate::grid::points`]), so `jamkit validate` and `jamkit run`
+/// both refuse such a file.
+pub(crate) fn check_point(
+    experiment: &Experiment,
+    protocol: &Protocol,
+    (dim, particles, rot_dof): (usize, usize, usize),
+    memory: Option<u64>,
+) -> Result<(), ExperimentError> {
+    let Some(memory) = memory else {
         return Ok(());
     };
-    for point in grid::points(experiment)? {
-        let solves = dense_solves(experiment, &point.protocol);
-        if solves.is_empty() {
-            continue;
-        }
-        let rot_dof = registry::dispatch(&experiment.family, point.dim, &point.params, RotDof)?;
-        check_dense_solves(
-            &solves,
-            (&experiment.family, point.dim, rot_dof),
-            point.particles,
-            memory,
-        )?;
+    let solves = dense_solves(experiment, protocol);
+    if solves.is_empty() {
+        return Ok(());
     }
-    Ok(())
-}
-
-/// The family's rotational coordinates per body at a grid point.
-struct RotDof;
-
-impl registry::SceneVisitor for RotDof {
-    type Output = usize;
-    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> usize {
-        shape.rot_dof()
-    }
+    check_dense_solves(
+        &solves,
+        (&experiment.family, dim, rot_dof),
+        particles,
+        memory,
+    )
 }
 
 #[cfg(test)]

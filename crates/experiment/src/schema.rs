@@ -851,12 +851,6 @@ impl Experiment {
                 "must be at least 1, or None for the family's default",
             ));
         }
-        // Last, on the grid's points (a scan's points are checked as each
-        // is validated, by `scanned` above): the dense eigen-solves against
-        // the machine's memory.
-        if self.scan.is_empty() {
-            crate::memory::check(self)?;
-        }
         Ok(())
     }
 
