@@ -17,12 +17,16 @@
 //! * [`protocol`]: the paper's compress/decompress bisection to the jamming
 //!   point, compression to a packing fraction or a pressure, and to a
 //!   packing fraction above its own jamming point;
-//! * [`saddle`]: the saddle escape after the bisection.
+//! * [`saddle`]: the saddle escape after the bisection;
+//! * [`cell`]: a packing in a deformed periodic cell ([`cell::Strained`]),
+//!   and [`stabilise`]: the shear stabilisation that relaxes that cell's
+//!   shape.
 //!
 //! Everything is generic over the dimension `D` and the family `S`, so the
 //! pair loop is compiled once per family with no dynamic dispatch.
 
 mod balls;
+pub mod cell;
 pub mod check;
 pub mod fire;
 pub mod hessian;
@@ -38,6 +42,7 @@ pub mod scene;
 mod scene_objective;
 pub mod simd;
 mod slots;
+pub mod stabilise;
 
 pub use fire::{
     Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Progress,

@@ -519,8 +519,10 @@ fn stabilisation_threshold<const D: usize, S: Shape<D>>(
 }
 
 /// `protocol.shear_stabilised`: the packing of `scene` shear-stabilised
-/// (`jamkit_observe::moduli::stabilise` with `protocol.stabilise`, the
-/// deformation check's minimiser) and the moduli of the stabilised cell,
+/// (the engine's `stabilise` with `protocol.stabilise`, the deformation
+/// check's minimiser and the linear-response stiffness of
+/// `jamkit_observe::moduli::cell_stiffness`) and the moduli of the
+/// stabilised cell,
 /// with the fixed box's `fixed_box` kept beside them. Rattlers by count
 /// (`threshold`).
 fn stabilised_moduli<const D: usize, S: Shape<D>>(
@@ -530,7 +532,7 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
     fixed_box: jamkit_observe::moduli::Moduli,
     params: jamkit_observe::moduli::ModuliParams,
 ) -> jamkit_core::Result<ModuliMeasures> {
-    use jamkit_observe::moduli;
+    use jamkit_observe::moduli::{self, CellContacts};
     let start = Instant::now();
     // At the packing's own pressure (`Pressure`: its target, to the
     // protocol's tolerance), as Dagois-Bohy et al.: at fixed volume a
@@ -541,12 +543,12 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
         moduli: params.clone(),
         ..e.protocol.stabilise().cloned().unwrap_or_default()
     };
-    let mut s = moduli::stabilise(
+    let mut s = jamkit_engine::stabilise::stabilise(
         scene,
-        threshold,
         ensemble,
         &stabilise,
         &moduli::deformation_minimizer(),
+        moduli::cell_stiffness(threshold, &params),
     )?;
     let stabilise_s = start.elapsed().as_secs_f64();
     let start = Instant::now();

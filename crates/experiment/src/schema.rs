@@ -196,7 +196,7 @@ pub enum Protocol {
         /// al. 2012): relax the cell's shape and volume (every strain) with
         /// the coordinates at the packing's own pressure, minimising the
         /// enthalpy, until the deviatoric stress is below 10⁻⁶ p
-        /// (`jamkit_observe::moduli::stabilise`).
+        /// (`jamkit_engine::stabilise`).
         /// The `Moduli` observable (required) then measures the stabilised
         /// cell; the saved configuration and the other observables stay
         /// those of the fixed box (the engine's box cannot be sheared).
@@ -251,7 +251,7 @@ pub enum Protocol {
         /// al. 2012): relax the cell's shape and volume (every strain) with
         /// the coordinates at the packing's own pressure, minimising the
         /// enthalpy, until the deviatoric stress is below 10⁻⁶ p
-        /// (`jamkit_observe::moduli::stabilise`).
+        /// (`jamkit_engine::stabilise`).
         /// The `Moduli` observable (required) then measures the stabilised
         /// cell; the saved configuration and the other observables stay
         /// those of the fixed box (the engine's box cannot be sheared).

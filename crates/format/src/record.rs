@@ -40,7 +40,7 @@ pub struct Measures {
     /// Empty, or why this packing deserves a second look.
     pub flag: String,
     /// Saddle escapes made after the jamming bisection (`None`: the escape
-    /// was off), see `jamkit_observe::saddle`.
+    /// was off), see `jamkit_engine::saddle`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub saddle_escapes: Option<u32>,
     /// The Hessian's spectrum, when asked for.
@@ -107,7 +107,7 @@ pub struct ModuliMeasures {
     pub stabilisation: Option<Stabilisation>,
 }
 
-/// A shear stabilisation (`jamkit_observe::moduli::stabilise`), as stored.
+/// A shear stabilisation (`jamkit_engine::stabilise`), as stored.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Stabilisation {
     /// The cell's deformation `F` from the fixed box, row by row: the cell

@@ -78,7 +78,7 @@ pub fn by_deformation_strained<const D: usize, S: Shape<D>>(
             "must lie strictly between 0 and 0.01 (a small strain)",
         ));
     }
-    let fire = fire.for_family(&cell.shape);
+    let fire = fire.for_family(cell.shape());
     fire.validate("minimizer")?;
     deformation_of(cell.clone(), gamma, &fire)
 }

@@ -60,22 +60,25 @@
 //! more than the pair margin, which is checked.)
 //!
 //! **Files.** `strain.rs`: the stress tensor and the strain derivatives;
-//! this file: the moduli by linear response; `cell.rs`: [`Strained`];
-//! `deformation.rs`: the check by deformation; `stabilise.rs`: shear
-//! stabilisation ([`stabilise`]).
+//! this file: the moduli by linear response; `cell.rs`: the contacts and
+//! strain derivatives of a [`Strained`] cell (the cell itself is the
+//! engine's, `jamkit_engine::cell`); `deformation.rs`: the check by
+//! deformation; `stabilise.rs`: the stiffness each step of the engine's
+//! shear stabilisation (`jamkit_engine::stabilise`) measures
+//! ([`cell_stiffness`]).
 
 mod cell;
 mod deformation;
 mod stabilise;
 mod strain;
 
-pub use cell::Strained;
+pub use cell::CellContacts;
 pub use deformation::{
     Deformation, by_deformation, by_deformation_strained, deformation_minimizer,
 };
-pub use stabilise::{
-    Ensemble, StabiliseParams, Stabilised, deviatoric_basis, stabilise, stiffness_tensor,
-};
+pub use jamkit_engine::cell::Strained;
+pub use jamkit_engine::stabilise::{Ensemble, StabiliseParams, Stabilised, deviatoric_basis};
+pub use stabilise::{cell_stiffness, stiffness_tensor};
 use strain::{Cell, FULL_HESSIAN, strain_derivatives_of};
 pub use strain::{
     StrainDerivatives, shear_planes, simple_shear, strain_derivatives, stress_tensor,

@@ -4,21 +4,7 @@
 use crate::hessian::{Hessian, HessianOptions};
 use jamkit_core::{Error, Matrix, Potential, Result, Shape, Vector};
 use jamkit_engine::Scene;
-
-/// `E` of a simple shear of the `(a, b)` plane: `x_a += γ x_b`.
-pub fn simple_shear<const D: usize>(a: usize, b: usize) -> Matrix<D> {
-    let mut e = Matrix::<D>::zeros();
-    e[(a, b)] = 1.0;
-    e
-}
-
-/// The shear planes `(a, b)`, `a < b`: `(0, 1)` in 2D; `(0, 1)`, `(0, 2)`,
-/// `(1, 2)` in 3D.
-pub fn shear_planes<const D: usize>() -> Vec<(usize, usize)> {
-    (0..D)
-        .flat_map(|a| (a + 1..D).map(move |b| (a, b)))
-        .collect()
-}
+pub use jamkit_engine::cell::{shear_planes, simple_shear};
 
 /// The stress tensor `σ_ab = (1/V) Σ_c v'(h_c) g_a r_b` of a scene (every
 /// contact; rattlers carry no force).
