@@ -1,8 +1,8 @@
-//! The Python module (`python/`, docs/how-to/python.md): `tests/python/run.sh`
-//! installs it with pip into a venv under `target/` (numpy, pytest and
-//! maturin from PyPI) and runs `python/tests` with pytest, which checks the
-//! module's packings, contacts and spectra against this build's `jamkit`
-//! command line, bit for bit.
+//! The Python module (`crates/python/`, docs/how-to/python.md):
+//! `tests/python/run.sh` installs it with pip into a venv under `target/`
+//! (numpy, pytest and maturin from PyPI) and runs `crates/python/tests`
+//! with pytest, which checks the module's packings, contacts and spectra
+//! against this build's `jamkit` command line, bit for bit.
 //!
 //! Building the extension takes about three minutes of CPU on a clean
 //! checkout, so the test runs under CI (`CI` set, where a failure to set
@@ -17,7 +17,9 @@ fn the_python_module_passes_its_pytest_suite() {
     let ci = std::env::var_os("CI").is_some_and(|v| !v.is_empty());
     let asked = std::env::var_os("JAMKIT_TEST_PYTHON").is_some_and(|v| !v.is_empty());
     if !ci && !asked {
-        eprintln!("python test not run: set CI or JAMKIT_TEST_PYTHON to build and test python/");
+        eprintln!(
+            "python test not run: set CI or JAMKIT_TEST_PYTHON to build and test crates/python/"
+        );
         return;
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -29,7 +31,7 @@ fn the_python_module_passes_its_pytest_suite() {
     let text = String::from_utf8_lossy(&out.stdout);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "python tests failed:\n{text}\n{err}");
-    // pytest's summary line, "N passed in …": all of python/tests ran
+    // pytest's summary line, "N passed in …": all of crates/python/tests ran
     // (at least the 5 tests of test_jamkit.py), none skipped or failed.
     let summary = text.lines().last().unwrap_or_default();
     let passed: usize = summary
