@@ -4,9 +4,10 @@
 //! `jamkit-core` (which neither the engine nor the observables need it):
 //!
 //! * [`profiled`]: [`Profiled<P>`](profiled::Profiled), the whole `Shape`
-//!   of a near-disk with the first-order gap from its profile `P` alone
-//!   (`lobed` is one; a new near-disk family is a profile and its
-//!   parameters);
+//!   of a near-disk from its profile `P` alone, with the first-order gap,
+//!   or the second-order or exact one for a profile with a third derivative
+//!   (`lobed`, `fourier` and `fourier_sum` are profiles; a new near-disk
+//!   family is a profile and its parameters);
 //! * [`first_order`]: the paper's first-order near-disk gap with its second
 //!   derivatives, for any profile `R(θ)/R⁰ = 1 + Δ P(θ)` given by `P`, `P'`
 //!   and `P''` at the two bodies' angles (used by `fourier`, `fourier_sum`

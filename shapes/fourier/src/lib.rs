@@ -34,14 +34,22 @@
 //! printed gap. (For the odd `F_n = sin(nψ)/n` this is the mirror image of
 //! `R⁰[1 + Δ F(φ − θ_i)]`, the same body turned by `π/n`; for a sum of
 //! modes with phases it is a different body, so the sign matters.)
+//!
+//! The families are their profile: [`FourierProfile`] gives `F`, its
+//! derivatives to the third, range and moments, and the shared near-disk
+//! (`jamkit_planar::profiled::Profiled`, orientations [`Angle`]) does the
+//! rest, the second-order and exact gap models included. [`NearDisk`] wraps
+//! it with the family's name and the first-order lane kernel (`W` pairs at
+//! once, a copy per mode number n ≤ 6), which gives `Profiled`'s contacts
+//! bit for bit.
 
-use jamkit_core::math::{Unit, cmul, turn_unit};
+use jamkit_core::math::{Unit, cmul};
 use jamkit_core::{
     Contact, ContactLanes, Dims, Family, FamilyInfo, FastContacts, GapHessian, Look, Outline, Pair,
-    PairLanes, ParamSpec, Policy, Shape, ShapeVisitor, Vector, contacts_one_by_one,
+    PairLanes, ParamSpec, Policy, Shape, ShapeVisitor, contacts_one_by_one,
 };
-use jamkit_planar::first_order::{Profile, gap_hessian};
-use jamkit_planar::gap2d::{self, GapModel, Jet3, SupportJet};
+use jamkit_planar::gap2d::{GapModel, Jet3};
+use jamkit_planar::profiled::{NearDiskProfile, Profiled};
 use serde::Deserialize;
 use std::f64::consts::PI;
 
@@ -212,30 +220,6 @@ fn visit_near_disk<V: ShapeVisitor>(
     }
 }
 
-impl Outline for NearDisk {
-    fn relative_radius(&self, psi: f64) -> f64 {
-        NearDisk::relative_radius(self, psi)
-    }
-}
-
-/// A near-disk family: `Δ`, the modes of `F`, and the moment of inertia.
-#[derive(Clone, Debug, PartialEq)]
-pub struct NearDisk {
-    name: &'static str,
-    delta: f64,
-    modes: Vec<Mode>,
-    /// `e^{i b_k}` of each mode.
-    phases: Vec<(f64, f64)>,
-    inertia: f64,
-    /// `Σ |a_k|`, a bound on `|F|`.
-    f_bound: f64,
-    /// The gap model.
-    gap: GapModel,
-    /// Per unit size, how far the exact gap can fall below the first-order
-    /// one (`Δ² F'²_max / (1 − Δ F_max)`, ∞ where that bound is not proven).
-    exact_slack: f64,
-}
-
 /// An orientation: the shared planar rotation `e^{iθ}`
 /// ([`jamkit_core::Rotation2`]); near-disks turn it by
 /// [`Rotation2::turned`](jamkit_core::Rotation2::turned).
@@ -243,181 +227,97 @@ pub type Angle = jamkit_core::Rotation2;
 
 /// `z²`, bit for bit `cmul(z, z)` (`ab + ba = 2ab` exactly).
 #[inline(always)]
-fn csq(z: (f64, f64)) -> (f64, f64) {
+fn csq(z: Unit) -> Unit {
     (z.0 * z.0 - z.1 * z.1, 2.0 * (z.0 * z.1))
 }
 
-/// `z_i^n` and `z_j^n` for one mode number.
+/// `z^n`: straight-line products for the paper's modes (n ≤ 6), binary
+/// exponentiation above.
 ///
-/// NOTE: the paper's modes (n ≤ 6) get straight-line code: `cpow`'s loop on
-/// the bits of a run-time `n` kept the pair loop from overlapping pairs. Each
-/// arm multiplies the same factors as `cpow` (products commute), so the
-/// powers are bit for bit those of `cpow`.
+/// NOTE: a loop on the bits of a run-time `n` kept the pair loop from
+/// overlapping pairs. Each arm multiplies the same factors as the binary
+/// loop (products commute), so the powers are bit for bit the loop's.
 #[inline(always)]
-fn cpow_pair(z_i: (f64, f64), z_j: (f64, f64), n: u32) -> ((f64, f64), (f64, f64)) {
+fn cpow(z: Unit, n: u32) -> Unit {
     match n {
-        1 => (z_i, z_j),
-        2 => (csq(z_i), csq(z_j)),
-        3 => (cmul(csq(z_i), z_i), cmul(csq(z_j), z_j)),
-        4 => (csq(csq(z_i)), csq(csq(z_j))),
-        5 => (cmul(csq(csq(z_i)), z_i), cmul(csq(csq(z_j)), z_j)),
-        6 => (cmul(csq(csq(z_i)), csq(z_i)), cmul(csq(csq(z_j)), csq(z_j))),
-        _ => (cpow(z_i, n), cpow(z_j, n)),
+        1 => z,
+        2 => csq(z),
+        3 => cmul(csq(z), z),
+        4 => csq(csq(z)),
+        5 => cmul(csq(csq(z)), z),
+        6 => cmul(csq(csq(z)), csq(z)),
+        mut n => {
+            let (mut z, mut acc) = (z, (1.0, 0.0));
+            while n > 0 {
+                if n & 1 == 1 {
+                    acc = cmul(acc, z);
+                }
+                z = cmul(z, z);
+                n >>= 1;
+            }
+            acc
+        }
     }
 }
 
-/// `F(A)` and `F'(A)` of both bodies of a pair for one mode with no phase,
-/// from `(e^{inA_i}, e^{inA_j})` ([`NearDisk::f_pair`]).
-#[inline(always)]
-fn single_mode(m: Mode, (p_i, p_j): ((f64, f64), (f64, f64))) -> [(f64, f64); 2] {
-    let (a, an) = (m.a, m.a * m.n as f64);
-    [(a * p_i.1, an * p_i.0), (a * p_j.1, an * p_j.0)]
+/// The profile `F(ψ) = Σ_k a_k sin(n_k ψ + b_k)` of both families, from
+/// `e^{iψ}`: `a sin(nψ + b) = a Im(e^{inψ} e^{ib})`,
+/// `a n cos(nψ + b) = a n Re(…)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FourierProfile {
+    family: &'static str,
+    modes: Vec<Mode>,
+    /// `e^{i b_k}` of each mode.
+    phases: Vec<Unit>,
+    /// `min F` on 4096 angles, and `Σ |a_k|`, a bound on `|F|`.
+    range: (f64, f64),
 }
 
-/// `z^n` by binary exponentiation.
-#[inline(always)]
-fn cpow(mut z: (f64, f64), mut n: u32) -> (f64, f64) {
-    let mut acc = (1.0, 0.0);
-    while n > 0 {
-        if n & 1 == 1 {
-            acc = cmul(acc, z);
-        }
-        z = cmul(z, z);
-        n >>= 1;
-    }
-    acc
-}
-
-impl NearDisk {
-    /// The `fourier` family: one mode `sin(nθ)/n`.
-    pub fn fourier(p: &FourierParams) -> jamkit_core::Result<Self> {
-        if p.n < 1 {
-            return Err(jamkit_core::Error::invalid(
-                "params.n",
-                p.n.to_string(),
-                "must be an integer ≥ 1",
-            ));
-        }
-        Self::new(
-            "fourier",
-            p.delta,
-            vec![Mode {
-                n: p.n,
-                a: 1.0 / p.n as f64,
-                b: 0.0,
-            }],
-            p.inertia,
-            p.gap,
-        )
-    }
-
-    /// The `fourier_sum` family.
-    pub fn fourier_sum(p: &FourierSumParams) -> jamkit_core::Result<Self> {
-        Self::new("fourier_sum", p.delta, p.modes.clone(), p.inertia, p.gap)
-    }
-
-    fn new(
-        name: &'static str,
-        delta: f64,
-        modes: Vec<Mode>,
-        inertia: Option<f64>,
-        gap: GapModel,
-    ) -> jamkit_core::Result<Self> {
-        let err = |field: &str, value: String, allowed: &str| {
-            jamkit_core::Error::invalid(field, value, allowed)
-        };
-        if !delta.is_finite() || delta < 0.0 {
-            return Err(err(
-                "params.delta",
-                delta.to_string(),
-                "must be a finite number ≥ 0",
-            ));
-        }
+impl FourierProfile {
+    /// The profile of `modes` (checked: at least one, `n ≥ 1`, `a` and `b`
+    /// finite; errors name `params.modes`).
+    fn new(family: &'static str, modes: Vec<Mode>) -> jamkit_core::Result<Self> {
         if modes.is_empty() {
-            return Err(err(
+            return Err(jamkit_core::Error::invalid(
                 "params.modes",
-                "[]".into(),
+                "[]",
                 "must list at least one mode (n, a, b)",
             ));
         }
         for (k, m) in modes.iter().enumerate() {
             if m.n < 1 {
-                return Err(err(
-                    &format!("params.modes[{k}].n"),
+                return Err(jamkit_core::Error::invalid(
+                    format!("params.modes[{k}].n"),
                     m.n.to_string(),
                     "must be an integer ≥ 1",
                 ));
             }
             if !(m.a.is_finite() && m.b.is_finite()) {
-                return Err(err(
-                    &format!("params.modes[{k}]"),
+                return Err(jamkit_core::Error::invalid(
+                    format!("params.modes[{k}]"),
                     format!("{m:?}"),
                     "a and b must be finite",
                 ));
             }
         }
-        // At Δ = 0 nothing turns (the registry runs such bodies as disks);
-        // the default I = Δ would be 0, so take 1 there.
-        let inertia = inertia.unwrap_or(if delta > 0.0 { delta } else { 1.0 });
-        if !(inertia > 0.0 && inertia.is_finite()) {
-            return Err(err(
-                "params.inertia",
-                inertia.to_string(),
-                "must be positive and finite (the default I = Δ needs Δ > 0)",
-            ));
-        }
-        let shape = Self {
-            name,
-            delta,
+        let mut profile = Self {
+            family,
             phases: modes.iter().map(|m| (m.b.cos(), m.b.sin())).collect(),
-            f_bound: modes.iter().map(|m| m.a.abs()).sum(),
-            exact_slack: {
-                let f_max: f64 = modes.iter().map(|m| m.a.abs()).sum();
-                let df_max: f64 = modes.iter().map(|m| m.a.abs() * m.n as f64).sum();
-                // The bound needs R_max/R_min = (1 + ΔF)/(1 − ΔF) < 1.85.
-                if delta * f_max < 0.25 {
-                    delta * delta * df_max * df_max / (1.0 - delta * f_max)
-                } else {
-                    f64::INFINITY
-                }
-            },
+            range: (0.0, modes.iter().map(|m| m.a.abs()).sum()),
             modes,
-            inertia,
-            gap,
         };
-        let min_r = shape.min_relative_radius();
-        if min_r <= 0.0 {
-            return Err(err(
-                "params.delta",
-                delta.to_string(),
-                &format!(
-                    "is so large that R(θ) ≤ 0 somewhere (min R/R0 = {min_r:.4}); the outline must stay star-shaped"
-                ),
-            ));
-        }
-        if gap == GapModel::Exact && !shape.is_convex() {
-            return Err(err(
-                "params.gap",
-                "Exact".into(),
-                &format!(
-                    "needs a convex outline, and Δ = {delta} makes it non-convex (the common normal is then not unique); use FirstOrder or SecondOrder, or a smaller Δ"
-                ),
-            ));
-        }
-        Ok(shape)
+        profile.range.0 = (0..4096)
+            .map(|k| profile.f_and_derivative(2.0 * PI * k as f64 / 4096.0).0)
+            .fold(f64::INFINITY, f64::min);
+        Ok(profile)
     }
 
-    /// The gap model.
-    pub fn gap_model(&self) -> GapModel {
-        self.gap
+    /// The modes.
+    pub fn modes(&self) -> &[Mode] {
+        &self.modes
     }
 
-    /// `Δ`.
-    pub fn delta(&self) -> f64 {
-        self.delta
-    }
-
-    /// `F(φ)` and `F'(φ)` from `e^{iφ}`... for a given lab angle (slow path, for geometry).
+    /// `F(φ)` and `F'(φ)` at the angle `φ` (slow path, for geometry).
     pub fn f_and_derivative(&self, phi: f64) -> (f64, f64) {
         let mut f = 0.0;
         let mut df = 0.0;
@@ -437,35 +337,51 @@ impl NearDisk {
             .sum()
     }
 
-    /// `R(φ)/R⁰ = 1 + Δ F(φ)`.
-    pub fn relative_radius(&self, phi: f64) -> f64 {
-        1.0 + self.delta * self.f_and_derivative(phi).0
+    /// `F` and `F'` of one mode with no phase from `e^{inA}`.
+    #[inline(always)]
+    fn single(m: Mode, p: Unit) -> (f64, f64) {
+        (m.a * p.1, m.a * m.n as f64 * p.0)
+    }
+}
+
+impl NearDiskProfile for FourierProfile {
+    const FAMILY: &'static str = "fourier";
+    /// Body `j` gets `−e^{iA}` for every set of modes.
+    const HALF_TURN_SYMMETRIC: bool = false;
+    const HESSIAN_DIVIDES: bool = true;
+
+    /// `F(A)` and `F'(A)`; the paper's family (one mode with no phase) with
+    /// no loop and no branch but the first.
+    #[inline(always)]
+    fn value_slope(&self, cos: f64, sin: f64) -> (f64, f64) {
+        let e = (cos, sin);
+        if let [m] = self.modes[..]
+            && m.b == 0.0
+        {
+            return Self::single(m, cpow(e, m.n));
+        }
+        let mut out = (0.0, 0.0);
+        for (m, &phase) in self.modes.iter().zip(&self.phases) {
+            let mut p = cpow(e, m.n);
+            if m.b != 0.0 {
+                p = cmul(p, phase);
+            }
+            out.0 += m.a * p.1;
+            out.1 += m.a * m.n as f64 * p.0;
+        }
+        out
     }
 
-    fn min_relative_radius(&self) -> f64 {
-        (0..4096)
-            .map(|k| self.relative_radius(2.0 * PI * k as f64 / 4096.0))
-            .fold(f64::INFINITY, f64::min)
+    fn curvature(&self, cos: f64, sin: f64) -> f64 {
+        self.jet(cos, sin)[2]
     }
 
-    /// True when the outline is convex: the polar curvature numerator
-    /// `r² + 2r'² − r r''` stays positive (sampled on 4096 angles).
-    pub fn is_convex(&self) -> bool {
-        (0..4096).all(|k| {
-            let phi = 2.0 * PI * k as f64 / 4096.0;
-            let (f, df) = self.f_and_derivative(phi);
-            let (r, dr, ddr) = (
-                1.0 + self.delta * f,
-                self.delta * df,
-                self.delta * self.f_second(phi),
-            );
-            r * r + 2.0 * dr * dr - r * ddr > 0.0
-        })
+    fn range(&self) -> (f64, f64) {
+        self.range
     }
 
-    /// Area in units of `(R⁰)²`: `π [1 + Δ² ⟨F²⟩]` with
-    /// `⟨F²⟩ = (1/2π)∫F² = ½ Σ_{k,l: n_k = n_l} a_k a_l cos(b_k − b_l)`.
-    pub fn relative_area(&self) -> f64 {
+    /// `⟨F⟩ = 0`, `⟨F²⟩ = ½ Σ_{k,l: n_k = n_l} a_k a_l cos(b_k − b_l)`.
+    fn moments(&self) -> (f64, f64) {
         let mut mean_f2 = 0.0;
         for p in &self.modes {
             for q in &self.modes {
@@ -474,7 +390,125 @@ impl NearDisk {
                 }
             }
         }
-        PI * (1.0 + self.delta * self.delta * mean_f2)
+        (0.0, mean_f2)
+    }
+
+    fn describe(&self) -> String {
+        match self.modes[..] {
+            [m] if self.family == "fourier" => format!("n = {}", m.n),
+            _ => format!("modes = {:?}", self.modes),
+        }
+    }
+
+    fn jet3(&self, cos: f64, sin: f64) -> Option<Jet3> {
+        Some(self.jet(cos, sin))
+    }
+
+    /// `Σ |a_k| n_k`.
+    fn slope_bound(&self) -> Option<f64> {
+        Some(self.modes.iter().map(|m| m.a.abs() * m.n as f64).sum())
+    }
+}
+
+impl FourierProfile {
+    /// `[F, F', F'', F‴]` at `e^{iA} = (cos, sin)`.
+    fn jet(&self, cos: f64, sin: f64) -> Jet3 {
+        let mut o = [0.0; 4];
+        for (m, &phase) in self.modes.iter().zip(&self.phases) {
+            let n = m.n as f64;
+            let p = cmul(cpow((cos, sin), m.n), phase);
+            o[0] += m.a * p.1;
+            o[1] += m.a * n * p.0;
+            o[2] -= m.a * n * n * p.1;
+            o[3] -= m.a * n * n * n * p.0;
+        }
+        o
+    }
+}
+
+/// A near-disk of `fourier` or `fourier_sum`: the shared near-disk
+/// ([`Profiled`]) of [`FourierProfile`] with orientations [`Angle`], and
+/// the family's name. Everything but the lane kernel is `Profiled`'s.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NearDisk {
+    name: &'static str,
+    shape: Profiled<FourierProfile, Angle>,
+}
+
+impl NearDisk {
+    /// The `fourier` family: one mode `sin(nθ)/n`.
+    pub fn fourier(p: &FourierParams) -> jamkit_core::Result<Self> {
+        if p.n < 1 {
+            return Err(jamkit_core::Error::invalid(
+                "params.n",
+                p.n.to_string(),
+                "must be an integer ≥ 1",
+            ));
+        }
+        let mode = Mode {
+            n: p.n,
+            a: 1.0 / p.n as f64,
+            b: 0.0,
+        };
+        Self::new("fourier", p.delta, vec![mode], p.inertia, p.gap)
+    }
+
+    /// The `fourier_sum` family.
+    pub fn fourier_sum(p: &FourierSumParams) -> jamkit_core::Result<Self> {
+        Self::new("fourier_sum", p.delta, p.modes.clone(), p.inertia, p.gap)
+    }
+
+    fn new(
+        name: &'static str,
+        delta: f64,
+        modes: Vec<Mode>,
+        inertia: Option<f64>,
+        gap: GapModel,
+    ) -> jamkit_core::Result<Self> {
+        let profile = FourierProfile::new(name, modes)?;
+        let shape = Profiled::with_orientation(profile, delta, inertia)?.with_gap(gap)?;
+        Ok(Self { name, shape })
+    }
+
+    /// The shared near-disk.
+    pub fn profiled(&self) -> &Profiled<FourierProfile, Angle> {
+        &self.shape
+    }
+
+    /// The gap model.
+    pub fn gap_model(&self) -> GapModel {
+        self.shape.gap_model()
+    }
+
+    /// `Δ`.
+    pub fn delta(&self) -> f64 {
+        self.shape.delta()
+    }
+
+    /// `F(φ)` and `F'(φ)` at the angle `φ` (slow path, for geometry).
+    pub fn f_and_derivative(&self, phi: f64) -> (f64, f64) {
+        self.shape.profile().f_and_derivative(phi)
+    }
+
+    /// `F''(φ)`.
+    pub fn f_second(&self, phi: f64) -> f64 {
+        self.shape.profile().f_second(phi)
+    }
+
+    /// `R(φ)/R⁰ = 1 + Δ F(φ)`.
+    pub fn relative_radius(&self, phi: f64) -> f64 {
+        self.shape.relative_radius(phi)
+    }
+
+    /// True when the outline is convex ([`Profiled::is_convex`]).
+    pub fn is_convex(&self) -> bool {
+        self.shape.is_convex()
+    }
+
+    /// Area in units of `(R⁰)²`: `π [1 + Δ² ⟨F²⟩]` with
+    /// `⟨F²⟩ = (1/2π)∫F² = ½ Σ_{k,l: n_k = n_l} a_k a_l cos(b_k − b_l)`.
+    pub fn relative_area(&self) -> f64 {
+        self.shape.relative_area()
     }
 
     /// Asphericity `A = P²/(4π S)` by numerical integration of the perimeter
@@ -482,11 +516,12 @@ impl NearDisk {
     /// accurate for a periodic integrand).
     pub fn asphericity(&self) -> f64 {
         let m = 8192;
+        let d = self.delta();
         let perimeter: f64 = (0..m)
             .map(|k| {
                 let phi = 2.0 * PI * k as f64 / m as f64;
                 let (f, df) = self.f_and_derivative(phi);
-                ((1.0 + self.delta * f).powi(2) + (self.delta * df).powi(2)).sqrt()
+                ((1.0 + d * f).powi(2) + (d * df).powi(2)).sqrt()
             })
             .sum::<f64>()
             * 2.0
@@ -495,45 +530,10 @@ impl NearDisk {
         perimeter * perimeter / (4.0 * PI * self.relative_area())
     }
 
-    /// The paper's first-order contact (module documentation) at distance
-    /// `r = |r_ij|`.
-    #[inline(always)]
-    fn first_order(
-        &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
-        r: f64,
-    ) -> Contact<2> {
-        // NOTE: coincident centres have no direction θ_ij; take θ_ij = 0
-        // (deterministic; such a pair overlaps deeply and any direction
-        // pushes it apart).
-        let (u, inv_r) = if r > 0.0 {
-            (r_ij * (1.0 / r), 1.0 / r)
-        } else {
-            (Vector::<2>::new(1.0, 0.0), 0.0)
-        };
-        let w_conj = (u[0], -u[1]);
-        let [(f_i, df_i), (f_j, df_j)] = self.f_pair(o_i.unit(), o_j.unit(), w_conj);
-        let d = self.delta;
-        let gap = r - size_i - size_j - d * (size_i * f_i + size_j * f_j);
-        let tangent = Vector::<2>::new(-u[1], u[0]);
-        let grad_r = u + tangent * (d * (size_i * df_i + size_j * df_j) * inv_r);
-        Contact {
-            gap,
-            grad_r,
-            grad_rot_i: [-d * size_i * df_i, 0.0, 0.0],
-            grad_rot_j: [-d * size_j * df_j, 0.0, 0.0],
-        }
-    }
-
-    /// The first-order contacts of `W` pairs ([`Shape::contacts_lanes`]):
-    /// `contacts`' bounding test and [`NearDisk::first_order`], lane by
+    /// The first-order contacts of `W` pairs ([`FastContacts::contacts_lanes`]):
+    /// `contacts`' bounding test and [`Profiled::first_order`], lane by
     /// lane, the same operations in the same order, with the branch at
-    /// `r = 0` turned into selects. `profile` maps `(e^{iA_i}, e^{iA_j})`
-    /// to `[(F_i, F_i'), (F_j, F_j')]` ([`NearDisk::f_pair`]).
+    /// `r = 0` turned into selects. `profile` maps `e^{iA}` to `(F, F')`.
     ///
     /// NOTE: one loop over the lanes with no branch and no call in its body
     /// (for one mode `n` is a constant, so `e^{inA}` is a few products):
@@ -545,9 +545,9 @@ impl NearDisk {
         &self,
         p: &PairLanes<2, Angle, W>,
         out: &mut ContactLanes<2, W>,
-        profile: impl Fn((f64, f64), (f64, f64)) -> [(f64, f64); 2],
+        profile: impl Fn(Unit) -> (f64, f64),
     ) {
-        let d = self.delta;
+        let d = self.delta();
         for l in 0..W {
             let r = p.r2[l].sqrt();
             // `first_order`'s unit vector and 1/r, with its choice at r = 0.
@@ -558,9 +558,10 @@ impl NearDisk {
             let inv_r = if positive { inv } else { 0.0 };
             let w_conj = (ux, -uy);
             let (z_i, z_j) = (p.o_i[l].unit(), p.o_j[l].unit());
+            // The phases of `Profiled::phases`, bit for bit.
             let e_i = cmul(z_i, w_conj);
             let e_j = cmul((-z_j.0, -z_j.1), w_conj);
-            let [(f_i, df_i), (f_j, df_j)] = profile(e_i, e_j);
+            let ((f_i, df_i), (f_j, df_j)) = (profile(e_i), profile(e_j));
             let (size_i, size_j) = (p.size_i[l], p.size_j[l]);
             out.found[l] = !(r - p.reach_i[l] - p.reach_j[l] > 0.0);
             out.gap[l] = r - size_i - size_j - d * (size_i * f_i + size_j * f_j);
@@ -582,205 +583,17 @@ impl NearDisk {
         pairs: &PairLanes<2, Angle, W>,
         out: &mut ContactLanes<2, W>,
     ) {
-        self.first_order_lanes(pairs, out, |e_i, e_j| {
-            single_mode(m, cpow_pair(e_i, e_j, N))
-        });
-    }
-
-    /// The contact of the second-order or the exact gap.
-    ///
-    /// NOTE: kept out of line and cold: inlined into the pair loop, these
-    /// paths made the paper's first-order packings 17 % slower (n = 2,
-    /// Δ = 0.1, N = 256, same bits); out of line and with one `visit` call
-    /// site the difference is within noise (4.53 vs 4.56 s user).
-    #[cold]
-    #[inline(never)]
-    fn beyond_first_order(
-        &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-    ) -> Option<Contact<2>> {
-        match self.gap {
-            GapModel::SecondOrder => Some(
-                self.second_order(size_i, o_i, size_j, o_j, r_ij)
-                    .contact(r_ij),
-            ),
-            _ => self
-                .exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap)
-                .map(|e| e.contact()),
-        }
-    }
-
-    /// `[F, F', F'', F''']` of both bodies of a pair (see
-    /// [`NearDisk::f_pair`]), for the second-order gap.
-    fn f_pair_jet3(&self, z_i: (f64, f64), z_j: (f64, f64), w_conj: (f64, f64)) -> [Jet3; 2] {
-        let e = [cmul(z_i, w_conj), cmul((-z_j.0, -z_j.1), w_conj)];
-        let mut out = [[0.0; 4]; 2];
-        for (m, &phase) in self.modes.iter().zip(&self.phases) {
-            let n = m.n as f64;
-            for (o, &e) in out.iter_mut().zip(&e) {
-                let p = cmul(cpow(e, m.n), phase);
-                o[0] += m.a * p.1;
-                o[1] += m.a * n * p.0;
-                o[2] -= m.a * n * n * p.1;
-                o[3] -= m.a * n * n * n * p.0;
-            }
-        }
-        out
-    }
-
-    /// The second-order gap's partials (see [`jamkit_planar::gap2d`]).
-    fn second_order(
-        &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
-    ) -> gap2d::Partials {
-        let r = r_ij.norm();
-        let u = if r > 0.0 {
-            r_ij * (1.0 / r)
-        } else {
-            Vector::<2>::new(1.0, 0.0)
-        };
-        let [p_i, p_j] = self.f_pair_jet3(o_i.unit(), o_j.unit(), (u[0], -u[1]));
-        gap2d::second_order(r, size_i, size_j, self.delta, p_i, p_j)
-    }
-
-    /// The exact gap (see [`jamkit_planar::gap2d::exact`]), or `None` when
-    /// it certainly exceeds `max_gap`. In the body frame the outline is
-    /// `R(φ)/R⁰ = 1 + Δ F(−φ)`, and orientation `θ` turns it
-    /// counter-clockwise by `θ`.
-    ///
-    /// Two uses of the first-order gap `h₁` (cheap):
-    /// * a bound: `h ≥ h₁ − (s_i + s_j)`, with `s = R⁰ Δ² F'²_max / (1 − Δ F_max)`
-    ///   (the support function exceeds the radius `R(ψ)` by at most
-    ///   `(6/11) L²/R_min`, `L = max|R'|`, when `R_max < 1.85 R_min`; see
-    ///   `docs/explanation/gap-models.md`, "Exact"), so far pairs skip the
-    ///   iteration;
-    /// * the first guess of the normal, `ψ₀ = θ_ij + Δ(R_i⁰F_i' + R_j⁰F_j')/r`,
-    ///   exact to `O(Δ²)`.
-    fn exact_gap(
-        &self,
-        size_i: f64,
-        o_i: &Angle,
-        size_j: f64,
-        o_j: &Angle,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-    ) -> Option<gap2d::ExactGap> {
-        let r = r_ij.norm();
-        let first = self.first_order(size_i, o_i, size_j, o_j, r_ij, r);
-        if first.gap - self.exact_slack * (size_i + size_j) > max_gap {
-            return None;
-        }
-        let w0 = if r > 0.0 {
-            let u = (r_ij[0] / r, r_ij[1] / r);
-            turn_unit(u, -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r)
-        } else {
-            (1.0, 0.0)
-        };
-        let d = self.delta;
-        // R(φ)/R⁰ = 1 + Δ F(−φ) at p = e^{iφ}: e^{−iφ} = p̄.
-        let outline = |p: Unit| {
-            let (mut f, mut df, mut ddf) = (0.0, 0.0, 0.0);
-            for (m, &phase) in self.modes.iter().zip(&self.phases) {
-                let n = m.n as f64;
-                let v = cmul(cpow_pair((p.0, -p.1), (1.0, 0.0), m.n).0, phase);
-                f += m.a * v.1;
-                df += m.a * n * v.0;
-                ddf -= m.a * n * n * v.1;
-            }
-            (1.0 + d * f, -d * df, d * ddf)
-        };
-        // Each body's support search starts where its previous one ended,
-        // turned by the change of direction: after the first Newton step on
-        // ψ the support point moves by ~1e-4 rad and one inner step suffices.
-        let support = |size: f64| {
-            let last = std::cell::Cell::new(None::<(Unit, gap2d::SupportPoint)>);
-            move |e: Unit| {
-                let p0 = match last.get() {
-                    Some((e_prev, sp)) => {
-                        // dβ = arg(e ē_prev), small: sin dβ ≈ dβ to O(dβ³).
-                        let turn = cmul(e, (e_prev.0, -e_prev.1));
-                        turn_unit(sp.p, turn.1 * sp.dphi_dbeta)
-                    }
-                    None => e,
-                };
-                let (j, sp) = gap2d::polar_support_unit(e, p0, outline);
-                last.set(Some((e, sp)));
-                SupportJet {
-                    h: size * j.h,
-                    d1: size * j.d1,
-                    d2: size * j.d2,
-                }
-            }
-        };
-        Some(gap2d::exact_unit(
-            r_ij,
-            w0,
-            o_i.unit(),
-            support(size_i),
-            o_j.unit(),
-            support(size_j),
-        ))
-    }
-
-    /// `(F, F', F'')` of both bodies of a pair (see [`NearDisk::f_pair`]),
-    /// for the Hessian.
-    fn f_pair_second(
-        &self,
-        z_i: (f64, f64),
-        z_j: (f64, f64),
-        w_conj: (f64, f64),
-    ) -> [(f64, f64, f64); 2] {
-        self.f_pair_jet3(z_i, z_j, w_conj)
-            .map(|[f, df, ddf, _]| (f, df, ddf))
-    }
-
-    /// `F(A)` and `F'(A)` for both bodies of a pair: `A_i = θ_i − θ_ij` and
-    /// `A_j = θ_j − θ_ij − π`, from `z_i = e^{iθ_i}`, `z_j = e^{iθ_j}` and
-    /// `w̄ = e^{−iθ_ij}`: `e^{iA_i} = z_i w̄`, `e^{iA_j} = −z_j w̄`, and
-    /// `a sin(nA + b) = a Im(e^{inA} e^{ib})`, `a n cos(nA + b) = a n Re(…)`.
-    #[inline(always)]
-    fn f_pair(&self, z_i: (f64, f64), z_j: (f64, f64), w_conj: (f64, f64)) -> [(f64, f64); 2] {
-        let e_i = cmul(z_i, w_conj);
-        let e_j = cmul((-z_j.0, -z_j.1), w_conj);
-        // The paper's family, one mode with no phase: no loop, no branch.
-        if let [m] = self.modes[..]
-            && m.b == 0.0
-        {
-            return single_mode(m, cpow_pair(e_i, e_j, m.n));
-        }
-        self.f_modes(e_i, e_j)
-    }
-
-    /// `F(A)` and `F'(A)` for both bodies of a pair from `e^{iA_i}` and
-    /// `e^{iA_j}`, any modes ([`NearDisk::f_pair`]).
-    #[inline(always)]
-    fn f_modes(&self, e_i: (f64, f64), e_j: (f64, f64)) -> [(f64, f64); 2] {
-        let mut out = [(0.0, 0.0); 2];
-        for (m, &phase) in self.modes.iter().zip(&self.phases) {
-            let (mut p_i, mut p_j) = cpow_pair(e_i, e_j, m.n);
-            if m.b != 0.0 {
-                p_i = cmul(p_i, phase);
-                p_j = cmul(p_j, phase);
-            }
-            let (a, an) = (m.a, m.a * m.n as f64);
-            out[0].0 += a * p_i.1;
-            out[0].1 += an * p_i.0;
-            out[1].0 += a * p_j.1;
-            out[1].1 += an * p_j.0;
-        }
-        out
+        self.first_order_lanes(pairs, out, |e| FourierProfile::single(m, cpow(e, N)));
     }
 }
 
+impl Outline for NearDisk {
+    fn relative_radius(&self, psi: f64) -> f64 {
+        NearDisk::relative_radius(self, psi)
+    }
+}
+
+/// [`Profiled`]'s, with the family's name and the lane kernel.
 impl Shape<2> for NearDisk {
     type Orientation = Angle;
     type Fast = Self;
@@ -794,38 +607,24 @@ impl Shape<2> for NearDisk {
     }
 
     fn volume(&self, size: f64) -> f64 {
-        self.relative_area() * size * size
+        self.shape.volume(size)
     }
 
     fn bounding_radius(&self, size: f64) -> f64 {
-        size * (1.0 + self.delta * self.f_bound)
+        self.shape.bounding_radius(size)
     }
 
-    fn rot_inertia(&self, _size: f64) -> jamkit_core::RotVec {
-        [self.inertia, 1.0, 1.0]
+    fn rot_inertia(&self, size: f64) -> jamkit_core::RotVec {
+        self.shape.rot_inertia(size)
     }
 
     #[inline]
     fn rotate(&self, o: &mut Angle, dq: &[f64]) {
-        *o = o.turned(dq[0]);
+        self.shape.rotate(o, dq)
     }
 
-    /// Rattlers below three contacts (`d + 1`); near-disks jam hypostatic;
-    /// a warning where the outline is not convex.
     fn policy(&self) -> Policy {
-        let mut warnings = Vec::new();
-        if !self.is_convex() {
-            warnings.push(format!(
-                "non-convex outline (Δ = {}): the first-order gap assumes convex bodies with one contact per pair",
-                self.delta
-            ));
-        }
-        Policy {
-            rattler_threshold: 3,
-            expects_isostatic: false,
-            warnings,
-            ..Policy::new(2)
-        }
+        self.shape.policy()
     }
 
     fn look(&self) -> Look {
@@ -836,76 +635,17 @@ impl Shape<2> for NearDisk {
     }
 
     #[inline(always)]
-    fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, Angle>, max_gap: f64, mut visit: F) {
-        let size_i = pair.size_i;
-        let o_i = &pair.o_i;
-        let size_j = pair.size_j;
-        let o_j = &pair.o_j;
-        let r_ij = &pair.r_ij;
-        let r = r_ij.norm();
-        // The gap is at least |r| − bounding radii; skip pairs certainly apart.
-        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
-            return;
-        }
-        // One call of `visit` for every model: a second call site (an early
-        // return for the other models) cost the first-order pair loop 6 %.
-        let contact = if self.gap == GapModel::FirstOrder {
-            Some(self.first_order(size_i, o_i, size_j, o_j, r_ij, r))
-        } else {
-            self.beyond_first_order(size_i, o_i, size_j, o_j, r_ij, max_gap)
-        };
-        if let Some(c) = contact {
-            visit(c);
-        }
+    fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, Angle>, max_gap: f64, visit: F) {
+        self.shape.contacts(pair, max_gap, visit)
     }
 
-    /// Second derivatives of the first-order gap
-    /// ([`jamkit_planar::first_order`], with `P = F`).
     fn gap_hessians<V: FnMut(GapHessian<2>)>(
         &self,
         pair: &Pair<2, Angle>,
         max_gap: f64,
-        mut visit: V,
+        visit: V,
     ) -> jamkit_core::Result<()> {
-        let size_i = pair.size_i;
-        let o_i = &pair.o_i;
-        let size_j = pair.size_j;
-        let o_j = &pair.o_j;
-        let r_ij = &pair.r_ij;
-        let r = r_ij.norm();
-        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
-            return Ok(());
-        }
-        match self.gap {
-            GapModel::FirstOrder => {}
-            GapModel::SecondOrder => {
-                visit(
-                    self.second_order(size_i, o_i, size_j, o_j, r_ij)
-                        .chain(r_ij),
-                );
-                return Ok(());
-            }
-            GapModel::Exact => {
-                if let Some(e) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
-                    visit(e.hessian());
-                }
-                return Ok(());
-            }
-        }
-        let u = if r > 0.0 {
-            r_ij / r
-        } else {
-            Vector::<2>::new(1.0, 0.0)
-        };
-        let [p_i, p_j] = self
-            .f_pair_second(o_i.unit(), o_j.unit(), (u[0], -u[1]))
-            .map(|(value, slope, curvature)| Profile {
-                value,
-                slope,
-                curvature,
-            });
-        visit(gap_hessian(r_ij, size_i, size_j, self.delta, p_i, p_j));
-        Ok(())
+        self.shape.gap_hessians(pair, max_gap, visit)
     }
 }
 
@@ -920,7 +660,7 @@ impl FastContacts<2, NearDisk> for NearDisk {
     /// included), second-order packings took 1.40 s user against 0.95 s
     /// through the generic pass (N = 64, n = 3, Δ = 0.1; same bits).
     fn use_lanes(shape: &NearDisk) -> bool {
-        shape.gap == GapModel::FirstOrder
+        shape.gap_model() == GapModel::FirstOrder
     }
 
     /// The first-order contacts by [`NearDisk::first_order_lanes`]; the
@@ -937,10 +677,11 @@ impl FastContacts<2, NearDisk> for NearDisk {
         pairs: &PairLanes<2, Angle, W>,
         out: &mut ContactLanes<2, W>,
     ) {
-        if shape.gap != GapModel::FirstOrder {
+        if shape.gap_model() != GapModel::FirstOrder {
             return contacts_one_by_one(shape, pairs, out);
         }
-        if let [m] = shape.modes[..]
+        let profile = shape.shape.profile();
+        if let [m] = profile.modes[..]
             && m.b == 0.0
         {
             match m.n {
@@ -950,12 +691,10 @@ impl FastContacts<2, NearDisk> for NearDisk {
                 4 => shape.single_mode_lanes::<4, W>(m, pairs, out),
                 5 => shape.single_mode_lanes::<5, W>(m, pairs, out),
                 6 => shape.single_mode_lanes::<6, W>(m, pairs, out),
-                n => shape.first_order_lanes(pairs, out, |e_i, e_j| {
-                    single_mode(m, cpow_pair(e_i, e_j, n))
-                }),
+                n => shape.first_order_lanes(pairs, out, |e| FourierProfile::single(m, cpow(e, n))),
             }
         } else {
-            shape.first_order_lanes(pairs, out, |e_i, e_j| shape.f_modes(e_i, e_j));
+            shape.first_order_lanes(pairs, out, |e| profile.value_slope(e.0, e.1));
         }
     }
 }
@@ -964,7 +703,7 @@ impl FastContacts<2, NearDisk> for NearDisk {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
-    use jamkit_core::ShapeExt;
+    use jamkit_core::{ShapeExt, Vector};
 
     fn fourier(n: u32, delta: f64) -> NearDisk {
         NearDisk::fourier(&FourierParams {
