@@ -152,8 +152,10 @@ fn bad_amplitudes_and_inertias_are_refused_by_name() {
     };
     assert_eq!(field(-0.1, None).as_deref(), Some("params.delta"));
     assert_eq!(field(f64::NAN, None).as_deref(), Some("params.delta"));
-    assert_eq!(field(0.0, None).as_deref(), Some("params.inertia"));
+    assert_eq!(field(0.0, Some(0.0)).as_deref(), Some("params.inertia"));
     assert_eq!(field(0.1, Some(-1.0)).as_deref(), Some("params.inertia"));
+    // The disk Δ = 0 turns with I = 1 unless told otherwise.
+    assert!(Profiled::new(TwoMode { a: 1.0, b: 1.0 }, 0.0, None).is_ok());
     // min P = −5/6: R > 0 needs Δ < 1.2.
     assert_eq!(field(1.3, None).as_deref(), Some("params.delta"));
     assert!(Profiled::new(TwoMode { a: 1.0, b: 1.0 }, 1.1, None).is_ok());
