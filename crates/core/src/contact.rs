@@ -108,9 +108,4 @@ impl<const D: usize, O: Copy> Pair<D, O> {
             r_ij,
         }
     }
-
-    /// The same pair seen from `j`: `i` and `j` swapped, `r_ij → −r_ij`.
-    pub fn swapped(&self) -> Self {
-        Self::new(self.size_j, self.o_j, self.size_i, self.o_i, -self.r_ij)
-    }
 }
