@@ -297,6 +297,25 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
             - self.geometry.displacement[i]
     }
 
+    /// Every listed pair as `(i, j, r0, pair)`: `r0` its separation in the
+    /// cell as built, `pair` the two bodies at their strained separation.
+    fn strained_pairs(
+        &self,
+    ) -> impl Iterator<Item = (usize, usize, Vector<D>, Pair<D, S::Orientation>)> + '_ {
+        self.geometry.pairs.iter().map(move |&(i, j, r0)| {
+            let (i, j) = (i as usize, j as usize);
+            let r = self.separation(i, j, &r0);
+            let pair = Pair::new(
+                self.sizes[i],
+                self.orientations[i],
+                self.sizes[j],
+                self.orientations[j],
+                r,
+            );
+            (i, j, r0, pair)
+        })
+    }
+
     /// Visit every contact of the strained cell as `(i, j, r0, r, contact)`:
     /// `r0` the pair's separation in the cell as built, `r` the strained
     /// one.
@@ -304,20 +323,9 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
     where
         F: FnMut(usize, usize, &Vector<D>, &Vector<D>, &jamkit_core::Contact<D>),
     {
-        for &(i, j, r0) in &self.geometry.pairs {
-            let (i, j) = (i as usize, j as usize);
-            let r = self.separation(i, j, &r0);
-            self.shape.contacts(
-                &Pair::new(
-                    self.sizes[i],
-                    self.orientations[i],
-                    self.sizes[j],
-                    self.orientations[j],
-                    r,
-                ),
-                0.0,
-                |c| visit(i, j, &r0, &r, &c),
-            );
+        for (i, j, r0, pair) in self.strained_pairs() {
+            self.shape
+                .contacts(&pair, 0.0, |c| visit(i, j, &r0, &pair.r_ij, &c));
         }
     }
 
@@ -327,20 +335,9 @@ impl<const D: usize, S: Shape<D>> Strained<D, S> {
         &self,
         visit: &mut dyn FnMut(usize, usize, &Vector<D>, &GapHessian<D>),
     ) -> Result<()> {
-        for &(i, j, r0) in &self.geometry.pairs {
-            let (i, j) = (i as usize, j as usize);
-            let r = self.separation(i, j, &r0);
-            self.shape.gap_hessians(
-                &Pair::new(
-                    self.sizes[i],
-                    self.orientations[i],
-                    self.sizes[j],
-                    self.orientations[j],
-                    r,
-                ),
-                0.0,
-                |c| visit(i, j, &r, &c),
-            )?;
+        for (i, j, _, pair) in self.strained_pairs() {
+            self.shape
+                .gap_hessians(&pair, 0.0, |c| visit(i, j, &pair.r_ij, &c))?;
         }
         Ok(())
     }
@@ -512,29 +509,18 @@ impl<const D: usize, S: Shape<D>> Objective for Strained<D, S> {
     fn hessian_entries(&mut self, entries: &mut Vec<(u32, u32, f64)>) -> Result<bool> {
         let k = self.shape.rot_dof();
         let stride = (D + k) as u32;
-        for &(i, j, r0) in &self.geometry.pairs {
-            let (iu, ju) = (i as usize, j as usize);
-            let r = self.separation(iu, ju, &r0);
-            let outcome = self.shape.gap_hessians(
-                &Pair::new(
-                    self.sizes[iu],
-                    self.orientations[iu],
-                    self.sizes[ju],
-                    self.orientations[ju],
-                    r,
-                ),
-                0.0,
-                |c| {
-                    add_contact::<D>(
-                        entries,
-                        [i * stride, j * stride],
-                        k,
-                        self.potential,
-                        &c,
-                        false,
-                    )
-                },
-            );
+        for (i, j, _, pair) in self.strained_pairs() {
+            let (i, j) = (i as u32, j as u32);
+            let outcome = self.shape.gap_hessians(&pair, 0.0, |c| {
+                add_contact::<D>(
+                    entries,
+                    [i * stride, j * stride],
+                    k,
+                    self.potential,
+                    &c,
+                    false,
+                )
+            });
             match outcome {
                 Ok(()) => {}
                 Err(Error::Unsupported(_)) => return Ok(false),
