@@ -276,14 +276,14 @@ fn bad_parameters_are_refused_with_the_field_named() {
         let e = overrides::apply(&e, &[set.into()]).unwrap();
         let err = match e.validate() {
             Err(err) => err.to_string(),
-            Ok(()) => jamkit_experiment::grid::points(&e).unwrap_err().to_string(),
+            Ok(()) => jamkit_experiment::Plan::new(&e).err().unwrap().to_string(),
         };
         assert!(err.contains(field), "{set}: {err}");
     }
     let e = overrides::apply(&e, &["params.shape=2".into()]).unwrap();
     let err = match e.validate() {
         Err(err) => err.to_string(),
-        Ok(()) => jamkit_experiment::grid::points(&e).unwrap_err().to_string(),
+        Ok(()) => jamkit_experiment::Plan::new(&e).err().unwrap().to_string(),
     };
     assert!(err.contains("shape"), "{err}");
 }

@@ -120,11 +120,12 @@ fn parameters_can_be_set_from_the_command_line() {
     ] {
         let e = overrides::apply(&e, &[set.into()]).unwrap();
         e.validate().unwrap();
-        jamkit_experiment::grid::points(&e).unwrap_or_else(|err| panic!("{set}: {err}"));
+        jamkit_experiment::Plan::new(&e).unwrap_or_else(|err| panic!("{set}: {err}"));
     }
     let bad = overrides::apply(&e, &["params.alpha=0.0".into()]).unwrap();
-    let err = jamkit_experiment::grid::points(&bad)
-        .unwrap_err()
+    let err = jamkit_experiment::Plan::new(&bad)
+        .err()
+        .unwrap()
         .to_string();
     assert!(err.contains("params.alpha"), "{err}");
 }

@@ -5,7 +5,7 @@
 //! that contains `<text>`: the message names the field, the value and what
 //! is allowed.
 
-use jamkit_experiment::{Experiment, ExperimentError, grid};
+use jamkit_experiment::{Experiment, ExperimentError, Plan};
 use std::path::{Path, PathBuf};
 
 fn files(dir: &str) -> Vec<PathBuf> {
@@ -25,8 +25,8 @@ fn files(dir: &str) -> Vec<PathBuf> {
 fn load(path: &Path) -> Result<(Experiment, usize), ExperimentError> {
     let e = Experiment::from_file(path)?;
     e.validate()?;
-    let points = grid::points(&e)?;
-    Ok((e, points.len()))
+    let points = Plan::new(&e)?.points.len();
+    Ok((e, points))
 }
 
 #[test]

@@ -8,7 +8,7 @@ use jamkit_core::{Potential, Shape};
 use jamkit_engine::{
     Fire, FireParams, JamParams, JamSearch, Objective, Scene, energy_slope, extrapolated_step, jam,
 };
-use jamkit_experiment::{Experiment, grid, sample};
+use jamkit_experiment::{Experiment, Plan};
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_sphere::Sphere;
 
@@ -174,9 +174,7 @@ fn extrapolated_is_the_default_and_bisection_is_left_out_of_settings() {
             r#"(name: "s", family: "sphere", dim: 2, particles: 8, samples: 1, seed: 1{search})"#
         );
         let e = Experiment::from_ron(&text, "inline").unwrap();
-        let points = grid::points(&e).unwrap();
-        let jobs = grid::jobs(&e, &points);
-        let settings = sample::settings(&e, &points[0], &jobs[0]);
+        let settings = Plan::new(&e).unwrap().jobs[0].settings.clone();
         let written = ron::ser::to_string(&e).unwrap();
         (settings["protocol"]["Jam"].get("search").cloned(), written)
     };

@@ -853,10 +853,8 @@ fn dimers3(minimizer: &str) -> jamkit_experiment::Experiment {
 
 /// The minimiser as the first packing of `e` records it (its settings).
 fn recorded_minimizer(e: &jamkit_experiment::Experiment) -> serde_json::Value {
-    let points = jamkit_experiment::grid::points(e).unwrap();
-    let jobs = jamkit_experiment::grid::jobs(e, &points);
-    let settings = jamkit_experiment::sample::settings(e, &points[0], &jobs[0]);
-    settings["minimizer"].clone()
+    let plan = jamkit_experiment::Plan::new(e).unwrap();
+    plan.jobs[0].settings["minimizer"].clone()
 }
 
 /// `minimizer.lbfgs`' three states read and write back as they are:

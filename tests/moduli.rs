@@ -1098,7 +1098,7 @@ fn protocol_targets_given_as_lists_scan() {
     let single = parse(
         r#"(name: "s", family: "sphere", particles: 32, protocol: AboveJam(delta_phi: 1e-3))"#,
     );
-    let points = jamkit_experiment::grid::points(&single).unwrap();
+    let points = jamkit_experiment::Plan::new(&single).unwrap().points;
     assert_eq!(points.len(), 1);
     assert_eq!(points[0].label("sphere"), "sphere_d2_N32");
     for (bad, named) in [
@@ -1439,6 +1439,35 @@ fn stabilisation_runner_experiment(
         "inline",
     )
     .unwrap()
+}
+
+/// A file that scans `protocol.shear_stabilised` over `[false, true]`
+/// measures each point's packing with that point's setting: the moduli of
+/// the `true` point are the stabilised cell's (with the fixed box's kept
+/// beside them), those of the `false` point the fixed box's alone, and the
+/// two points share the configuration (the setting acts on the
+/// measurement only).
+#[test]
+fn a_scanned_shear_stabilisation_acts_on_its_own_point() {
+    let text = stabilisation_runner_text(1, "").replace(
+        "observables:",
+        r#"scan: [{"protocol.shear_stabilised": [false, true]}], observables:"#,
+    );
+    let e = jamkit_experiment::Experiment::from_ron(&text, "inline").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let report = common::run_ok(&e, dir.path(), 1);
+    assert_eq!(report.packings.len(), 2);
+    let stabilised: Vec<(bool, bool)> = report
+        .packings
+        .iter()
+        .map(|f| {
+            let asked = f.settings["protocol"]["Pressure"]["shear_stabilised"] == true;
+            let moduli = f.measures.moduli.as_ref().unwrap();
+            (asked, moduli.stabilisation.is_some())
+        })
+        .collect();
+    assert_eq!(stabilised, [(false, false), (true, true)]);
+    assert_eq!(report.packings[0].positions, report.packings[1].positions);
 }
 
 /// `protocol.shear_stabilised` through the runner (disks, N = 32,

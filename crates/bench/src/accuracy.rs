@@ -30,7 +30,7 @@
 
 use crate::output::{Print, environment, write};
 use anyhow::{Context, Result, bail};
-use jamkit_experiment::grid::{self, value_text};
+use jamkit_experiment::grid::value_text;
 use jamkit_experiment::runner::{self, RunOptions};
 use jamkit_experiment::schema::{Observable, Protocol};
 use jamkit_experiment::{Experiment, ExperimentError, Log, overrides};
@@ -139,7 +139,10 @@ impl Plan {
         // The comparisons group packings by Δ and gap model (part 2) and by
         // the ladder's setting (part 3): nothing else may scan.
         let mut keys = Vec::new();
-        for p in grid::points(&gap_models).context("--set-gap-models")? {
+        for p in &jamkit_experiment::Plan::new(&gap_models)
+            .context("--set-gap-models")?
+            .points
+        {
             let key = (param(&p.params, "delta"), param(&p.params, "gap"));
             if key.0.is_none() || key.1.is_none() {
                 bail!(
@@ -159,7 +162,10 @@ impl Plan {
         // The comparison groups packings by the ladder's setting: the scan
         // of the file, and nothing else.
         let mut settings = Vec::new();
-        for p in grid::points(&tolerances).context("--set-tolerances")? {
+        for p in &jamkit_experiment::Plan::new(&tolerances)
+            .context("--set-tolerances")?
+            .points
+        {
             let (lo, hi) = window(&p.protocol);
             let key = (lo, hi, p.minimizer.force_tol);
             if settings.contains(&key) {

@@ -26,7 +26,7 @@ use anyhow::{Context, Result, bail};
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use jamkit_experiment::grid::Shard;
 use jamkit_experiment::runner::{RunOptions, default_out, run};
-use jamkit_experiment::{Experiment, Log, grid, overrides};
+use jamkit_experiment::{Experiment, Log, Plan, overrides};
 use jamkit_registry as registry;
 use std::path::{Path, PathBuf};
 
@@ -433,14 +433,14 @@ fn real_main() -> Result<()> {
         }
         Command::Validate { file, sets } => {
             let experiment = load(&file, &sets)?;
-            let points = grid::points(&experiment)?;
+            let plan = Plan::new(&experiment)?;
             out!(
                 "{}: valid; {} point(s) × {} sample(s)",
                 file.display(),
-                points.len(),
+                plan.points.len(),
                 experiment.samples
             );
-            for p in &points {
+            for p in &plan.points {
                 out!("  {}", p.label(&experiment.family));
             }
             Ok(())
@@ -789,8 +789,8 @@ fn packing_files(path: &Path) -> Result<Vec<PathBuf>> {
     let ron = path.join("experiment.ron");
     if ron.exists() {
         let e = Experiment::from_file(&ron)?;
-        let points = grid::points(&e)?;
-        let files: Vec<PathBuf> = grid::jobs(&e, &points)
+        let files: Vec<PathBuf> = Plan::new(&e)?
+            .jobs
             .iter()
             .map(|j| dir.join(format!("{}.json", j.id)))
             .filter(|p| p.exists())

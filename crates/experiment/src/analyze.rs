@@ -390,6 +390,6 @@ pub fn analyze(
         list.join(", ")
     );
     let experiment = Experiment::from_ron(&text, "analyze")?;
-    let (file, table) = sample::remeasure(&experiment, file)?;
+    let (file, table) = sample::remeasure(&experiment, None, file)?;
     Ok((file, force, table))
 }

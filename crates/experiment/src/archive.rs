@@ -26,7 +26,7 @@
 //! again.
 
 use crate::error::ExperimentError;
-use crate::{grid, runner, schema::Experiment};
+use crate::{plan::Plan, runner, schema::Experiment};
 use jamkit_format::{self as format, PackingFile};
 use std::path::Path;
 
@@ -105,8 +105,8 @@ fn tables(
     mut packings: Vec<PackingFile>,
     out: &Path,
 ) -> Result<bool, ExperimentError> {
-    let points = grid::points(experiment)?;
-    let jobs = grid::jobs(experiment, &points);
+    let plan = Plan::new(experiment)?;
+    let jobs = &plan.jobs;
     let place = |f: &PackingFile| jobs.iter().position(|j| j.id == f.id);
     if packings.iter().any(|f| place(f).is_none()) {
         return Ok(false);

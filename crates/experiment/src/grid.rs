@@ -15,7 +15,6 @@
 use crate::error::ExperimentError;
 use crate::schema::{Experiment, Protocol, ScanSetting, scan_value_text};
 use jamkit_core::FamilyInfo;
-use jamkit_core::Pair;
 use jamkit_engine::FireParams;
 use jamkit_registry::{self as registry, ParamMap};
 
@@ -30,9 +29,10 @@ pub struct Point {
     pub particles: usize,
     /// Every family parameter (defaults filled in).
     pub params: ParamMap,
-    /// The experiment's minimiser with the family's defaults filled in
-    /// (`dt_max`: the experiment's, else the family's, else 0.5), resolved
-    /// once here, where the point's shape is built to check it.
+    /// The minimiser at this point (a scanned setting written in); the
+    /// plan fills in the family's defaults (`dt_max`: the experiment's,
+    /// else the family's, else 0.5) where it builds the point's shape
+    /// (`Plan::new`).
     pub minimizer: FireParams,
     /// The protocol with this point's one target (φ, pressure or δφ: a
     /// list in the file scans, as the innermost axis of the grid).
@@ -93,6 +93,10 @@ pub struct Job {
     pub seed: u64,
     /// File-name-safe identifier, `<point label>_s<seed>`.
     pub id: String,
+    /// Everything that shapes its packing, as the packing file records it
+    /// ([`settings`]): a packing on disk with other settings is refused,
+    /// one with the same is reused.
+    pub settings: serde_json::Value,
 }
 
 /// A parameter value as compact RON text.
@@ -151,7 +155,10 @@ fn scan_values(
     Ok(values)
 }
 
-/// The grid points of an experiment, each checked by building its shape.
+/// The grid points of an experiment, in grid order: its lists and scans
+/// expanded, every family parameter filled in (the family's defaults where
+/// the file gives none). The plan builds each point's shape
+/// (`Plan::new`).
 pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
     // Also checked by `validate`; a dimension listed twice would give two
     // points with the same label, hence the same packing ids.
@@ -172,40 +179,19 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
             .collect();
     }
     let scanned = experiment.scanned()?;
-    let memory = crate::memory::machine_memory();
     let mut out = Vec::new();
     for dim in experiment.dim.values() {
         for particles in experiment.particles.values() {
             for params in &combos {
                 for (scan, e) in &scanned {
-                    // The spectrum and the moduli both need the Hessian.
-                    let hessian = if e.spectrum().is_some() {
-                        Some("Spectrum")
-                    } else if e.moduli().is_some() {
-                        Some("Moduli")
-                    } else {
-                        None
-                    };
-                    let check = CheckOnly {
-                        hessian,
-                        minimizer: &e.minimizer,
-                    };
-                    let (minimizer, rot_dof) = registry::dispatch(&e.family, dim, params, check)??;
                     let (protocols, target_label) = e.protocol.targets();
                     for protocol in protocols {
-                        // The dense eigen-solves against the machine's memory.
-                        crate::memory::check_point(
-                            e,
-                            &protocol,
-                            (dim, particles, rot_dof),
-                            memory,
-                        )?;
                         out.push(Point {
                             index: out.len(),
                             dim,
                             particles,
                             params: params.clone(),
-                            minimizer: minimizer.clone(),
+                            minimizer: e.minimizer.clone(),
                             protocol,
                             target_label,
                             scan: scan.clone(),
@@ -230,6 +216,7 @@ pub fn jobs(experiment: &Experiment, points: &[Point]) -> Vec<Job> {
                 sample,
                 seed,
                 id: format!("{label}_s{seed}"),
+                settings: settings(experiment, p, seed),
             });
         }
     }
@@ -321,27 +308,55 @@ fn param_axes(
     Ok(axes)
 }
 
-/// A visitor that only checks that the shape can be built.
-/// Builds the shape (which checks its parameters) and, when the spectrum
-/// (or the moduli) is asked for, that the family gives the second
-/// derivatives of its gap; `hessian` names the observable that needs them.
-struct CheckOnly<'a> {
-    hessian: Option<&'static str>,
-    minimizer: &'a FireParams,
+/// Everything that shapes one packing, for the resume check.
+pub fn settings(experiment: &Experiment, point: &Point, seed: u64) -> serde_json::Value {
+    let e = experiment;
+    let minimizer = &point.minimizer;
+    serde_json::json!({
+        "dim": point.dim,
+        "family": e.family,
+        "params": point.params,
+        "particles": point.particles,
+        "seed": seed,
+        "sizes": e.sizes,
+        "protocol": protocol_settings(&point.protocol),
+        "minimizer": minimizer_settings(minimizer),
+        "potential": e.potential,
+        "rattlers": e.rattlers,
+        "engine": e.engine,
+    })
 }
 
-impl registry::SceneVisitor for CheckOnly<'_> {
-    type Output = Result<(FireParams, usize), ExperimentError>;
-    fn visit<const D: usize, S: jamkit_core::Shape<D>>(self, shape: S) -> Self::Output {
-        if let Some(observable) = self.hessian {
-            let o = <S::Orientation as jamkit_core::BodyOrientation>::reference();
-            let apart = jamkit_core::Vector::<D>::from_fn(|a, _| if a == 0 { 4.0 } else { 0.0 });
-            shape
-                .gap_hessians(&Pair::new(1.0, o, 1.0, o, apart), f64::INFINITY, |_| {})
-                .map_err(|e| ExperimentError::invalid("observables", observable, e.to_string()))?;
-        }
-        Ok((self.minimizer.for_family(&shape), shape.rot_dof()))
+/// The protocol as a packing records it: as written to `experiment.ron`,
+/// except that `search: Bisection` is left out. Packings made before the
+/// field existed were bisection packings and record no `search`, so they
+/// still resume under an explicit `search: Bisection`; the default,
+/// `Extrapolated`, is always written, so no packing of one search is ever
+/// taken for the other's.
+fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
+    let mut value = serde_json::to_value(protocol).expect("protocol serialises");
+    if let Some(jam) = value.get_mut("Jam").and_then(|j| j.as_object_mut())
+        && jam.get("search") == Some(&serde_json::json!("Bisection"))
+    {
+        jam.remove("search");
     }
+    value
+}
+
+/// The minimiser as a packing records it: as resolved for the family
+/// (`FireParams::for_family`), except that `lbfgs: None` is left out.
+/// Packings made before the field existed ran without L-BFGS and record
+/// none, so they still resume under an explicit `lbfgs: None`; where the
+/// family's default is L-BFGS it is always written, so no packing of one
+/// minimiser is ever taken for the other's.
+fn minimizer_settings(minimizer: &FireParams) -> serde_json::Value {
+    let mut value = serde_json::to_value(minimizer).expect("minimizer serialises");
+    if let Some(m) = value.as_object_mut()
+        && m.get("lbfgs") == Some(&serde_json::Value::Null)
+    {
+        m.remove("lbfgs");
+    }
+    value
 }
 
 #[cfg(test)]

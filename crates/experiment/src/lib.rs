@@ -7,6 +7,8 @@
 //! * [`schema`]: the experiment file's fields, defaults and validation;
 //! * [`overrides`]: `--set KEY=VALUE` edits of any field;
 //! * [`grid`]: expansion of lists into parameter points and samples;
+//! * [`plan`]: an experiment made ready to run, once: validated, its grid
+//!   expanded, each point's shape built, every job listed with its settings;
 //! * [`memory`]: the dense eigen-solves of an experiment against the
 //!   machine's memory, checked at validation;
 //! * [`registry`]: the explicit list of shape families, and the one place
@@ -32,6 +34,7 @@ pub mod memory;
 pub mod merge;
 mod outcome;
 pub mod overrides;
+pub mod plan;
 pub mod reload;
 pub mod runner;
 pub mod sample;
@@ -39,4 +42,5 @@ pub mod schema;
 
 pub use batchlog::Log;
 pub use error::ExperimentError;
+pub use plan::Plan;
 pub use schema::Experiment;

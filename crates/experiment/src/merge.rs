@@ -9,10 +9,10 @@
 //! in no part.
 
 use crate::error::ExperimentError;
-use crate::grid;
 use crate::lock::first_difference;
+use crate::plan::Plan;
+use crate::runner;
 use crate::schema::Experiment;
-use crate::{runner, sample};
 use jamkit_format::{self as format, PackingFile};
 use std::path::{Path, PathBuf};
 
@@ -89,14 +89,14 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeReport, ExperimentErro
         }
     }
     let experiment = Experiment::from_file(&first.join("experiment.ron"))?;
-    let points = grid::points(&experiment)?;
-    let jobs = grid::jobs(&experiment, &points);
+    let plan = Plan::new(&experiment)?;
+    let jobs = &plan.jobs;
     let mut packings = Vec::with_capacity(jobs.len());
     let mut missing = Vec::new();
     let mut duplicates = 0;
     // Where each packing came from, for the eigenvalue tables.
     let mut sources = Vec::with_capacity(jobs.len());
-    for job in &jobs {
+    for job in jobs {
         let name = format!("{}.json", job.id);
         let mut found: Option<(PackingFile, &PathBuf)> = None;
         for d in dirs {
@@ -105,8 +105,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeReport, ExperimentErro
                 continue;
             }
             let file = PackingFile::load_checked(&path)?;
-            let wanted = sample::settings(&experiment, &points[job.point], job);
-            if let Some((key, here, there)) = first_difference(&wanted, &file.settings) {
+            if let Some((key, here, there)) = first_difference(&job.settings, &file.settings) {
                 return Err(refuse(format!(
                     "{} was made with {key} = {there}, its run's experiment.ron has {key} = \
                      {here}",
@@ -156,7 +155,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<MergeReport, ExperimentErro
     let packing_dir = out.join("packings");
     std::fs::create_dir_all(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;
     let same = |a: &Path, b: &Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y);
-    for ((file, from), job) in packings.iter().zip(&sources).zip(&jobs) {
+    for ((file, from), job) in packings.iter().zip(&sources).zip(jobs) {
         if same(from, out) {
             continue;
         }

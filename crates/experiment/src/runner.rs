@@ -10,10 +10,10 @@
 
 use crate::batchlog::{BatchLog, Log};
 use crate::error::ExperimentError;
-use crate::grid::{self, Job, Point};
+use crate::grid::{self, Job};
 use crate::lock;
 use crate::outcome::Outcome;
-use crate::sample::{jam_job_watched, measure_jammed, remeasure, settings};
+use crate::plan::Plan;
 use crate::schema::{Experiment, Observable};
 use jamkit_format::{self as format, PackingFile};
 use rayon::prelude::*;
@@ -56,19 +56,18 @@ pub struct RunReport {
 
 /// Run an experiment into `options.out`.
 pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, ExperimentError> {
-    experiment.validate()?;
-    let points = grid::points(experiment)?;
-    let mut jobs = grid::jobs(experiment, &points);
+    let mut plan = Plan::new(experiment)?;
     if let Some(shard) = options.shard {
-        jobs = jobs
-            .into_iter()
-            .enumerate()
-            .filter(|(j, _)| shard.owns(*j))
-            .map(|(_, job)| job)
-            .collect();
+        plan.keep_part(shard);
     }
+    execute(&plan, options)
+}
+
+/// Run the jobs of `plan` into `options.out`.
+pub fn execute(plan: &Plan, options: &RunOptions) -> Result<RunReport, ExperimentError> {
+    let (experiment, jobs) = (plan.experiment, &plan.jobs);
     let packing_dir = options.out.join("packings");
-    refuse_other_settings(experiment, &points, &jobs, &packing_dir)?;
+    refuse_other_settings(jobs, &packing_dir)?;
     std::fs::create_dir_all(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;
     let effective = ron::ser::to_string_pretty(experiment, ron::ser::PrettyConfig::default())
         .expect("experiment serialises");
@@ -103,10 +102,9 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
     };
     let make = |job: &Job| -> Result<Outcome, ExperimentError> {
         let path = packing_dir.join(format!("{}.json", job.id));
-        let point = &points[job.point];
-        let wanted = settings(experiment, point, job);
+        let wanted = &job.settings;
         let finished = || {
-            PackingFile::load_matching(&path, &wanted)
+            PackingFile::load_matching(&path, wanted)
                 .filter(|done| covers(&stored(done), experiment))
         };
         if let Some(done) = finished() {
@@ -121,7 +119,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             lock::Claim::Busy(holder) => return Ok(Outcome::Elsewhere(holder)),
         };
         // Another process may have finished it since the first look.
-        let done = PackingFile::load_matching(&path, &wanted);
+        let done = PackingFile::load_matching(&path, wanted);
         let (file, eigen, reused) = match done {
             Some(done) if covers(&stored(&done), experiment) => {
                 if experiment.output.extxyz && !xyz_path(&path).exists() {
@@ -136,19 +134,22 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             Some(done) if done.positions.len() == done.particles => {
                 let mut merged = experiment.clone();
                 merged.observables = union(&stored(&done), &experiment.observables);
-                let (file, eigen) =
-                    remeasure(&merged, done).map_err(|err| kept_unmeasured(err, &path))?;
+                let (file, eigen) = plan
+                    .remeasure(&merged, job, done)
+                    .map_err(|err| kept_unmeasured(err, &path))?;
                 (file, eigen, true)
             }
             _ => {
-                let jammed = jam_job_watched(experiment, point, job, log.begin(&job.id))
+                let jammed = plan
+                    .jam(job, log.begin(&job.id))
                     .map_err(|err| keep_failed_state(err, &packing_dir))?;
                 // The packing first, without observables (its file lists
                 // none, so a rerun measures them on it instead of taking
                 // it for finished): a measurement that fails, or a process
                 // killed while measuring, leaves it on disk.
                 jammed.file.save(&path)?;
-                let (file, eigen) = measure_jammed(experiment, jammed)
+                let (file, eigen) = plan
+                    .measure(jammed)
                     .map_err(|err| measuring_failed(err, &packing_dir, &path))?;
                 (file, eigen, false)
             }
@@ -197,7 +198,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
     let mut failures = Vec::new();
     let mut elsewhere = Vec::new();
     let mut reused = 0;
-    for (r, job) in results.into_iter().zip(&jobs) {
+    for (r, job) in results.into_iter().zip(jobs) {
         match r {
             Ok(Outcome::Done(f, was_reused)) => {
                 reused += usize::from(was_reused);
@@ -207,7 +208,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             Err(e) => failures.push(e),
         }
     }
-    let groups = group_by_point(experiment, &points, &jobs, &packings);
+    let groups = group_by_point(plan, &packings);
     let summaries = format::summarize_points(&groups);
     if options.shard.is_some() || !elsewhere.is_empty() {
         return Ok(RunReport {
@@ -230,19 +231,13 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
 
 /// Refuse to run into a directory holding a packing of these jobs made
 /// with other settings, naming the first that differs (`lock` module).
-fn refuse_other_settings(
-    experiment: &Experiment,
-    points: &[Point],
-    jobs: &[Job],
-    packing_dir: &Path,
-) -> Result<(), ExperimentError> {
+fn refuse_other_settings(jobs: &[Job], packing_dir: &Path) -> Result<(), ExperimentError> {
     for job in jobs {
         let path = packing_dir.join(format!("{}.json", job.id));
         let Some(old) = PackingFile::load(&path) else {
             continue;
         };
-        let wanted = settings(experiment, &points[job.point], job);
-        if let Some((key, here, mut there)) = lock::first_difference(&wanted, &old.settings) {
+        if let Some((key, here, mut there)) = lock::first_difference(&job.settings, &old.settings) {
             if there == "(not set)"
                 && let Some(unwritten) = unwritten_setting(&key)
             {
@@ -398,9 +393,9 @@ pub fn tables_of_runs(
     let packings: Vec<PackingFile> = order.iter().map(|id| latest[id].clone()).collect();
     let mut labels: Vec<(String, Vec<String>)> = Vec::new();
     for (experiment, _) in runs {
-        let points = grid::points(experiment)?;
-        let jobs = grid::jobs(experiment, &points);
-        for p in &points {
+        let plan = Plan::new(experiment)?;
+        let jobs = &plan.jobs;
+        for p in &plan.points {
             let label = p.label(&experiment.family);
             let at = match labels.iter().position(|(l, _)| *l == label) {
                 Some(at) => at,
@@ -503,22 +498,21 @@ pub(crate) fn tables_measured(
     measured: (bool, bool),
     out: &Path,
 ) -> Result<(), ExperimentError> {
-    let points = grid::points(experiment)?;
-    let jobs = grid::jobs(experiment, &points);
-    let groups = group_by_point(experiment, &points, &jobs, packings);
+    let groups = group_by_point(&Plan::new(experiment)?, packings);
     write_table_files(packings, &groups, measured, &experiment.scan_paths(), out)
 }
 
+/// The packings of each point of `plan` with the point's label, in grid
+/// order; points with none left out.
 fn group_by_point<'a>(
-    experiment: &Experiment,
-    points: &[Point],
-    jobs: &[Job],
+    plan: &Plan,
     packings: &'a [PackingFile],
 ) -> Vec<(String, Vec<&'a PackingFile>)> {
-    points
+    plan.points
         .iter()
         .map(|p| {
-            let ids: Vec<&str> = jobs
+            let ids: Vec<&str> = plan
+                .jobs
                 .iter()
                 .filter(|j| j.point == p.index)
                 .map(|j| j.id.as_str())
@@ -527,7 +521,7 @@ fn group_by_point<'a>(
                 .iter()
                 .filter(|f| ids.contains(&f.id.as_str()))
                 .collect();
-            (p.label(&experiment.family), members)
+            (p.label(&plan.experiment.family), members)
         })
         .filter(|(_, m): &(String, Vec<&PackingFile>)| !m.is_empty())
         .collect()
@@ -664,13 +658,12 @@ mod tests {
             "killed",
         )
         .unwrap();
-        let points = grid::points(&e).unwrap();
-        let jobs = grid::jobs(&e, &points);
+        let plan = Plan::new(&e).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let packings = dir.path().join("packings");
         std::fs::create_dir_all(&packings).unwrap();
-        let path = packings.join(format!("{}.json", jobs[0].id));
-        let jammed = jam_job_watched(&e, &points[0], &jobs[0], None).unwrap();
+        let path = packings.join(format!("{}.json", plan.jobs[0].id));
+        let jammed = plan.jam(&plan.jobs[0], None).unwrap();
         jammed.file.save(&path).unwrap();
 
         let resumed = run(&e, &options(dir.path())).unwrap();

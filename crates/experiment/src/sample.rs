@@ -18,94 +18,87 @@ use jamkit_core::BodyOrientation;
 use jamkit_core::{Packing, Shape};
 use jamkit_engine::saddle::{self, SaddleParams};
 use jamkit_engine::{
-    AboveJamParams, Fire, FireParams, JamParams, PressureParams, Progress, Scene, above_jam,
-    compress_to_phi, compress_to_pressure, jam,
+    AboveJamParams, Fire, JamParams, PressureParams, Progress, Scene, above_jam, compress_to_phi,
+    compress_to_pressure, jam,
 };
 use jamkit_format::{JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures};
 use jamkit_observe::gaps::{CountGaps, GapCounts};
 use jamkit_observe::spectrum::{self, Spectrum};
 use jamkit_observe::{JammingSummary, RattlerRule, summarize, summarize_with};
-use jamkit_registry::{self as registry, SceneVisitor};
 use rand::SeedableRng;
 use std::sync::Arc;
 use std::time::Instant;
-
-/// Everything that shapes one packing, for the resume check.
-pub fn settings(experiment: &Experiment, point: &Point, job: &Job) -> serde_json::Value {
-    let e = experiment;
-    let minimizer = &point.minimizer;
-    serde_json::json!({
-        "dim": point.dim,
-        "family": e.family,
-        "params": point.params,
-        "particles": point.particles,
-        "seed": job.seed,
-        "sizes": e.sizes,
-        "protocol": protocol_settings(&point.protocol),
-        "minimizer": minimizer_settings(minimizer),
-        "potential": e.potential,
-        "rattlers": e.rattlers,
-        "engine": e.engine,
-    })
-}
-
-/// The protocol as a packing records it: as written to `experiment.ron`,
-/// except that `search: Bisection` is left out. Packings made before the
-/// field existed were bisection packings and record no `search`, so they
-/// still resume under an explicit `search: Bisection`; the default,
-/// `Extrapolated`, is always written, so no packing of one search is ever
-/// taken for the other's.
-fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
-    let mut value = serde_json::to_value(protocol).expect("protocol serialises");
-    if let Some(jam) = value.get_mut("Jam").and_then(|j| j.as_object_mut())
-        && jam.get("search") == Some(&serde_json::json!("Bisection"))
-    {
-        jam.remove("search");
-    }
-    value
-}
-
-/// The minimiser as a packing records it: as resolved for the family
-/// (`FireParams::for_family`), except that `lbfgs: None` is left out.
-/// Packings made before the field existed ran without L-BFGS and record
-/// none, so they still resume under an explicit `lbfgs: None`; where the
-/// family's default is L-BFGS it is always written, so no packing of one
-/// minimiser is ever taken for the other's.
-fn minimizer_settings(minimizer: &FireParams) -> serde_json::Value {
-    let mut value = serde_json::to_value(minimizer).expect("minimizer serialises");
-    if let Some(m) = value.as_object_mut()
-        && m.get("lbfgs") == Some(&serde_json::Value::Null)
-    {
-        m.remove("lbfgs");
-    }
-    value
-}
 
 /// The observables of `experiment`, as stored with each packing.
 pub(crate) fn observables_value(experiment: &Experiment) -> serde_json::Value {
     serde_json::to_value(&experiment.observables).expect("observables serialise")
 }
 
-/// Make one packing; with it, the table of its eigenvalues when the
-/// experiment asks for them (`eigenvalues/<id>.csv`).
-pub fn run_job(
-    experiment: &Experiment,
-    point: &Point,
-    job: &Job,
-) -> Result<(PackingFile, Option<String>), ExperimentError> {
-    run_job_watched(experiment, point, job, None)
+/// A point's shape, built once by the plan (`Plan::new`): it makes the
+/// point's packings and measures them.
+pub(crate) trait Sampler: Send + Sync {
+    /// The packing of `job` at the end of its protocol, unmeasured.
+    fn jam(
+        &self,
+        e: &Experiment,
+        point: &Point,
+        job: &Job,
+        progress: Option<Arc<Progress>>,
+    ) -> Result<Jammed, ExperimentError>;
+
+    /// The observables of `e` measured on the configuration of `file` on
+    /// this shape, with the point's protocol ([`measure_scene`]).
+    fn measure(
+        &self,
+        e: &Experiment,
+        file: PackingFile,
+        run: Protocolled,
+    ) -> Result<(PackingFile, Observed), ExperimentError>;
 }
 
-/// [`run_job`], its minimiser reporting to `progress` (a batch log's view;
-/// the packing is the same bits).
-pub fn run_job_watched(
-    experiment: &Experiment,
-    point: &Point,
-    job: &Job,
-    progress: Option<Arc<Progress>>,
-) -> Result<(PackingFile, Option<String>), ExperimentError> {
-    let jammed = jam_job_watched(experiment, point, job, progress)?;
-    measure_jammed(experiment, jammed)
+/// The sampler of a point whose shape is `shape` and protocol `protocol`.
+pub(crate) fn sampler<const D: usize, S: Shape<D>>(
+    shape: S,
+    protocol: &Protocol,
+) -> Box<dyn Sampler> {
+    Box::new(OfShape::<D, S> {
+        shape,
+        protocol: protocol.clone(),
+    })
+}
+
+struct OfShape<const D: usize, S> {
+    shape: S,
+    protocol: Protocol,
+}
+
+impl<const D: usize, S: Shape<D>> Sampler for OfShape<D, S> {
+    fn jam(
+        &self,
+        experiment: &Experiment,
+        point: &Point,
+        job: &Job,
+        progress: Option<Arc<Progress>>,
+    ) -> Result<Jammed, ExperimentError> {
+        let sample = Sample {
+            experiment,
+            point,
+            job,
+        };
+        sample.jam::<D, S>(self.shape.clone(), progress)
+    }
+
+    fn measure(
+        &self,
+        e: &Experiment,
+        file: PackingFile,
+        run: Protocolled,
+    ) -> Result<(PackingFile, Observed), ExperimentError> {
+        let id = file.id.clone();
+        crate::reload::scene_of::<D, S>(self.shape.clone(), &file)
+            .and_then(|scene| measure_scene(e, &self.protocol, scene, file, run))
+            .map_err(|err| in_packing(&id, err))
+    }
 }
 
 /// A packing at the end of its protocol, before its observables: `file`
@@ -119,36 +112,32 @@ pub struct Jammed {
     pub file: PackingFile,
     /// The protocol's figures, for the measures.
     run: Protocolled,
+    /// Its grid point.
+    point: usize,
 }
 
-/// The first half of [`run_job_watched`]: the packing of `job` at the end
-/// of its protocol, unmeasured ([`measure_jammed`] measures it).
-pub fn jam_job_watched(
-    experiment: &Experiment,
-    point: &Point,
-    job: &Job,
-    progress: Option<Arc<Progress>>,
-) -> Result<Jammed, ExperimentError> {
-    let visitor = SampleVisitor {
-        experiment,
-        point,
-        job,
-        progress,
-    };
-    registry::dispatch(&experiment.family, point.dim, &point.params, visitor)?
+impl Jammed {
+    /// The index of its grid point.
+    pub fn point(&self) -> usize {
+        self.point
+    }
 }
 
-struct SampleVisitor<'a> {
+/// One sample: its experiment, grid point and job.
+struct Sample<'a> {
     experiment: &'a Experiment,
     point: &'a Point,
     job: &'a Job,
-    progress: Option<Arc<Progress>>,
 }
 
-impl SceneVisitor for SampleVisitor<'_> {
-    type Output = Result<Jammed, ExperimentError>;
-
-    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Self::Output {
+impl Sample<'_> {
+    /// The packing of the job on `shape` at the end of its protocol, its
+    /// minimiser reporting to `progress`.
+    fn jam<const D: usize, S: Shape<D>>(
+        &self,
+        shape: S,
+        progress: Option<Arc<Progress>>,
+    ) -> Result<Jammed, ExperimentError> {
         let (e, job) = (self.experiment, self.job);
         let sample_err = |source| ExperimentError::sample(job.id.clone(), source);
         let start = Instant::now();
@@ -164,8 +153,8 @@ impl SceneVisitor for SampleVisitor<'_> {
             .map_err(sample_err)?;
         let mut scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
         let mut fire = Fire::new(minimizer);
-        if let Some(p) = &self.progress {
-            fire.watch(p.clone());
+        if let Some(p) = progress {
+            fire.watch(p);
         }
         let mut saddle_escapes = None;
         let mut jam_point = None;
@@ -311,10 +300,14 @@ impl SceneVisitor for SampleVisitor<'_> {
             jam_point,
         };
         let shape = &scene.packing().shape;
-        let unmeasured = Observed::unmeasured().measures(e, run.clone(), shape);
+        let unmeasured = Observed::unmeasured().measures(&self.point.protocol, run.clone(), shape);
         let mut file = self.file(scene.packing(), true, unmeasured);
         file.observables = serde_json::json!([]);
-        Ok(Jammed { file, run })
+        Ok(Jammed {
+            file,
+            run,
+            point: self.point.index,
+        })
     }
 }
 
@@ -323,14 +316,15 @@ impl SceneVisitor for SampleVisitor<'_> {
 /// eigenvalue table if asked for. A failed shear stabilisation is an error
 /// carrying the fixed-box packing as its `state` (the runner keeps it as
 /// `<id>.failed.json`).
-pub fn measure_jammed(
+pub(crate) fn measure_jammed(
     experiment: &Experiment,
+    sampler: &dyn Sampler,
     jammed: Jammed,
 ) -> Result<(PackingFile, Option<String>), ExperimentError> {
     let e = experiment;
-    let Jammed { file, run } = jammed;
+    let Jammed { file, run, .. } = jammed;
     let id = file.id.clone();
-    let (mut file, mut observed) = measure_saved(e, file, run)?;
+    let (mut file, mut observed) = sampler.measure(e, file, run)?;
     if let Some(source) = observed.stabilisation_failed.take() {
         // The packing the stabilisation started from, with its
         // fixed-box measures, kept as `<id>.failed.json` (the runner's
@@ -365,7 +359,7 @@ pub fn measure_jammed(
     Ok((file, observed.eigenvalue_table))
 }
 
-impl SampleVisitor<'_> {
+impl Sample<'_> {
     /// The packing file of `p` with `measures` (the configuration only when
     /// `write`).
     fn file<const D: usize, S: Shape<D>>(
@@ -385,7 +379,7 @@ impl SampleVisitor<'_> {
             particles: p.len(),
             seed: job.seed,
             protocol: e.protocol.name().to_string(),
-            settings: settings(e, self.point, job),
+            settings: job.settings.clone(),
             observables: observables_value(e),
             phi: measures.phi,
             energy_per_particle: measures.energy_per_particle,
@@ -459,7 +453,7 @@ impl SampleVisitor<'_> {
 
 /// What the protocol ended with, as stored.
 #[derive(Clone)]
-struct Protocolled {
+pub(crate) struct Protocolled {
     phi: f64,
     energy_per_particle: f64,
     fire_steps: u64,
@@ -473,7 +467,7 @@ struct Protocolled {
 }
 
 /// The observables of one packing.
-struct Observed {
+pub(crate) struct Observed {
     contacts: Option<JammingSummary>,
     pressure: Option<f64>,
     spectrum: Option<SpectrumMeasures>,
@@ -526,7 +520,7 @@ fn stabilisation_threshold<const D: usize, S: Shape<D>>(
 /// with the fixed box's `fixed_box` kept beside them. Rattlers by count
 /// (`threshold`).
 fn stabilised_moduli<const D: usize, S: Shape<D>>(
-    e: &Experiment,
+    protocol: &Protocol,
     scene: &mut Scene<D, S>,
     threshold: usize,
     fixed_box: jamkit_observe::moduli::Moduli,
@@ -541,7 +535,7 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
     let ensemble = moduli::Ensemble::Pressure(scene.pressure());
     let stabilise = moduli::StabiliseParams {
         moduli: params.clone(),
-        ..e.protocol.stabilise().cloned().unwrap_or_default()
+        ..protocol.stabilise().cloned().unwrap_or_default()
     };
     let mut s = jamkit_engine::stabilise::stabilise(
         scene,
@@ -590,6 +584,7 @@ fn stabilised_moduli<const D: usize, S: Shape<D>>(
 /// observable being measured (`Spectrum`, `Moduli`).
 fn observe<const D: usize, S: Shape<D>>(
     e: &Experiment,
+    protocol: &Protocol,
     scene: &mut Scene<D, S>,
 ) -> Result<Observed, (&'static str, jamkit_core::Error)> {
     let contacts = e
@@ -621,10 +616,11 @@ fn observe<const D: usize, S: Shape<D>>(
                 wall_s,
                 stabilisation: None,
             };
-            if e.protocol.shear_stabilised() {
+            if protocol.shear_stabilised() {
                 let threshold =
                     stabilisation_threshold(e, scene.packing()).map_err(|err| ("Moduli", err))?;
-                match stabilised_moduli(e, scene, threshold, moduli.clone(), params.clone()) {
+                match stabilised_moduli(protocol, scene, threshold, moduli.clone(), params.clone())
+                {
                     Ok(m) => Some(m),
                     // The fixed box's moduli, and the failure for the
                     // caller to keep (`Observed::stabilisation_failed`).
@@ -666,7 +662,7 @@ impl Observed {
 
     fn measures<const D: usize, S: Shape<D>>(
         &self,
-        e: &Experiment,
+        protocol: &Protocol,
         run: Protocolled,
         shape: &S,
     ) -> Measures {
@@ -674,7 +670,7 @@ impl Observed {
         let policy = shape.policy();
         let mut flags = policy.warnings;
         if let (Some(s), Protocol::Jam { .. }, true) =
-            (contacts, &e.protocol, policy.expects_isostatic)
+            (contacts, protocol, policy.expects_isostatic)
             && s.iso_margin < 1
         {
             flags.push(format!(
@@ -714,10 +710,12 @@ impl Observed {
 }
 
 /// Measure the observables of `e` on a saved packing (same settings,
-/// other observables); the protocol's own figures are kept, and the
-/// measuring time is added to `wall_s`.
+/// other observables), on the point's shape `on` or, `None`, the shape
+/// its file names; the protocol's own figures are kept, and the measuring
+/// time is added to `wall_s`.
 pub(crate) fn remeasure(
     e: &Experiment,
+    on: Option<&dyn Sampler>,
     file: PackingFile,
 ) -> Result<(PackingFile, Option<String>), ExperimentError> {
     let old = &file.measures;
@@ -732,7 +730,10 @@ pub(crate) fn remeasure(
         jam_point: old.jam_point.clone(),
     };
     let id = file.id.clone();
-    let (file, observed) = measure_saved(e, file, run)?;
+    let (file, observed) = match on {
+        Some(sampler) => sampler.measure(e, file, run)?,
+        None => measure_saved(e, file, run)?,
+    };
     // The saved packing stays as it was.
     if let Some(source) = observed.stabilisation_failed {
         return Err(ExperimentError::measuring(id, "Moduli", source));
@@ -741,12 +742,8 @@ pub(crate) fn remeasure(
 }
 
 /// The observables of `e` measured on the configuration of `file` as
-/// `reload` gives it back, with the protocol's figures `run` (the
-/// measuring time added to its `wall_s`): `file` with those measures,
-/// its rattler flags and observables, and what was observed. A sample's
-/// own measures and a re-measure of its saved packing both come from
-/// here, so they are the same bits. A failed stabilisation is left in
-/// `Observed::stabilisation_failed` for the caller.
+/// `reload` gives it back (the shape its file names), with the protocol's
+/// figures `run`: [`measure_scene`].
 fn measure_saved(
     e: &Experiment,
     file: PackingFile,
@@ -759,28 +756,51 @@ fn measure_saved(
     }
     impl PackingVisitor for Measure<'_> {
         type Output = Result<(PackingFile, Observed), ExperimentError>;
-        fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> Self::Output {
-            let (e, mut file, mut run) = (self.e, self.file, self.run);
-            let start = Instant::now();
-            let observed = observe(e, &mut scene).map_err(|(observable, source)| {
-                ExperimentError::measuring(file.id.clone(), observable, source)
-            })?;
-            run.wall_s += start.elapsed().as_secs_f64();
-            file.measures = observed.measures(e, run, &scene.packing().shape);
-            file.phi = file.measures.phi;
-            file.energy_per_particle = file.measures.energy_per_particle;
-            file.rattler = observed.rattler();
-            file.observables = observables_value(e);
-            Ok((file, observed))
+        fn visit<const D: usize, S: Shape<D>>(self, scene: Scene<D, S>) -> Self::Output {
+            measure_scene(self.e, &self.e.protocol, scene, self.file, self.run)
         }
     }
     let id = file.id.clone();
     reload(&file.clone(), Measure { e, file, run })
         .and_then(|r| r)
-        .map_err(|err| match err {
-            ExperimentError::Sample { .. } => err,
-            other => ExperimentError::invalid(format!("packing {id}"), "…", other.to_string()),
-        })
+        .map_err(|err| in_packing(&id, err))
+}
+
+/// The observables of `e` measured on `scene`, the configuration of
+/// `file` as its file records it, made by `protocol` (the grid point's:
+/// a scan may set its stabilisation), with the protocol's figures `run` (the
+/// measuring time added to its `wall_s`): `file` with those measures, its
+/// rattler flags and observables, and what was observed. A sample's own
+/// measures and a re-measure of its saved packing both come from here, so
+/// they are the same bits. A failed stabilisation is left in
+/// `Observed::stabilisation_failed` for the caller.
+fn measure_scene<const D: usize, S: Shape<D>>(
+    e: &Experiment,
+    protocol: &Protocol,
+    mut scene: Scene<D, S>,
+    mut file: PackingFile,
+    mut run: Protocolled,
+) -> Result<(PackingFile, Observed), ExperimentError> {
+    let start = Instant::now();
+    let observed = observe(e, protocol, &mut scene).map_err(|(observable, source)| {
+        ExperimentError::measuring(file.id.clone(), observable, source)
+    })?;
+    run.wall_s += start.elapsed().as_secs_f64();
+    file.measures = observed.measures(protocol, run, &scene.packing().shape);
+    file.phi = file.measures.phi;
+    file.energy_per_particle = file.measures.energy_per_particle;
+    file.rattler = observed.rattler();
+    file.observables = observables_value(e);
+    Ok((file, observed))
+}
+
+/// An error of the packing `id` that is not a sample's own, named as the
+/// packing's.
+fn in_packing(id: &str, err: ExperimentError) -> ExperimentError {
+    match err {
+        ExperimentError::Sample { .. } => err,
+        other => ExperimentError::invalid(format!("packing {id}"), "…", other.to_string()),
+    }
 }
 
 /// The spectrum of a jammed scene as stored, and the eigenvalue table if
