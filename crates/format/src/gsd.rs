@@ -105,8 +105,7 @@ pub struct Chunk {
 }
 
 impl Chunk {
-    /// `rows` of `M` numbers each, as `float32` (the conversion rounds to
-    /// nearest).
+    /// `values`, `m` to a row, as `float32` (each rounded to the nearest).
     pub fn f32(name: &str, m: u32, values: &[f64]) -> Self {
         debug_assert!(values.len() % m as usize == 0);
         let data = values
@@ -116,7 +115,7 @@ impl Chunk {
         Self::new(name, Kind::F32, m, values.len(), data)
     }
 
-    /// `M` numbers per row, as `float64`.
+    /// `values`, `m` to a row, as `float64`.
     pub fn f64(name: &str, m: u32, values: &[f64]) -> Self {
         let data = values.iter().flat_map(|v| v.to_le_bytes()).collect();
         Self::new(name, Kind::F64, m, values.len(), data)
