@@ -317,6 +317,56 @@ fn ellipsoids_are_ellipsoids_with_their_quaternion() {
     }
 }
 
+/// Sizes drawn from `Uniform`: every body its own size, so its own type,
+/// named by its size, each a `Sphere` of its diameter.
+#[test]
+fn uniform_sizes_give_one_type_per_body() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("uniform");
+    let f = run_and_export(
+        "experiments/quickstart.ron",
+        &dir,
+        &[
+            "particles=16",
+            "samples=1",
+            "sizes=Uniform(min: 0.5, max: 0.7)",
+        ],
+    );
+    let p = &packings(&dir)[0];
+    check_frame(&f, 0, p);
+    let radii = vec_of(&p["radii"]);
+    let shapes = shapes(&f, 0);
+    assert_eq!(shapes.len(), 16);
+    let typeid = unsigned(&f, 0, "particles/typeid");
+    for i in 0..16 {
+        let s = &shapes[typeid[i] as usize];
+        assert_eq!(s["type"], "Sphere");
+        assert_eq!(s["diameter"].as_f64().unwrap(), 2.0 * radii[i]);
+    }
+}
+
+/// A 4D packing is refused, naming its file, its dimension and what GSD
+/// holds, and nothing is written.
+#[test]
+fn a_4d_packing_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("d4");
+    common::small_quickstart(&run, 1, &["--set", "dim=4", "--set", "particles=64"]);
+    let target = tmp.path().join("d4.gsd");
+    let (code, _, err) = jamkit(&[
+        "export",
+        run.to_str().unwrap(),
+        "-o",
+        target.to_str().unwrap(),
+    ]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("sphere_d4_N64_s1.json") && err.contains("dim = 4: GSD holds 2D and 3D"),
+        "{err}"
+    );
+    assert!(!target.exists());
+}
+
 /// An output path that cannot be written: the message names it, and no
 /// file is left behind.
 #[test]
