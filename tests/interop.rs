@@ -1,8 +1,12 @@
-//! The field's tools and jamkit, both ways: `tests/interop/run.sh` installs ASE from PyPI into a venv under
-//! `target/` and runs `tests/interop/check.py`, which reads with
-//! `ase.io.read` the extended XYZ that `jamkit export` writes for a packing
-//! of every registered family in D = 2 and 3, from the family's example
-//! (N, box, positions to 1e-12, radii exactly), and runs
+//! The field's tools and jamkit, both ways: `tests/interop/run.sh` installs
+//! ASE and gsd from PyPI into a venv under `target/` and runs
+//! `tests/interop/check.py`, which reads with `ase.io.read` the extended
+//! XYZ that `jamkit export` writes for a packing of every registered family
+//! in D = 2 and 3, from the family's example (N, box, positions to 1e-12,
+//! radii exactly), reads with `gsd.hoomd` the GSD file it writes for each
+//! (N, box, positions and orientations to float32 rounding, each type
+//! shape of its family's kind: Sphere, Ellipsoid, SphereUnion, Polygon,
+//! Mesh), and runs
 //! `jamkit analyze` on sphere packings written by a small script as plain
 //! text (the run's contacts and rattlers must come back) and by
 //! `ase.io.write` (ASE's bodies and box must come back as ASE reads them;
@@ -21,7 +25,7 @@ use std::process::Command;
 mod common;
 
 #[test]
-fn ase_reads_our_exports_and_we_analyze_its_files() {
+fn ase_and_gsd_read_our_exports_and_we_analyze_ase_files() {
     let ci = std::env::var_os("CI").is_some_and(|v| !v.is_empty());
     let have_python = Command::new("python3")
         .args(["-c", "import venv"])
@@ -68,12 +72,16 @@ fn ase_reads_our_exports_and_we_analyze_its_files() {
     let text = String::from_utf8_lossy(&out.stdout);
     let err = String::from_utf8_lossy(&out.stderr);
     if !out.status.success() && !ci && err.contains("pip") {
-        eprintln!("interop test not run: could not install ASE\n{err}");
+        eprintln!("interop test not run: could not install ASE and gsd\n{err}");
         return;
     }
     assert!(out.status.success(), "{text}\n{err}");
     assert!(
         text.contains(&format!("ase read {runs} packings")),
+        "{text}\n{err}"
+    );
+    assert!(
+        text.contains(&format!("gsd read {runs} packings")),
         "{text}\n{err}"
     );
     assert!(

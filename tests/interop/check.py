@@ -1,10 +1,16 @@
-"""ASE against jamkit, both ways (called by tests/interop.rs via run.sh).
+"""ASE and gsd against jamkit, both ways (called by tests/interop.rs via run.sh).
 
 1. Every packing of WORK/runs/*/packings exported by `jamkit export` is read
    by ase.io.read: N, box and positions must equal the packing file's to
    1e-12 (per sphere for bodies made of spheres, whose centres the packing
    file lists under "spheres"), radii exactly.
-2. ASE writes a sphere packing (a jammed one of ours, as plain ASE Atoms
+2. Every packing exported as GSD is read by gsd.hoomd: N, dimensions,
+   box, positions (HOOMD's box [-L/2, L/2), the packing's modulo L) and
+   orientations (unit quaternions (w, x, y, z), up to sign) equal the
+   packing file's to float32 rounding, and each type shape parses as JSON
+   of the type its family's look asks for (Sphere, Ellipsoid,
+   SphereUnion, Polygon, Mesh).
+3. ASE writes a sphere packing (a jammed one of ours, as plain ASE Atoms
    with a radius array) as extended XYZ; `jamkit analyze` on it must give
    back the contacts and rattlers that jamkit's own run recorded.
 """
@@ -15,6 +21,7 @@ import subprocess
 import sys
 
 import ase.io
+import gsd.hoomd
 import numpy as np
 
 jamkit, work = sys.argv[1], sys.argv[2]
@@ -45,7 +52,58 @@ for path in sorted(glob.glob(os.path.join(work, "runs", "*", "packings", "*.json
 assert len(checked) >= 4, checked
 print("ase read", len(checked), "packings of", sorted(set(checked)))
 
-# 2. Files written by other code, analysed by jamkit.
+# 2. GSD, read by the gsd package.
+# The type shape each family's look gives.
+SHAPE = {"sphere": "Sphere", "ellipse": "Ellipsoid", "ellipsoid": "Ellipsoid",
+         "nmer": "SphereUnion", "fourier": "Polygon", "fourier_sum": "Polygon",
+         "lobed": "Polygon", "harmonic": "Mesh"}
+F32 = float(np.finfo(np.float32).eps)
+gsd_read, kinds = [], set()
+for path in sorted(glob.glob(os.path.join(work, "runs", "*", "packings", "*.json"))):
+    p = json.load(open(path))
+    out = path[:-5] + ".gsd"
+    subprocess.run([jamkit, "export", path, "-o", out], check=True, capture_output=True)
+    with gsd.hoomd.open(out, mode="r") as traj:
+        assert len(traj) == 1, (path, len(traj))
+        frame = traj[0]
+    dim, n, box = p["dim"], p["particles"], np.array(p["box"])
+    assert frame.particles.N == n and frame.configuration.dimensions == dim, path
+    want_box = np.zeros(6, dtype=np.float32)
+    want_box[:dim] = box
+    assert np.array_equal(frame.configuration.box, want_box), (path, frame.configuration.box)
+    pos = frame.particles.position.astype(float)
+    assert pos.shape == (n, 3), path
+    half = frame.configuration.box[:dim].astype(float) / 2
+    assert np.all(pos[:, :dim] >= -half) and np.all(pos[:, :dim] < half), path
+    assert np.all(pos[:, dim:] == 0), path
+    d = pos[:, :dim] + box / 2 - np.array(p["positions"])
+    d -= box * np.round(d / box)
+    assert np.max(np.abs(d)) <= F32 * np.max(box), (path, np.max(np.abs(d)))
+    q = frame.particles.orientation.astype(float)
+    for i, o in enumerate(p["orientations"] or [[]] * n):
+        if len(o) == 0:
+            want = np.array([1.0, 0, 0, 0])
+        elif len(o) == 1:
+            want = np.array([np.cos(o[0] / 2), 0, 0, np.sin(o[0] / 2)])
+        else:
+            want = np.array(o)
+        s = np.sign(np.dot(q[i], want)) or 1.0
+        assert np.max(np.abs(q[i] - s * want)) <= 2 * F32, (path, i, q[i], want)
+    assert np.array_equal(frame.particles.diameter, np.float32(2 * np.array(p["radii"]))), path
+    shapes = frame.particles.type_shapes
+    assert len(shapes) == len(frame.particles.types) == len(set(p["radii"])), path
+    for t, s in zip(frame.particles.types, shapes):
+        assert s["type"] == SHAPE[p["family"]], (path, t, s["type"])
+        kinds.add(s["type"])
+    for i in range(n):
+        name = frame.particles.types[frame.particles.typeid[i]]
+        assert float(name[1:]) == p["radii"][i], (path, i, name)
+    gsd_read.append(p["family"])
+assert len(gsd_read) == len(checked), (gsd_read, checked)
+assert {"Sphere", "Ellipsoid", "SphereUnion", "Polygon"} <= kinds, kinds
+print("gsd read", len(gsd_read), "packings with type shapes", sorted(kinds))
+
+# 3. Files written by other code, analysed by jamkit.
 spheres = sorted(glob.glob(os.path.join(work, "runs", "sphere*", "packings", "*.json")))
 assert spheres, "no sphere packing to write"
 for path in spheres:

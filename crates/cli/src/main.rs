@@ -96,13 +96,16 @@ enum Command {
         #[arg(short, long)]
         out: PathBuf,
     },
-    /// Write packings as extended XYZ (for OVITO and ASE): one packing file,
-    /// or every packing of a run directory as the frames of one file
-    /// (docs/reference/output-files.md, "Extended XYZ").
+    /// Write packings as extended XYZ (for OVITO and ASE) or, for an output
+    /// file ending in .gsd, as HOOMD-blue's GSD (for HOOMD-blue, OVITO and
+    /// the Python package gsd): one packing file, or every packing of a run
+    /// directory as the frames of one file
+    /// (docs/reference/export-formats.md).
     Export {
         /// A packing file (DIR/packings/<id>.json) or a run directory.
         path: PathBuf,
-        /// The .xyz file to write.
+        /// The file to write: FILE.gsd for GSD, any other name (FILE.xyz)
+        /// for extended XYZ.
         #[arg(short, long)]
         out: PathBuf,
     },
@@ -311,14 +314,29 @@ fn real_main() -> Result<()> {
     match cli.command {
         Command::Export { path, out } => {
             let files = packing_files(&path)?;
-            let mut text = String::new();
-            for f in &files {
-                let file = jamkit_format::PackingFile::load_checked(f)?;
-                let frame = jamkit_experiment::extxyz::frame(&file)
-                    .with_context(|| f.display().to_string())?;
-                text.push_str(&frame);
-            }
-            jamkit_format::write_atomic(&out, text.as_bytes())?;
+            let bytes = if out
+                .extension()
+                .is_some_and(|x| x.eq_ignore_ascii_case("gsd"))
+            {
+                let mut writer = jamkit_experiment::gsd::writer();
+                for (k, f) in files.iter().enumerate() {
+                    let file = jamkit_format::PackingFile::load_checked(f)?;
+                    let frame = jamkit_experiment::gsd::frame(&file, k as u64)
+                        .with_context(|| f.display().to_string())?;
+                    writer.frame(frame)?;
+                }
+                writer.to_bytes()?
+            } else {
+                let mut text = String::new();
+                for f in &files {
+                    let file = jamkit_format::PackingFile::load_checked(f)?;
+                    let frame = jamkit_experiment::extxyz::frame(&file)
+                        .with_context(|| f.display().to_string())?;
+                    text.push_str(&frame);
+                }
+                text.into_bytes()
+            };
+            jamkit_format::write_atomic(&out, &bytes)?;
             out!("{} frames in {}", files.len(), out.display());
             Ok(())
         }

@@ -18,6 +18,8 @@
 //!   and `gaps.csv`, written atomically;
 //! * [`analyze`]: a sphere packing from another code (extended XYZ or
 //!   `x y (z) r` text) measured as our own (`jamkit analyze`);
+//! * [`extxyz`], [`gsd`]: packings as extended XYZ and as HOOMD-blue's
+//!   GSD (`jamkit export`);
 //! * [`archive`]: a run's measures without the configurations, small
 //!   enough to commit (`jamkit archive`);
 //! * [`reload`]: a saved packing back as a typed scene (for the spectrum of
@@ -29,6 +31,7 @@ pub mod batchlog;
 pub mod error;
 pub mod extxyz;
 pub mod grid;
+pub mod gsd;
 pub mod lock;
 pub mod memory;
 pub mod merge;
