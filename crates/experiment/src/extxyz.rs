@@ -22,17 +22,21 @@
 
 use crate::error::ExperimentError;
 use crate::reload::{PackingVisitor, reload};
-use jamkit_core::{Shape, ShapeVisitor as SceneVisitor};
+use jamkit_core::Shape;
 use jamkit_engine::Scene;
 use jamkit_format::PackingFile;
 use std::fmt::Write;
 
-/// Contacts per body of the packing in `file` (`h < 0`).
-fn contacts_per_body(file: &PackingFile) -> Result<Vec<usize>, ExperimentError> {
+/// What the frame needs of the packing's shape: contacts per body
+/// (`h < 0`), and the semi-axes per unit size if its family's shape is an
+/// ellipse or ellipsoid ([`Look::ellipsoid_axes`](jamkit_core::Look::ellipsoid_axes)).
+fn contacts_and_axes(
+    file: &PackingFile,
+) -> Result<(Vec<usize>, Option<[f64; 3]>), ExperimentError> {
     struct Count;
     impl PackingVisitor for Count {
-        type Output = Vec<usize>;
-        fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> Vec<usize> {
+        type Output = (Vec<usize>, Option<[f64; 3]>);
+        fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) -> Self::Output {
             let mut count = vec![0; scene.packing().positions.len()];
             scene.for_each_contact(0.0, |i, j, _, c| {
                 if c.gap < 0.0 {
@@ -40,30 +44,10 @@ fn contacts_per_body(file: &PackingFile) -> Result<Vec<usize>, ExperimentError> 
                     count[j] += 1;
                 }
             });
-            count
+            (count, scene.packing().shape.look().ellipsoid_axes)
         }
     }
     reload(file, Count)
-}
-
-/// The registry's visitor that asks a shape for its ellipsoid semi-axes.
-struct AxesOf;
-
-impl SceneVisitor for AxesOf {
-    type Output = Option<[f64; 3]>;
-
-    fn visit<const D: usize, S: Shape<D>>(self, shape: S) -> Option<[f64; 3]> {
-        shape.look().ellipsoid_axes
-    }
-}
-
-/// The semi-axes per unit size of the packing's bodies, if its family's
-/// shape is an ellipse or ellipsoid ([`Look::ellipsoid_axes`](jamkit_core::Look::ellipsoid_axes)).
-fn ellipsoid_axes(file: &PackingFile) -> Option<[f64; 3]> {
-    let params = jamkit_registry::params_from_json(&file.params).ok()?;
-    jamkit_registry::dispatch(&file.family, file.dim, &params, AxesOf)
-        .ok()
-        .flatten()
 }
 
 /// One frame of extended XYZ for `file`.
@@ -83,14 +67,13 @@ pub fn frame(file: &PackingFile) -> Result<String, ExperimentError> {
             "extended XYZ holds 2D and 3D packings",
         ));
     }
-    let contacts = contacts_per_body(file)?;
+    let (contacts, semi_axes) = contacts_and_axes(file)?;
     let dim = file.dim;
     let planar = dim == 2 && file.orientations.first().is_some_and(|o| o.len() == 1);
     let quaternion = dim == 3 && file.orientations.first().is_some_and(|o| o.len() == 4);
     let rigid = !file.spheres.is_empty();
     // Semi-axes per unit size along the body axes, from the shape's
     // optional ability (ellipses (a, b, b), ellipsoids their ratios ξ).
-    let semi_axes = ellipsoid_axes(file);
     let rattlers = file.rattler.len() == file.particles;
 
     let mut props = String::from("species:S:1:pos:R:3:radius:R:1");
