@@ -1,11 +1,14 @@
-//! The registry: every shape family jamkit knows, in one readable list
-//! (its own crate, so that drawing a packing does not pull in the runner).
+//! The registry: every shape family jamkit knows (its own crate, so that
+//! drawing a packing does not pull in the runner).
 //!
 //! A family registers itself once, in its own crate, by implementing
 //! [`jamkit_core::Family`]: its info, its typed parameters, and how they
 //! become a shape in a dimension (with the degenerate cases, `Δ = 0` → the
-//! disk). Adding a family to jamkit is one line in the [`families!`] list
-//! below (plus the crate in the manifests); the runner, `jamkit draw`,
+//! disk); its manifest names the types under
+//! `[package.metadata.jamkit] families`. Adding a family crate to jamkit is
+//! one line, its dependency in this crate's `Cargo.toml`: the build script
+//! reads the family types from the crate's manifest into the `families!`
+//! list ([`FAMILIES`] is the list it makes). The runner, `jamkit draw`,
 //! `draw-shape`, `report` and `jamkit shapes` all go through [`dispatch`],
 //! the one place where a family name from a file becomes a typed shape `S`
 //! in a const dimension `D`, after which everything is statically
@@ -49,16 +52,9 @@ macro_rules! families {
     };
 }
 
-families![
-    jamkit_sphere::SphereFamily,
-    jamkit_fourier::FourierFamily,
-    jamkit_fourier::FourierSumFamily,
-    jamkit_lobed::LobedFamily,
-    jamkit_nmer::NmerFamily,
-    jamkit_ellipse::EllipseFamily,
-    jamkit_harmonic::HarmonicFamily,
-    jamkit_ellipsoid::EllipsoidFamily,
-];
+// The families of the crates this crate depends on under `shapes/`, as
+// their manifests list them (build.rs).
+include!(concat!(env!("OUT_DIR"), "/families.rs"));
 
 /// Dimensions the engine is compiled for (families with `Dims::Any`).
 pub const COMPILED_DIMS: &[usize] = &[2, 3, 4];
