@@ -37,6 +37,7 @@ pub mod memory;
 pub mod merge;
 mod outcome;
 pub mod overrides;
+mod paper;
 pub mod plan;
 pub mod reload;
 pub mod runner;

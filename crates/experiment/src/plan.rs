@@ -23,9 +23,10 @@ use std::sync::Arc;
 
 /// An experiment ready to run: its points, each with its shape, and its
 /// jobs, in grid order.
-pub struct Plan<'e> {
-    /// The experiment, validated.
-    pub experiment: &'e Experiment,
+pub struct Plan {
+    /// The experiment, validated, on its path (`paper_path: true` written
+    /// into the minimiser and the protocol), as `experiment.ron` records it.
+    pub experiment: Experiment,
     /// Its grid points, the family's minimiser defaults filled in.
     pub points: Vec<Point>,
     /// Every packing to make (or, after [`Plan::keep_part`], this part's).
@@ -34,13 +35,14 @@ pub struct Plan<'e> {
     samplers: Vec<Box<dyn Sampler>>,
 }
 
-impl<'e> Plan<'e> {
+impl Plan {
     /// The plan of `experiment`; a bad field, parameter or dimension, an
     /// observable the family cannot give, or a dense eigen-solve larger
     /// than the machine's memory is an error naming it.
-    pub fn new(experiment: &'e Experiment) -> Result<Self, ExperimentError> {
+    pub fn new(experiment: &Experiment) -> Result<Self, ExperimentError> {
         experiment.validate()?;
-        let mut points = grid::points(experiment)?;
+        let experiment = crate::paper::apply(experiment.clone());
+        let mut points = grid::points(&experiment)?;
         // The spectrum and the moduli both need the Hessian.
         let hessian = if experiment.spectrum().is_some() {
             Some("Spectrum")
@@ -59,7 +61,7 @@ impl<'e> Plan<'e> {
             };
             let built = registry::dispatch(&experiment.family, point.dim, &point.params, build)??;
             memory::check_point(
-                experiment,
+                &experiment,
                 &point.protocol,
                 (point.dim, point.particles, built.rot_dof),
                 machine,
@@ -67,7 +69,7 @@ impl<'e> Plan<'e> {
             point.minimizer = built.minimizer;
             samplers.push(built.sampler);
         }
-        let jobs = grid::jobs(experiment, &points);
+        let jobs = grid::jobs(&experiment, &points);
         Ok(Self {
             experiment,
             points,
@@ -100,7 +102,7 @@ impl<'e> Plan<'e> {
         job: &Job,
         progress: Option<Arc<Progress>>,
     ) -> Result<Jammed, ExperimentError> {
-        self.samplers[job.point].jam(self.experiment, self.point(job), job, progress)
+        self.samplers[job.point].jam(&self.experiment, self.point(job), job, progress)
     }
 
     /// The experiment's observables measured on a jammed packing (as its
@@ -110,7 +112,7 @@ impl<'e> Plan<'e> {
         jammed: Jammed,
     ) -> Result<(PackingFile, Option<String>), ExperimentError> {
         sample::measure_jammed(
-            self.experiment,
+            &self.experiment,
             self.samplers[jammed.point()].as_ref(),
             jammed,
         )

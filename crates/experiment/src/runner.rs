@@ -65,7 +65,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
 
 /// Run the jobs of `plan` into `options.out`.
 pub fn execute(plan: &Plan, options: &RunOptions) -> Result<RunReport, ExperimentError> {
-    let (experiment, jobs) = (plan.experiment, &plan.jobs);
+    let (experiment, jobs) = (&plan.experiment, &plan.jobs);
     let packing_dir = options.out.join("packings");
     refuse_other_settings(jobs, &packing_dir)?;
     std::fs::create_dir_all(&packing_dir).map_err(|e| ExperimentError::io(&packing_dir, e))?;

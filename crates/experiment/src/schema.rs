@@ -113,6 +113,11 @@ pub struct Experiment {
     /// What to write.
     #[serde(default)]
     pub output: OutputParams,
+    /// `true`: the paper's path, bit for bit (FIRE all the way with plain
+    /// masses and no L-BFGS, `Σ (∂V/∂q)²`, and the plain bisection),
+    /// whatever jamkit's defaults (`paper` module).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub paper_path: bool,
 }
 
 fn default_dim() -> OneOrMany<usize> {
@@ -815,6 +820,7 @@ impl Experiment {
         }
         self.sizes.validate()?;
         self.minimizer.validate("minimizer")?;
+        crate::paper::check(self)?;
         self.validate_protocol()?;
         self.scanned()?;
         self.validate_observables()?;
