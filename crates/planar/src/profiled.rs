@@ -149,6 +149,22 @@ pub trait NearDiskProfile: Clone + Debug + PartialEq + Send + Sync + 'static {
     }
 }
 
+/// How [`Profiled::exact_solve`] finds the exact gap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExactSolve {
+    /// The joint iteration ([`gap2d::exact_joint`]) from first-order
+    /// guesses of the normal and the support points, and the nested solve
+    /// where it fails: what contacts and Hessians use.
+    Joint,
+    /// The joint iteration alone (`None` where it fails), for tests.
+    JointAlone,
+    /// The nested solve alone ([`gap2d::exact_unit`] on
+    /// [`gap2d::polar_support_unit`] supports from the line of centres), a
+    /// check: it agrees with the joint iteration to the solvers' tolerance,
+    /// not to the bit.
+    Nested,
+}
+
 /// A near-disk of profile `P` and orientation type `O`: `Δ`, the moment of
 /// inertia, the gap model, and the area constants computed once.
 #[derive(Clone, Debug, PartialEq)]
@@ -387,10 +403,19 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         )
     }
 
-    /// The exact gap (see [`gap2d::exact_unit`]), or `None` when it
-    /// certainly exceeds `max_gap`. In the body frame the outline is
-    /// `R(φ)/R⁰ = 1 + Δ P(−φ)`, and orientation `θ` turns it
-    /// counter-clockwise by `θ`.
+    /// The exact gap (see [`gap2d::exact_joint`]), or `None` when it
+    /// certainly exceeds `max_gap`: [`Profiled::exact_solve`] by the joint
+    /// iteration.
+    #[inline]
+    fn exact_gap(&self, pair: &Pair<2, O>, max_gap: f64) -> Option<gap2d::ExactGap> {
+        self.exact_solve(pair, max_gap, ExactSolve::Joint)
+    }
+
+    /// The exact gap of a pair, or `None` when it certainly exceeds
+    /// `max_gap` (or, with [`ExactSolve::JointAlone`], where the joint
+    /// iteration fails), by the solver `solve` ([`ExactSolve`]). In
+    /// the body frame the outline is `R(φ)/R⁰ = 1 + Δ P(−φ)`, and
+    /// orientation `θ` turns it counter-clockwise by `θ`.
     ///
     /// Two uses of the first-order gap `h₁` (cheap):
     /// * a bound: `h ≥ h₁ − (s_i + s_j)`, with `s = R⁰ Δ² P'²_max / (1 − Δ P_max)`
@@ -400,7 +425,15 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     ///   iteration;
     /// * the first guess of the normal, `ψ₀ = θ_ij + Δ(R_i⁰P_i' + R_j⁰P_j')/r`,
     ///   exact to `O(Δ²)`.
-    fn exact_gap(&self, pair: &Pair<2, O>, max_gap: f64) -> Option<gap2d::ExactGap> {
+    ///
+    /// Called only for a shape whose gap model is `Exact` (else the
+    /// profile's third derivative may be missing).
+    pub fn exact_solve(
+        &self,
+        pair: &Pair<2, O>,
+        max_gap: f64,
+        solve: ExactSolve,
+    ) -> Option<gap2d::ExactGap> {
         let (size_i, size_j, r_ij) = (pair.size_i, pair.size_j, &pair.r_ij);
         let r = r_ij.norm();
         let first = self.first_order(pair);
@@ -409,7 +442,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         }
         let w0 = if r > 0.0 {
             let u = (r_ij[0] / r, r_ij[1] / r);
-            turn_unit(u, -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r)
+            gap2d::turn_step(u, -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r)
         } else {
             (1.0, 0.0)
         };
@@ -419,6 +452,27 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             let [f, df, ddf, _] = self.jet3((p.0, -p.1));
             (1.0 + d * f, -d * df, d * ddf)
         };
+        let (z_i, z_j) = (pair.o_i.unit(), pair.o_j.unit());
+        if solve != ExactSolve::Nested {
+            let sized = |size: f64| {
+                move |p: Unit| {
+                    let (r, r1, r2) = outline(p);
+                    (size * r, size * r1, size * r2)
+                }
+            };
+            // From each support point's first-order offset from its
+            // direction, δ = atan(R'/R) ≈ R'/R⁰ = ∂h₁/∂θ / R⁰ (error O(Δ²)).
+            let (e_i, e_j) = (
+                gap2d::turn_step(cmul(w0, (z_i.0, -z_i.1)), first.grad_rot_i[0] / size_i),
+                gap2d::turn_step(cmul(w0, (-z_j.0, z_j.1)), first.grad_rot_j[0] / size_j),
+            );
+            let joint =
+                gap2d::exact_joint(r_ij, w0, z_i, e_i, sized(size_i), z_j, e_j, sized(size_j));
+            if joint.is_some() || solve == ExactSolve::JointAlone {
+                return joint;
+            }
+            gap2d::count_joint_fallback();
+        }
         // Each body's support search starts where its previous one ended,
         // turned by the change of direction: after the first Newton step on
         // ψ the support point moves by ~1e-4 rad and one inner step suffices.
@@ -445,9 +499,9 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         Some(gap2d::exact_unit(
             r_ij,
             w0,
-            pair.o_i.unit(),
+            z_i,
             support(size_i),
-            pair.o_j.unit(),
+            z_j,
             support(size_j),
         ))
     }
