@@ -391,3 +391,44 @@ fn joint_iteration_agrees_with_the_nested_solve() {
         assert!(pairs > 32, "only {pairs} pairs");
     }
 }
+
+/// Overlapping pairs down to coincident centres (r from 0 to 1.05 × the
+/// sum of the sizes), where `g(ψ)` may have several maxima: the contacts'
+/// solve (the joint iteration where its reach admits the pair, the nested
+/// solve elsewhere) finds the nested solve's maximum, to 1e-14 in the gap.
+/// Δ = 0.3 (n = 2) and the n = 5 mode at Δ = 0.15, where the joint
+/// iteration run on every pair would stop at another maximum on some
+/// pairs below r ≈ 0.11 × the sizes.
+#[test]
+fn the_contacts_solve_finds_the_nested_maximum_under_deep_overlaps() {
+    use jamkit_planar::profiled::ExactSolve;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(8);
+    for s in [
+        fourier(2, 0.3, GapModel::Exact),
+        fourier(5, 0.15, GapModel::Exact),
+    ] {
+        let p = s.profiled();
+        for _ in 0..20_000 {
+            let (ti, tj, a) = (
+                rng.random::<f64>() * 2.0 * PI,
+                rng.random::<f64>() * 2.0 * PI,
+                rng.random::<f64>() * 2.0 * PI,
+            );
+            let r = 1.2 * 1.05 * rng.random::<f64>();
+            let d = Vector::<2>::new(a.cos(), a.sin()) * r;
+            let pair = Pair::new(0.5, Angle::new(ti), 0.7, Angle::new(tj), d);
+            let nested = p.exact_solve(&pair, 0.0, ExactSolve::Nested);
+            let joint = p.exact_solve(&pair, 0.0, ExactSolve::Joint);
+            match (nested, joint) {
+                (Some(x), Some(y)) => {
+                    assert!(
+                        (x.gap - y.gap).abs() < 1e-14,
+                        "r = {r}: {y:?} against {x:?}"
+                    )
+                }
+                (None, None) => {}
+                other => panic!("one solve skipped the pair: {other:?}"),
+            }
+        }
+    }
+}

@@ -156,7 +156,8 @@ pub enum ExactSolve {
     /// guesses of the normal and the support points, and the nested solve
     /// where it fails: what contacts and Hessians use.
     Joint,
-    /// The joint iteration alone (`None` where it fails), for tests.
+    /// The joint iteration alone (`None` where it fails or is not run:
+    /// pairs closer than its reach), for tests.
     JointAlone,
     /// The nested solve alone ([`gap2d::exact_unit`] on
     /// [`gap2d::polar_support_unit`] supports from the line of centres), a
@@ -179,6 +180,10 @@ pub struct Profiled<P, O = Angle<1>> {
     /// Per unit size, how far the exact gap can fall below the first-order
     /// one (`Δ² P'²_max / (1 − Δ P_max)`, ∞ where that bound is not proven).
     exact_slack: f64,
+    /// Per unit size, the centre distance above which the joint iteration
+    /// runs: `2 max(max(H − ρ), max R − min R)` over the outline
+    /// ([`Profiled::exact_solve`]).
+    joint_reach: f64,
     orientation: PhantomData<O>,
 }
 
@@ -226,6 +231,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             moments,
             gap: GapModel::FirstOrder,
             exact_slack: f64::INFINITY,
+            joint_reach: f64::INFINITY,
             orientation: PhantomData,
         };
         let min_r = shape.min_relative_radius();
@@ -273,8 +279,28 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             Some(df_max) if d * f_max < 0.25 => d * d * df_max * df_max / (1.0 - d * f_max),
             _ => f64::INFINITY,
         };
+        self.joint_reach = self.joint_reach();
         self.gap = gap;
         Ok(self)
+    }
+
+    /// `2 max(c, s)` per unit size, with `c = max(H − ρ)` (how far below
+    /// `−H` the support function's `H''` = ρ − H can reach) and
+    /// `s = Δ (max P − min P)` (the spread of `R`), on 8192 points of the
+    /// outline (support point `R(φ)`, normal angle `φ − atan(R'/R)`).
+    fn joint_reach(&self) -> f64 {
+        let d = self.delta;
+        let c = (0..8192)
+            .map(|k| {
+                let (sin, cos) = (2.0 * PI * k as f64 / 8192.0).sin_cos();
+                let (p, dp) = self.profile.value_slope(cos, sin);
+                let (r, dr, ddr) = (1.0 + d * p, d * dp, d * self.profile.curvature(cos, sin));
+                let q = r * r + dr * dr;
+                let rho = q * q.sqrt() / (r * r + 2.0 * dr * dr - r * ddr);
+                r * r / q.sqrt() - rho
+            })
+            .fold(0.0, f64::max);
+        2.0 * c.max(d * (self.range.1 - self.range.0))
     }
 
     /// The gap model.
@@ -453,7 +479,17 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             (1.0 + d * f, -d * df, d * ddf)
         };
         let (z_i, z_j) = (pair.o_i.unit(), pair.o_j.unit());
-        if solve != ExactSolve::Nested {
+        // The joint iteration only where it finds the nested solve's
+        // optimum: with `r > 2 Σ R⁰ max(c, s)` ([`Profiled::joint_reach`]),
+        // `g'' = −r cos(ψ − θ_ij) − H_i'' − H_j'' < 0` wherever
+        // `cos(ψ − θ_ij) ≥ 1/2`, and `g` there exceeds every value outside
+        // (`≤ r/2 − Σ R⁰ min R`): one maximum in that cone, the global one,
+        // which the nested solve's ascent from `ψ₀` reaches. A joint result
+        // outside the cone goes to the nested solve.
+        if solve == ExactSolve::JointAlone && r <= self.joint_reach * (size_i + size_j) {
+            return None;
+        }
+        if solve != ExactSolve::Nested && r > self.joint_reach * (size_i + size_j) {
             let sized = |size: f64| {
                 move |p: Unit| {
                     let (r, r1, r2) = outline(p);
@@ -467,7 +503,8 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
                 gap2d::turn_step(cmul(w0, (-z_j.0, z_j.1)), first.grad_rot_j[0] / size_j),
             );
             let joint =
-                gap2d::exact_joint(r_ij, w0, z_i, e_i, sized(size_i), z_j, e_j, sized(size_j));
+                gap2d::exact_joint(r_ij, w0, z_i, e_i, sized(size_i), z_j, e_j, sized(size_j))
+                    .filter(|e| e.normal.0 * r_ij[0] + e.normal.1 * r_ij[1] >= 0.5 * r);
             if joint.is_some() || solve == ExactSolve::JointAlone {
                 return joint;
             }
