@@ -466,11 +466,15 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         if first.gap - self.exact_slack * (size_i + size_j) > max_gap {
             return None;
         }
-        let w0 = if r > 0.0 {
-            let u = (r_ij[0] / r, r_ij[1] / r);
-            gap2d::turn_step(u, -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r)
+        // ψ₀ as the turn `dψ` of the line of centres `u`: by `turn_step` for
+        // the joint iteration, by `turn_unit` for the nested solve.
+        let (u, dpsi) = if r > 0.0 {
+            (
+                (r_ij[0] / r, r_ij[1] / r),
+                -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r,
+            )
         } else {
-            (1.0, 0.0)
+            ((1.0, 0.0), 0.0)
         };
         let d = self.delta;
         // R(φ)/R⁰ = 1 + Δ P(−φ) at p = e^{iφ}: e^{−iφ} = p̄.
@@ -496,6 +500,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
                     (size * r, size * r1, size * r2)
                 }
             };
+            let w0 = gap2d::turn_step(u, dpsi);
             // From each support point's first-order offset from its
             // direction, δ = atan(R'/R) ≈ R'/R⁰ = ∂h₁/∂θ / R⁰ (error O(Δ²)).
             let (e_i, e_j) = (
@@ -535,7 +540,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         };
         Some(gap2d::exact_unit(
             r_ij,
-            w0,
+            turn_unit(u, dpsi),
             z_i,
             support(size_i),
             z_j,
