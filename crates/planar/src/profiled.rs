@@ -149,6 +149,23 @@ pub trait NearDiskProfile: Clone + Debug + PartialEq + Send + Sync + 'static {
     }
 }
 
+/// How [`Profiled::exact_solve`] finds the exact gap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExactSolve {
+    /// The joint iteration ([`gap2d::exact_joint`]) from first-order
+    /// guesses of the normal and the support points, and the nested solve
+    /// where it fails: what contacts and Hessians use.
+    Joint,
+    /// The joint iteration alone (`None` where it fails or is not run:
+    /// pairs closer than its reach), for tests.
+    JointAlone,
+    /// The nested solve alone ([`gap2d::exact_unit`] on
+    /// [`gap2d::polar_support_unit`] supports from the line of centres), a
+    /// check: it agrees with the joint iteration to the solvers' tolerance,
+    /// not to the bit.
+    Nested,
+}
+
 /// A near-disk of profile `P` and orientation type `O`: `Δ`, the moment of
 /// inertia, the gap model, and the area constants computed once.
 #[derive(Clone, Debug, PartialEq)]
@@ -163,6 +180,10 @@ pub struct Profiled<P, O = Angle<1>> {
     /// Per unit size, how far the exact gap can fall below the first-order
     /// one (`Δ² P'²_max / (1 − Δ P_max)`, ∞ where that bound is not proven).
     exact_slack: f64,
+    /// Per unit size, the centre distance above which the joint iteration
+    /// runs: `2 max(max(H − ρ), max R − min R)` over the outline
+    /// ([`Profiled::exact_solve`]).
+    joint_reach: f64,
     orientation: PhantomData<O>,
 }
 
@@ -210,6 +231,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             moments,
             gap: GapModel::FirstOrder,
             exact_slack: f64::INFINITY,
+            joint_reach: f64::INFINITY,
             orientation: PhantomData,
         };
         let min_r = shape.min_relative_radius();
@@ -257,8 +279,28 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             Some(df_max) if d * f_max < 0.25 => d * d * df_max * df_max / (1.0 - d * f_max),
             _ => f64::INFINITY,
         };
+        self.joint_reach = self.joint_reach();
         self.gap = gap;
         Ok(self)
+    }
+
+    /// `2 max(c, s)` per unit size, with `c = max(H − ρ)` (how far below
+    /// `−H` the support function's `H''` = ρ − H can reach) and
+    /// `s = Δ (max P − min P)` (the spread of `R`), on 8192 points of the
+    /// outline (support point `R(φ)`, normal angle `φ − atan(R'/R)`).
+    fn joint_reach(&self) -> f64 {
+        let d = self.delta;
+        let c = (0..8192)
+            .map(|k| {
+                let (sin, cos) = (2.0 * PI * k as f64 / 8192.0).sin_cos();
+                let (p, dp) = self.profile.value_slope(cos, sin);
+                let (r, dr, ddr) = (1.0 + d * p, d * dp, d * self.profile.curvature(cos, sin));
+                let q = r * r + dr * dr;
+                let rho = q * q.sqrt() / (r * r + 2.0 * dr * dr - r * ddr);
+                r * r / q.sqrt() - rho
+            })
+            .fold(0.0, f64::max);
+        2.0 * c.max(d * (self.range.1 - self.range.0))
     }
 
     /// The gap model.
@@ -387,10 +429,19 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         )
     }
 
-    /// The exact gap (see [`gap2d::exact_unit`]), or `None` when it
-    /// certainly exceeds `max_gap`. In the body frame the outline is
-    /// `R(φ)/R⁰ = 1 + Δ P(−φ)`, and orientation `θ` turns it
-    /// counter-clockwise by `θ`.
+    /// The exact gap (see [`gap2d::exact_joint`]), or `None` when it
+    /// certainly exceeds `max_gap`: [`Profiled::exact_solve`] by the joint
+    /// iteration.
+    #[inline]
+    fn exact_gap(&self, pair: &Pair<2, O>, max_gap: f64) -> Option<gap2d::ExactGap> {
+        self.exact_solve(pair, max_gap, ExactSolve::Joint)
+    }
+
+    /// The exact gap of a pair, or `None` when it certainly exceeds
+    /// `max_gap` (or, with [`ExactSolve::JointAlone`], where the joint
+    /// iteration fails), by the solver `solve` ([`ExactSolve`]). In
+    /// the body frame the outline is `R(φ)/R⁰ = 1 + Δ P(−φ)`, and
+    /// orientation `θ` turns it counter-clockwise by `θ`.
     ///
     /// Two uses of the first-order gap `h₁` (cheap):
     /// * a bound: `h ≥ h₁ − (s_i + s_j)`, with `s = R⁰ Δ² P'²_max / (1 − Δ P_max)`
@@ -400,18 +451,30 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     ///   iteration;
     /// * the first guess of the normal, `ψ₀ = θ_ij + Δ(R_i⁰P_i' + R_j⁰P_j')/r`,
     ///   exact to `O(Δ²)`.
-    fn exact_gap(&self, pair: &Pair<2, O>, max_gap: f64) -> Option<gap2d::ExactGap> {
+    ///
+    /// Called only for a shape whose gap model is `Exact` (else the
+    /// profile's third derivative may be missing).
+    pub fn exact_solve(
+        &self,
+        pair: &Pair<2, O>,
+        max_gap: f64,
+        solve: ExactSolve,
+    ) -> Option<gap2d::ExactGap> {
         let (size_i, size_j, r_ij) = (pair.size_i, pair.size_j, &pair.r_ij);
         let r = r_ij.norm();
         let first = self.first_order(pair);
         if first.gap - self.exact_slack * (size_i + size_j) > max_gap {
             return None;
         }
-        let w0 = if r > 0.0 {
-            let u = (r_ij[0] / r, r_ij[1] / r);
-            turn_unit(u, -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r)
+        // ψ₀ as the turn `dψ` of the line of centres `u`: by `turn_step` for
+        // the joint iteration, by `turn_unit` for the nested solve.
+        let (u, dpsi) = if r > 0.0 {
+            (
+                (r_ij[0] / r, r_ij[1] / r),
+                -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r,
+            )
         } else {
-            (1.0, 0.0)
+            ((1.0, 0.0), 0.0)
         };
         let d = self.delta;
         // R(φ)/R⁰ = 1 + Δ P(−φ) at p = e^{iφ}: e^{−iφ} = p̄.
@@ -419,6 +482,39 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             let [f, df, ddf, _] = self.jet3((p.0, -p.1));
             (1.0 + d * f, -d * df, d * ddf)
         };
+        let (z_i, z_j) = (pair.o_i.unit(), pair.o_j.unit());
+        // The joint iteration only where it finds the nested solve's
+        // optimum: with `r > 2 Σ R⁰ max(c, s)` ([`Profiled::joint_reach`]),
+        // `g'' = −r cos(ψ − θ_ij) − H_i'' − H_j'' < 0` wherever
+        // `cos(ψ − θ_ij) ≥ 1/2`, and `g` there exceeds every value outside
+        // (`≤ r/2 − Σ R⁰ min R`): one maximum in that cone, the global one,
+        // which the nested solve's ascent from `ψ₀` reaches. A joint result
+        // outside the cone goes to the nested solve.
+        if solve == ExactSolve::JointAlone && r <= self.joint_reach * (size_i + size_j) {
+            return None;
+        }
+        if solve != ExactSolve::Nested && r > self.joint_reach * (size_i + size_j) {
+            let sized = |size: f64| {
+                move |p: Unit| {
+                    let (r, r1, r2) = outline(p);
+                    (size * r, size * r1, size * r2)
+                }
+            };
+            let w0 = gap2d::turn_step(u, dpsi);
+            // From each support point's first-order offset from its
+            // direction, δ = atan(R'/R) ≈ R'/R⁰ = ∂h₁/∂θ / R⁰ (error O(Δ²)).
+            let (e_i, e_j) = (
+                gap2d::turn_step(cmul(w0, (z_i.0, -z_i.1)), first.grad_rot_i[0] / size_i),
+                gap2d::turn_step(cmul(w0, (-z_j.0, z_j.1)), first.grad_rot_j[0] / size_j),
+            );
+            let joint =
+                gap2d::exact_joint(r_ij, w0, z_i, e_i, sized(size_i), z_j, e_j, sized(size_j))
+                    .filter(|e| e.normal.0 * r_ij[0] + e.normal.1 * r_ij[1] >= 0.5 * r);
+            if joint.is_some() || solve == ExactSolve::JointAlone {
+                return joint;
+            }
+            gap2d::count_joint_fallback();
+        }
         // Each body's support search starts where its previous one ended,
         // turned by the change of direction: after the first Newton step on
         // ψ the support point moves by ~1e-4 rad and one inner step suffices.
@@ -444,10 +540,10 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         };
         Some(gap2d::exact_unit(
             r_ij,
-            w0,
-            pair.o_i.unit(),
+            turn_unit(u, dpsi),
+            z_i,
             support(size_i),
-            pair.o_j.unit(),
+            z_j,
             support(size_j),
         ))
     }
