@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// How to run.
 #[derive(Clone, Debug)]
@@ -52,10 +53,35 @@ pub struct RunReport {
     /// Packings another process was making (their lock was held): left to
     /// it; a later run gathers them. No tables are written while any is.
     pub elsewhere: Vec<String>,
+    /// Samples not started because [`Hooks::stop`] was set: a rerun makes
+    /// them. No tables but `results.csv` are written while any is.
+    pub stopped: Vec<String>,
+}
+
+/// What a caller watching a run (the Python module) may ask of it.
+#[derive(Clone, Copy, Default)]
+pub struct Hooks<'a> {
+    /// Once set, samples not yet started are left unmade
+    /// ([`RunReport::stopped`]); a sample under way finishes and is saved.
+    pub stop: Option<&'a AtomicBool>,
+    /// Called as each sample ends, made, read back or failed, from the
+    /// thread that ran it, with its id; not called for samples left to
+    /// another process or stopped.
+    #[allow(clippy::type_complexity)]
+    pub finished: Option<&'a (dyn Fn(&str, Result<&PackingFile, &ExperimentError>) + Sync)>,
 }
 
 /// Run an experiment into `options.out`.
 pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, ExperimentError> {
+    run_with(experiment, options, Hooks::default())
+}
+
+/// [`run`], watched by `hooks`.
+pub fn run_with(
+    experiment: &Experiment,
+    options: &RunOptions,
+    hooks: Hooks<'_>,
+) -> Result<RunReport, ExperimentError> {
     experiment.validate()?;
     let points = grid::points(experiment)?;
     let mut jobs = grid::jobs(experiment, &points);
@@ -169,6 +195,9 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         Ok(Outcome::Done(Box::new(file), reused))
     };
     let work = |job: &Job| -> Result<Outcome, ExperimentError> {
+        if hooks.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+            return Ok(Outcome::Stopped);
+        }
         let made = make(job).and_then(|outcome| {
             if let Outcome::Done(file, _) = &outcome {
                 table_so_far(job, file)?;
@@ -176,6 +205,13 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
             Ok(outcome)
         });
         log.finish(&job.id, &made);
+        if let Some(finished) = hooks.finished {
+            match &made {
+                Ok(Outcome::Done(file, _)) => finished(&job.id, Ok(file)),
+                Err(e) => finished(&job.id, Err(e)),
+                Ok(_) => {}
+            }
+        }
         made
     };
     let results: Vec<Result<Outcome, ExperimentError>> = std::thread::scope(|s| {
@@ -196,6 +232,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
     let mut packings = Vec::new();
     let mut failures = Vec::new();
     let mut elsewhere = Vec::new();
+    let mut stopped = Vec::new();
     let mut reused = 0;
     for (r, job) in results.into_iter().zip(&jobs) {
         match r {
@@ -204,18 +241,20 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
                 packings.push(*f);
             }
             Ok(Outcome::Elsewhere(_)) => elsewhere.push(job.id.clone()),
+            Ok(Outcome::Stopped) => stopped.push(job.id.clone()),
             Err(e) => failures.push(e),
         }
     }
     let groups = group_by_point(experiment, &points, &jobs, &packings);
     let summaries = format::summarize_points(&groups);
-    if options.shard.is_some() || !elsewhere.is_empty() {
+    if options.shard.is_some() || !elsewhere.is_empty() || !stopped.is_empty() {
         return Ok(RunReport {
             packings,
             reused,
             failures,
             summaries,
             elsewhere,
+            stopped,
         });
     }
     write_tables(experiment, &packings, &groups, &options.out)?;
@@ -225,6 +264,7 @@ pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, E
         failures,
         summaries,
         elsewhere,
+        stopped,
     })
 }
 

@@ -152,7 +152,6 @@ impl SceneVisitor for SampleVisitor<'_> {
         let (e, job) = (self.experiment, self.job);
         let sample_err = |source| ExperimentError::sample(job.id.clone(), source);
         let start = Instant::now();
-        let minimizer = self.point.minimizer.clone();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(job.seed);
         let sizes = e.sizes.sample(self.point.particles, &mut rng);
         let min_reach = sizes
@@ -162,7 +161,23 @@ impl SceneVisitor for SampleVisitor<'_> {
         let protocol = &self.point.protocol;
         let packing = Packing::<D, S>::random(shape, sizes, protocol.phi_start(), &mut rng)
             .map_err(sample_err)?;
-        let mut scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
+        let scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
+        self.protocol(scene, start)
+    }
+}
+
+impl SampleVisitor<'_> {
+    /// The protocol of the sample's point from the configuration of
+    /// `scene` (a random start, or a packing given by the caller), `start`
+    /// the sample's start time.
+    fn protocol<const D: usize, S: Shape<D>>(
+        &self,
+        mut scene: Scene<D, S>,
+        start: Instant,
+    ) -> Result<Jammed, ExperimentError> {
+        let (e, job) = (self.experiment, self.job);
+        let minimizer = self.point.minimizer.clone();
+        let protocol = &self.point.protocol;
         let mut fire = Fire::new(minimizer);
         if let Some(p) = &self.progress {
             fire.watch(p.clone());
@@ -316,6 +331,46 @@ impl SceneVisitor for SampleVisitor<'_> {
         file.observables = serde_json::json!([]);
         Ok(Jammed { file, run })
     }
+}
+
+/// The protocol of `experiment` (a single grid point: no lists) run from
+/// the configuration of `file` instead of a random start, then its
+/// observables, as a sample's: the packing file of the result, with the
+/// id and seed of `file`, and the eigenvalue table if asked for. `file`'s
+/// family, parameters, dimension and body count must be the experiment's.
+pub fn run_from_file(
+    experiment: &Experiment,
+    file: &PackingFile,
+) -> Result<(PackingFile, Option<String>), ExperimentError> {
+    let points = crate::grid::points(experiment)?;
+    let [point] = &points[..] else {
+        return Err(ExperimentError::invalid(
+            "experiment",
+            format!("{} grid points", points.len()),
+            "must be one point (no lists) to run from a packing",
+        ));
+    };
+    let job = Job {
+        point: 0,
+        sample: 0,
+        seed: file.seed,
+        id: file.id.clone(),
+    };
+    struct FromFile<'a>(SampleVisitor<'a>);
+    impl PackingVisitor for FromFile<'_> {
+        type Output = Result<Jammed, ExperimentError>;
+        fn visit<const D: usize, S: Shape<D>>(self, scene: Scene<D, S>) -> Self::Output {
+            self.0.protocol(scene, Instant::now())
+        }
+    }
+    let visitor = SampleVisitor {
+        experiment,
+        point,
+        job: &job,
+        progress: None,
+    };
+    let jammed = reload(file, FromFile(visitor))??;
+    measure_jammed(experiment, jammed)
 }
 
 /// The second half of [`run_job_watched`]: the observables of `experiment`
@@ -716,7 +771,7 @@ impl Observed {
 /// Measure the observables of `e` on a saved packing (same settings,
 /// other observables); the protocol's own figures are kept, and the
 /// measuring time is added to `wall_s`.
-pub(crate) fn remeasure(
+pub fn remeasure(
     e: &Experiment,
     file: PackingFile,
 ) -> Result<(PackingFile, Option<String>), ExperimentError> {
@@ -824,7 +879,7 @@ pub fn eigenvalue_table(s: &Spectrum) -> String {
 
 /// The `spheres` rows of a packing file: `[x, y(, z), radius, body]` for
 /// every sphere of every body, empty unless the family is made of spheres.
-fn sphere_rows<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> Vec<Vec<f64>> {
+pub fn sphere_rows<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> Vec<Vec<f64>> {
     let mut rows = Vec::new();
     for (i, (r, (&size, o))) in p
         .positions
