@@ -691,6 +691,74 @@ mod tests {
         assert_eq!(still.observables, serde_json::json!([]));
     }
 
+    /// A stop set by the hook of the first sample (one thread) leaves the
+    /// others unstarted: one packing on disk, the rest listed as stopped,
+    /// no summary; a rerun makes the rest, and the first is the same bits.
+    #[test]
+    fn a_stop_between_samples_keeps_the_finished_and_leaves_the_rest() {
+        let e = Experiment::from_ron(
+            r#"(name: "stopped", family: "sphere", particles: 16, samples: 3, seed: 5)"#,
+            "stopped",
+        )
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let stop = AtomicBool::new(false);
+        let seen = Mutex::new(Vec::new());
+        let finished = |id: &str, outcome: Result<&PackingFile, &ExperimentError>| {
+            assert!(outcome.is_ok());
+            seen.lock().unwrap().push(id.to_string());
+            stop.store(true, Ordering::SeqCst);
+        };
+        let hooks = Hooks {
+            stop: Some(&stop),
+            finished: Some(&finished),
+        };
+        let report = run_with(&e, &options(dir.path()), hooks).unwrap();
+        let ids: Vec<String> = grid::jobs(&e, &grid::points(&e).unwrap())
+            .into_iter()
+            .map(|j| j.id)
+            .collect();
+        assert_eq!(*seen.lock().unwrap(), ids[..1]);
+        assert_eq!(report.packings.len(), 1);
+        assert_eq!(report.stopped, ids[1..]);
+        assert!(report.failures.is_empty());
+        assert!(!dir.path().join("summary.csv").exists());
+        let again = run(&e, &options(dir.path())).unwrap();
+        assert_eq!((again.packings.len(), again.reused), (3, 1));
+        assert!(again.stopped.is_empty() && dir.path().join("summary.csv").exists());
+        assert_eq!(again.packings[0].positions, report.packings[0].positions);
+    }
+
+    /// `run_from_file` with a run's own `Jam` protocol, from the jammed
+    /// packing's file: the search starts inside the window, so it ends
+    /// there after its first relaxation, at the file's φ, with the bodies
+    /// where they were to far better than a contact's overlap (`~10⁻⁸` at
+    /// `V/N ~ 10⁻¹⁶`).
+    #[test]
+    fn jamming_a_jammed_packing_again_leaves_it_where_it_is() {
+        let e = Experiment::from_ron(
+            r#"(name: "again", family: "sphere", particles: 16, seed: 2)"#,
+            "again",
+        )
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let made = run(&e, &options(dir.path())).unwrap().packings.remove(0);
+        let (again, _) = crate::sample::run_from_file(&e, &made).unwrap();
+        assert_eq!(again.id, made.id);
+        assert_eq!(again.phi.to_bits(), made.phi.to_bits());
+        assert!(again.energy_per_particle > 1e-16 && again.energy_per_particle < 2e-16);
+        let mut moved: f64 = 0.0;
+        for (a, b) in again.positions.iter().zip(&made.positions) {
+            for (k, (x, y)) in a.iter().zip(b).enumerate() {
+                let l = made.box_edges[k];
+                let d = x - y;
+                moved = moved.max((d - l * (d / l).round()).abs());
+            }
+        }
+        assert!(moved < 1e-10, "a body moved by {moved:e}");
+        assert_eq!(again.measures.n_contacts, made.measures.n_contacts);
+    }
+
     /// A run killed while measuring leaves the packing saved before its
     /// observables (as the runner saves it when the protocol ends); a
     /// rerun does not take it for finished, measures it without making it
