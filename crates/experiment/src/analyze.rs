@@ -390,6 +390,6 @@ pub fn analyze(
         list.join(", ")
     );
     let experiment = Experiment::from_ron(&text, "analyze")?;
-    let (file, table) = sample::remeasure(&experiment, None, file)?;
+    let (file, table) = sample::measure_file(&experiment, file)?;
     Ok((file, force, table))
 }

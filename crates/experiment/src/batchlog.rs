@@ -145,6 +145,7 @@ impl BatchLog {
         let what = match outcome {
             Ok(Outcome::Done(_, true)) => "read back from an earlier run".to_string(),
             Ok(Outcome::Elsewhere(holder)) => format!("in flight elsewhere ({holder}), left to it"),
+            Ok(Outcome::Stopped) => "stopped before it started".to_string(),
             Ok(Outcome::Done(f, false)) => {
                 let m = &f.measures;
                 let z = m.z_j.map_or("–".into(), |z| format!("{z:.4}"));

@@ -10,4 +10,6 @@ pub(crate) enum Outcome {
     Done(Box<PackingFile>, bool),
     /// Another process holds its lock (the lock file's contents).
     Elsewhere(String),
+    /// Not started: the run was asked to stop (`runner::Hooks::stop`).
+    Stopped,
 }

@@ -129,6 +129,33 @@ impl Plan {
         sample::remeasure(experiment, Some(self.samplers[job.point].as_ref()), file)
     }
 
+    /// The protocol of this plan's one point run from the configuration of
+    /// `file` instead of a random start, then its observables, as a
+    /// sample's: the packing file of the result, with the id and seed of
+    /// `file`, and the eigenvalue table if asked for. `file`'s family,
+    /// parameters, dimension and body count must be the experiment's.
+    pub fn run_from_file(
+        &self,
+        file: &PackingFile,
+    ) -> Result<(PackingFile, Option<String>), ExperimentError> {
+        let [point] = &self.points[..] else {
+            return Err(ExperimentError::invalid(
+                "experiment",
+                format!("{} grid points", self.points.len()),
+                "must be one point (no lists) to run from a packing",
+            ));
+        };
+        let job = Job {
+            point: 0,
+            sample: 0,
+            seed: file.seed,
+            id: file.id.clone(),
+            settings: grid::settings(&self.experiment, point, file.seed),
+        };
+        let jammed = self.samplers[0].jam_from(&self.experiment, point, &job, file)?;
+        self.measure(jammed)
+    }
+
     /// Make and measure the packing of `job` (the runner saves it in
     /// between; this is the two halves at once).
     pub fn run_job(&self, job: &Job) -> Result<(PackingFile, Option<String>), ExperimentError> {

@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// How to run.
 #[derive(Clone, Debug)]
@@ -52,19 +53,48 @@ pub struct RunReport {
     /// Packings another process was making (their lock was held): left to
     /// it; a later run gathers them. No tables are written while any is.
     pub elsewhere: Vec<String>,
+    /// Samples not started because [`Hooks::stop`] was set: a rerun makes
+    /// them. No tables but `results.csv` are written while any is.
+    pub stopped: Vec<String>,
+}
+
+/// What a caller watching a run (the Python module) may ask of it.
+#[derive(Clone, Copy, Default)]
+pub struct Hooks<'a> {
+    /// Once set, samples not yet started are left unmade
+    /// ([`RunReport::stopped`]); a sample under way finishes and is saved.
+    pub stop: Option<&'a AtomicBool>,
+    /// Called as each sample ends, made, read back or failed, from the
+    /// thread that ran it, with its id; not called for samples left to
+    /// another process or stopped.
+    #[allow(clippy::type_complexity)]
+    pub finished: Option<&'a (dyn Fn(&str, Result<&PackingFile, &ExperimentError>) + Sync)>,
 }
 
 /// Run an experiment into `options.out`.
 pub fn run(experiment: &Experiment, options: &RunOptions) -> Result<RunReport, ExperimentError> {
+    run_with(experiment, options, Hooks::default())
+}
+
+/// [`run`], watched by `hooks`.
+pub fn run_with(
+    experiment: &Experiment,
+    options: &RunOptions,
+    hooks: Hooks<'_>,
+) -> Result<RunReport, ExperimentError> {
     let mut plan = Plan::new(experiment)?;
     if let Some(shard) = options.shard {
         plan.keep_part(shard);
     }
-    execute(&plan, options)
+    execute(&plan, options, hooks)
 }
 
-/// Run the jobs of `plan` into `options.out`.
-pub fn execute(plan: &Plan, options: &RunOptions) -> Result<RunReport, ExperimentError> {
+/// Run the jobs of `plan` into `options.out`, watched by `hooks`.
+pub fn execute(
+    plan: &Plan,
+    options: &RunOptions,
+    hooks: Hooks<'_>,
+) -> Result<RunReport, ExperimentError> {
     let (experiment, jobs) = (&plan.experiment, &plan.jobs);
     let packing_dir = options.out.join("packings");
     refuse_other_settings(jobs, &packing_dir)?;
@@ -170,6 +200,9 @@ pub fn execute(plan: &Plan, options: &RunOptions) -> Result<RunReport, Experimen
         Ok(Outcome::Done(Box::new(file), reused))
     };
     let work = |job: &Job| -> Result<Outcome, ExperimentError> {
+        if hooks.stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+            return Ok(Outcome::Stopped);
+        }
         let made = make(job).and_then(|outcome| {
             if let Outcome::Done(file, _) = &outcome {
                 table_so_far(job, file)?;
@@ -177,6 +210,13 @@ pub fn execute(plan: &Plan, options: &RunOptions) -> Result<RunReport, Experimen
             Ok(outcome)
         });
         log.finish(&job.id, &made);
+        if let Some(finished) = hooks.finished {
+            match &made {
+                Ok(Outcome::Done(file, _)) => finished(&job.id, Ok(file)),
+                Err(e) => finished(&job.id, Err(e)),
+                Ok(_) => {}
+            }
+        }
         made
     };
     let results: Vec<Result<Outcome, ExperimentError>> = std::thread::scope(|s| {
@@ -197,6 +237,7 @@ pub fn execute(plan: &Plan, options: &RunOptions) -> Result<RunReport, Experimen
     let mut packings = Vec::new();
     let mut failures = Vec::new();
     let mut elsewhere = Vec::new();
+    let mut stopped = Vec::new();
     let mut reused = 0;
     for (r, job) in results.into_iter().zip(jobs) {
         match r {
@@ -205,18 +246,20 @@ pub fn execute(plan: &Plan, options: &RunOptions) -> Result<RunReport, Experimen
                 packings.push(*f);
             }
             Ok(Outcome::Elsewhere(_)) => elsewhere.push(job.id.clone()),
+            Ok(Outcome::Stopped) => stopped.push(job.id.clone()),
             Err(e) => failures.push(e),
         }
     }
     let groups = group_by_point(plan, &packings);
     let summaries = format::summarize_points(&groups);
-    if options.shard.is_some() || !elsewhere.is_empty() {
+    if options.shard.is_some() || !elsewhere.is_empty() || !stopped.is_empty() {
         return Ok(RunReport {
             packings,
             reused,
             failures,
             summaries,
             elsewhere,
+            stopped,
         });
     }
     write_tables(experiment, &packings, &groups, &options.out)?;
@@ -226,6 +269,7 @@ pub fn execute(plan: &Plan, options: &RunOptions) -> Result<RunReport, Experimen
         failures,
         summaries,
         elsewhere,
+        stopped,
     })
 }
 
@@ -643,6 +687,76 @@ mod tests {
         assert_eq!(still.positions, kept.positions);
         assert_eq!(still.measures.fire_steps, kept.measures.fire_steps);
         assert_eq!(still.observables, serde_json::json!([]));
+    }
+
+    /// A stop set by the hook of the first sample (one thread) leaves the
+    /// others unstarted: one packing on disk, the rest listed as stopped,
+    /// no summary; a rerun makes the rest, and the first is the same bits.
+    #[test]
+    fn a_stop_between_samples_keeps_the_finished_and_leaves_the_rest() {
+        let e = Experiment::from_ron(
+            r#"(name: "stopped", family: "sphere", particles: 16, samples: 3, seed: 5)"#,
+            "stopped",
+        )
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let stop = AtomicBool::new(false);
+        let seen = Mutex::new(Vec::new());
+        let finished = |id: &str, outcome: Result<&PackingFile, &ExperimentError>| {
+            assert!(outcome.is_ok());
+            seen.lock().unwrap().push(id.to_string());
+            stop.store(true, Ordering::SeqCst);
+        };
+        let hooks = Hooks {
+            stop: Some(&stop),
+            finished: Some(&finished),
+        };
+        let report = run_with(&e, &options(dir.path()), hooks).unwrap();
+        let ids: Vec<String> = Plan::new(&e)
+            .unwrap()
+            .jobs
+            .into_iter()
+            .map(|j| j.id)
+            .collect();
+        assert_eq!(*seen.lock().unwrap(), ids[..1]);
+        assert_eq!(report.packings.len(), 1);
+        assert_eq!(report.stopped, ids[1..]);
+        assert!(report.failures.is_empty());
+        assert!(!dir.path().join("summary.csv").exists());
+        let again = run(&e, &options(dir.path())).unwrap();
+        assert_eq!((again.packings.len(), again.reused), (3, 1));
+        assert!(again.stopped.is_empty() && dir.path().join("summary.csv").exists());
+        assert_eq!(again.packings[0].positions, report.packings[0].positions);
+    }
+
+    /// `run_from_file` with a run's own `Jam` protocol, from the jammed
+    /// packing's file: the search starts inside the window, so it ends
+    /// there after its first relaxation, at the file's φ, with the bodies
+    /// where they were to far better than a contact's overlap (`~10⁻⁸` at
+    /// `V/N ~ 10⁻¹⁶`).
+    #[test]
+    fn jamming_a_jammed_packing_again_leaves_it_where_it_is() {
+        let e = Experiment::from_ron(
+            r#"(name: "again", family: "sphere", particles: 16, seed: 2)"#,
+            "again",
+        )
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let made = run(&e, &options(dir.path())).unwrap().packings.remove(0);
+        let (again, _) = Plan::new(&e).unwrap().run_from_file(&made).unwrap();
+        assert_eq!(again.id, made.id);
+        assert_eq!(again.phi.to_bits(), made.phi.to_bits());
+        assert!(again.energy_per_particle > 1e-16 && again.energy_per_particle < 2e-16);
+        let mut moved: f64 = 0.0;
+        for (a, b) in again.positions.iter().zip(&made.positions) {
+            for (k, (x, y)) in a.iter().zip(b).enumerate() {
+                let l = made.box_edges[k];
+                let d = x - y;
+                moved = moved.max((d - l * (d / l).round()).abs());
+            }
+        }
+        assert!(moved < 1e-10, "a body moved by {moved:e}");
+        assert_eq!(again.measures.n_contacts, made.measures.n_contacts);
     }
 
     /// A run killed while measuring leaves the packing saved before its

@@ -46,6 +46,16 @@ pub(crate) trait Sampler: Send + Sync {
         progress: Option<Arc<Progress>>,
     ) -> Result<Jammed, ExperimentError>;
 
+    /// The protocol of `point` run from the configuration of `file` (on
+    /// this shape) instead of a random start, as the packing of `job`.
+    fn jam_from(
+        &self,
+        e: &Experiment,
+        point: &Point,
+        job: &Job,
+        file: &PackingFile,
+    ) -> Result<Jammed, ExperimentError>;
+
     /// The observables of `e` measured on the configuration of `file` on
     /// this shape, with the point's protocol ([`measure_scene`]).
     fn measure(
@@ -86,6 +96,23 @@ impl<const D: usize, S: Shape<D>> Sampler for OfShape<D, S> {
             job,
         };
         sample.jam::<D, S>(self.shape.clone(), progress)
+    }
+
+    fn jam_from(
+        &self,
+        experiment: &Experiment,
+        point: &Point,
+        job: &Job,
+        file: &PackingFile,
+    ) -> Result<Jammed, ExperimentError> {
+        let start = Instant::now();
+        let scene = crate::reload::scene_of::<D, S>(self.shape.clone(), file)?;
+        let sample = Sample {
+            experiment,
+            point,
+            job,
+        };
+        sample.protocol(scene, start, None)
     }
 
     fn measure(
@@ -141,7 +168,6 @@ impl Sample<'_> {
         let (e, job) = (self.experiment, self.job);
         let sample_err = |source| ExperimentError::sample(job.id.clone(), source);
         let start = Instant::now();
-        let minimizer = self.point.minimizer.clone();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(job.seed);
         let sizes = e.sizes.sample(self.point.particles, &mut rng);
         let min_reach = sizes
@@ -151,7 +177,22 @@ impl Sample<'_> {
         let protocol = &self.point.protocol;
         let packing = Packing::<D, S>::random(shape, sizes, protocol.phi_start(), &mut rng)
             .map_err(sample_err)?;
-        let mut scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
+        let scene = Scene::new(packing, e.potential, e.engine.skin * min_reach);
+        self.protocol(scene, start, progress)
+    }
+
+    /// The protocol of the sample's point from the configuration of
+    /// `scene` (a random start, or a packing given by the caller), `start`
+    /// the sample's start time, its minimiser reporting to `progress`.
+    fn protocol<const D: usize, S: Shape<D>>(
+        &self,
+        mut scene: Scene<D, S>,
+        start: Instant,
+        progress: Option<Arc<Progress>>,
+    ) -> Result<Jammed, ExperimentError> {
+        let (e, job) = (self.experiment, self.job);
+        let minimizer = self.point.minimizer.clone();
+        let protocol = &self.point.protocol;
         let mut fire = Fire::new(minimizer);
         if let Some(p) = progress {
             fire.watch(p);
@@ -713,6 +754,16 @@ impl Observed {
 /// other observables), on the point's shape `on` or, `None`, the shape
 /// its file names; the protocol's own figures are kept, and the measuring
 /// time is added to `wall_s`.
+/// [`remeasure`] on the shape the file names: the observables of `e`
+/// measured on the packing of `file` as its arrays are (a packing of
+/// another code, or one edited since).
+pub fn measure_file(
+    e: &Experiment,
+    file: PackingFile,
+) -> Result<(PackingFile, Option<String>), ExperimentError> {
+    remeasure(e, None, file)
+}
+
 pub(crate) fn remeasure(
     e: &Experiment,
     on: Option<&dyn Sampler>,
@@ -844,7 +895,7 @@ pub fn eigenvalue_table(s: &Spectrum) -> String {
 
 /// The `spheres` rows of a packing file: `[x, y(, z), radius, body]` for
 /// every sphere of every body, empty unless the family is made of spheres.
-fn sphere_rows<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> Vec<Vec<f64>> {
+pub fn sphere_rows<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> Vec<Vec<f64>> {
     let mut rows = Vec::new();
     for (i, (r, (&size, o))) in p
         .positions
