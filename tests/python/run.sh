@@ -19,9 +19,9 @@ if ! "$build/bin/python" -c "import maturin" 2>/dev/null; then
     "$build/bin/pip" install "${quiet[@]}" "maturin>=1.9,<2"
 fi
 venv=$root/target/python-venv
-if ! "$venv/bin/python" -c "import numpy, pandas, pytest, ase, matplotlib, nbclient, ipykernel" 2>/dev/null; then
+if ! "$venv/bin/python" -c "import numpy, pandas, pytest, ase, gsd, matplotlib, nbclient, ipykernel" 2>/dev/null; then
     python3 -m venv "$venv"
-    "$venv/bin/pip" install "${quiet[@]}" numpy pandas pytest "ase>=3.22" matplotlib nbclient ipykernel
+    "$venv/bin/pip" install "${quiet[@]}" numpy pandas pytest "ase>=3.22" "gsd>=3" matplotlib nbclient ipykernel
 fi
 wheels=$root/target/python-wheels
 rm -rf "$wheels"

@@ -434,6 +434,15 @@ def export_xyz(packing: Packing, path: PathLike) -> None:
     _native.export_xyz(_packing(packing)._json(), os.fspath(path))
 
 
+def export_gsd(packings: Union[Packing, Iterable[Packing]], path: PathLike) -> None:
+    """Write ``packings`` (one, or several: one frame each, in order) to
+    ``path`` as HOOMD-blue's GSD, as ``jamkit export … -o FILE.gsd`` does
+    (for HOOMD-blue, OVITO and the ``gsd`` package; float32 positions)."""
+    if isinstance(packings, Packing):
+        packings = [packings]
+    _native.export_gsd([_packing(p)._json() for p in packings], os.fspath(path))
+
+
 def _table(directory: PathLike, name: str, written_with: str):
     pd = _optional("pandas", f"jamkit.{name.split('.')[0]}")
     path = os.path.join(os.fspath(directory), name)

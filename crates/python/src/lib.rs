@@ -534,6 +534,18 @@ fn export_xyz(packing_json: &str, path: &str) -> PyResult<()> {
     jamkit_format::write_atomic(Path::new(path), frame.as_bytes()).map_err(fail)
 }
 
+/// The packings (JSON of packing files, a list) written to `path` as
+/// HOOMD-blue's GSD, one frame each, as `jamkit export … -o FILE.gsd` does.
+#[pyfunction]
+fn export_gsd(packings_json: Vec<String>, path: &str) -> PyResult<()> {
+    let files = packings_json
+        .iter()
+        .map(|json| packing(json))
+        .collect::<PyResult<Vec<_>>>()?;
+    let bytes = jamkit_experiment::gsd::file(&files).map_err(fail)?;
+    jamkit_format::write_atomic(Path::new(path), &bytes).map_err(fail)
+}
+
 /// The packing made consistent with its arrays (see `packing_with`).
 #[pyfunction]
 fn normalize(packing_json: &str) -> PyResult<String> {
@@ -552,6 +564,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_protocol, m)?)?;
     m.add_function(wrap_pyfunction!(draw, m)?)?;
     m.add_function(wrap_pyfunction!(export_xyz, m)?)?;
+    m.add_function(wrap_pyfunction!(export_gsd, m)?)?;
     m.add("JamkitError", m.py().get_type::<JamkitError>())?;
     Ok(())
 }

@@ -285,6 +285,27 @@ def test_draw_and_export_xyz_are_the_command_lines(runs, tmp_path):
     assert (tmp_path / "p.xyz").read_text() == (tmp_path / "cli.xyz").read_text()
 
 
+def test_export_gsd_is_the_command_lines_and_gsd_reads_it(runs, tmp_path):
+    p = runs[2][0]
+    path = runs[3] / "cli" / "packings" / f"{p.id}.json"
+    jamkit.export_gsd(p, tmp_path / "p.gsd")
+    cli("export", str(path), "-o", str(tmp_path / "cli.gsd"))
+    assert (tmp_path / "p.gsd").read_bytes() == (tmp_path / "cli.gsd").read_bytes()
+    import gsd.hoomd
+
+    jamkit.export_gsd([p, p], tmp_path / "two.gsd")
+    with gsd.hoomd.open(str(tmp_path / "two.gsd"), "r") as frames:
+        assert len(frames) == 2
+        frame = frames[1]
+        assert frame.particles.N == len(p.positions)
+        # HOOMD's box is centred on the origin; GSD stores float32.
+        centred = p.positions[:, :2] - 0.5 * p.box[:2]
+        got = frame.particles.position[:, :2].astype(np.float64)
+        d = got - centred
+        d -= p.box[:2] * np.round(d / p.box[:2])
+        assert np.max(np.abs(d)) <= 1e-6 * np.max(p.box)
+
+
 def test_progress_reports_every_sample(tmp_path):
     events = []
     made = jamkit.run(dict(NEAR_DISKS, samples=3), out=tmp_path / "run", progress=events.append)
