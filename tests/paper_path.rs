@@ -76,18 +76,17 @@ fn a_file_that_contradicts_the_paper_path_is_refused_naming_the_field() {
         ),
     ] {
         let e = near_disks(sets);
-        let err = e.validate().unwrap_err().to_string();
+        let err = Plan::new(&e).err().unwrap().to_string();
         assert!(
             err.contains(field) && err.contains("paper_path"),
             "{sets:?}: {err}"
         );
     }
     // jamkit's default values and the paper's own are not contradictions.
-    near_disks(&[
+    Plan::new(&near_disks(&[
         "paper_path=true",
         "minimizer.newton=None",
         "protocol.search=Extrapolated",
-    ])
-    .validate()
+    ]))
     .unwrap();
 }

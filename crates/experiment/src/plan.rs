@@ -41,6 +41,7 @@ impl Plan {
     /// than the machine's memory is an error naming it.
     pub fn new(experiment: &Experiment) -> Result<Self, ExperimentError> {
         experiment.validate()?;
+        crate::paper::check(experiment)?;
         let experiment = crate::paper::apply(experiment.clone());
         let mut points = grid::points(&experiment)?;
         // The spectrum and the moduli both need the Hessian.

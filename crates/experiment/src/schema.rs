@@ -820,7 +820,6 @@ impl Experiment {
         }
         self.sizes.validate()?;
         self.minimizer.validate("minimizer")?;
-        crate::paper::check(self)?;
         self.validate_protocol()?;
         self.scanned()?;
         self.validate_observables()?;
