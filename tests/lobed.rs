@@ -65,9 +65,9 @@ fn parameters_can_be_set_from_the_command_line() {
     for set in ["params.inertia=0.5", "params.inertia=Some(0.5)"] {
         let e = overrides::apply(&e, &[set.into()]).unwrap();
         e.validate().unwrap();
-        jamkit_experiment::grid::points(&e).unwrap_or_else(|err| panic!("{set}: {err}"));
+        jamkit_experiment::Plan::new(&e).unwrap_or_else(|err| panic!("{set}: {err}"));
     }
     let e = overrides::apply(&e, &["params.kappa=0.05".into()]).unwrap();
-    let err = jamkit_experiment::grid::points(&e).unwrap_err().to_string();
+    let err = jamkit_experiment::Plan::new(&e).err().unwrap().to_string();
     assert!(err.contains("params.kappa"), "{err}");
 }

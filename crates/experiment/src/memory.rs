@@ -197,7 +197,7 @@ pub fn check_dense_solves(
 /// its `protocol`, `dim`, `particles`, and the family's `rot_dof` there)
 /// checked against `memory`, this machine's ([`machine_memory`]; nothing
 /// is checked where it cannot be read). Asked for every point as the grid
-/// is built ([`crate::grid::points`]), so `jamkit validate` and `jamkit run`
+/// is planned ([`crate::plan::Plan::new`]), so `jamkit validate` and `jamkit run`
 /// both refuse such a file.
 pub(crate) fn check_point(
     experiment: &Experiment,
