@@ -336,7 +336,12 @@ def test_an_interrupt_keeps_the_finished_packings(tmp_path):
 
 def test_ctrl_c_raises_keyboard_interrupt_and_keeps_the_packings(tmp_path):
     out = tmp_path / "run"
+    # Python turns SIGINT into KeyboardInterrupt only where it was not
+    # ignored at start (a shell ignores it in background jobs): the child
+    # asks for Python's own handler, as an interactive session has it.
     script = (
+        "import signal\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "import jamkit, sys\n"
         f"jamkit.run({dict(NEAR_DISKS, samples=200)!r}, out={str(out)!r}, quiet=True)\n"
     )
