@@ -712,15 +712,8 @@ mod tests {
     fn polar_support_of_an_ellipse() {
         let (a, b) = (0.9, 0.6);
         let outline = |phi: f64| {
-            // R = ab q^{-1/2}, q = b²cos² + a²sin²; derivatives by hand.
             let (s, c) = phi.sin_cos();
-            let q = b * b * c * c + a * a * s * s;
-            let q1 = 2.0 * (a * a - b * b) * s * c;
-            let q2 = 2.0 * (a * a - b * b) * (c * c - s * s);
-            let r = a * b / q.sqrt();
-            let r1 = -0.5 * r * q1 / q;
-            let r2 = -0.5 * (r1 * q1 + r * q2) / q + 0.5 * r * q1 * q1 / (q * q);
-            (r, r1, r2)
+            ellipse_outline(a, b)((c, s))
         };
         let exact_support = ellipse(a, b);
         for k in 0..24 {
