@@ -1,7 +1,8 @@
 //! The plan of a run: an experiment made ready to run, once.
 //!
 //! [`Plan::new`] takes the experiment file's way to the samples in one
-//! pass: it validates the experiment, expands its grid ([`grid::points`]),
+//! pass: it validates the experiment, sets the paper's fields when it asks
+//! for `paper_path` (`paper` module), expands its grid ([`grid::points`]),
 //! builds each point's shape (the one place where the family's parameters
 //! are read into the family's type), checks what needs the shape (the
 //! family's second derivatives when an observable needs the Hessian, the
