@@ -50,8 +50,9 @@ fn contacts_and_axes(
     reload(file, Count)
 }
 
-/// One frame of extended XYZ for `file`.
-pub fn frame(file: &PackingFile) -> Result<String, ExperimentError> {
+/// Refuse to export `file` to `format` unless it is a valid packing file
+/// holding its configuration, in 2D or 3D.
+pub(crate) fn exportable(file: &PackingFile, format: &str) -> Result<(), ExperimentError> {
     file.check_as(format_args!("packing {}", file.id))?;
     if file.positions.len() != file.particles {
         return Err(ExperimentError::invalid(
@@ -60,13 +61,19 @@ pub fn frame(file: &PackingFile) -> Result<String, ExperimentError> {
             "export needs the configuration (the run had output.packings = false)",
         ));
     }
-    if file.dim > 3 {
+    if !(2..=3).contains(&file.dim) {
         return Err(ExperimentError::invalid(
             format!("packing {}: dim", file.id),
             file.dim,
-            "extended XYZ holds 2D and 3D packings",
+            format!("{format} holds 2D and 3D packings"),
         ));
     }
+    Ok(())
+}
+
+/// One frame of extended XYZ for `file`.
+pub fn frame(file: &PackingFile) -> Result<String, ExperimentError> {
+    exportable(file, "extended XYZ")?;
     let (contacts, semi_axes) = contacts_and_axes(file)?;
     let dim = file.dim;
     let planar = dim == 2 && file.orientations.first().is_some_and(|o| o.len() == 1);

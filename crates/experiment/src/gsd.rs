@@ -295,22 +295,8 @@ fn mesh(radius: impl Fn([f64; 3]) -> f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
 
 /// The chunks of one frame for `file`, with `configuration/step = step`.
 pub fn frame(file: &PackingFile, step: u64) -> Result<Vec<Chunk>, ExperimentError> {
-    file.check_as(format_args!("packing {}", file.id))?;
-    if file.positions.len() != file.particles {
-        return Err(ExperimentError::invalid(
-            format!("packing {}: positions", file.id),
-            "[]",
-            "export needs the configuration (the run had output.packings = false)",
-        ));
-    }
+    crate::extxyz::exportable(file, "GSD")?;
     let dim = file.dim;
-    if !(2..=3).contains(&dim) {
-        return Err(ExperimentError::invalid(
-            format!("packing {}: dim", file.id),
-            dim,
-            "GSD holds 2D and 3D packings",
-        ));
-    }
     let bodies = reload(file, Visit)?.map_err(|e| {
         ExperimentError::invalid(
             format!("packing {}: family {}", file.id, file.family),

@@ -468,25 +468,10 @@ impl Sample<'_> {
         let bodies = scene.packing().len().max(1) as f64;
         let energy = scene.energy();
         let measures = Measures {
-            phi: scene.packing().phi(),
-            energy_per_particle: energy / bodies,
-            n_contacts: None,
-            n_rattlers: None,
-            z_j: None,
-            iso_margin: None,
-            n_rot_rattlers: None,
-            free_rotations: None,
-            pressure: None,
             fire_steps: steps,
-            lbfgs_evaluations: None,
-            minimizations: 0,
             wall_s: start.elapsed().as_secs_f64(),
             flag: error.to_string(),
-            saddle_escapes: None,
-            spectrum: None,
-            gaps: None,
-            moduli: None,
-            jam_point: None,
+            ..Measures::bare(scene.packing().phi(), energy / bodies)
         };
         Some(self.file(scene.packing(), true, measures))
     }

@@ -69,6 +69,34 @@ pub struct Measures {
     pub jam_point: Option<JamPoint>,
 }
 
+impl Measures {
+    /// A configuration's packing fraction and `V/N` with nothing else
+    /// measured (no protocol run, no observable).
+    pub fn bare(phi: f64, energy_per_particle: f64) -> Self {
+        Self {
+            phi,
+            energy_per_particle,
+            n_contacts: None,
+            n_rattlers: None,
+            z_j: None,
+            iso_margin: None,
+            n_rot_rattlers: None,
+            free_rotations: None,
+            pressure: None,
+            fire_steps: 0,
+            lbfgs_evaluations: None,
+            minimizations: 0,
+            wall_s: 0.0,
+            flag: String::new(),
+            saddle_escapes: None,
+            spectrum: None,
+            gaps: None,
+            moduli: None,
+            jam_point: None,
+        }
+    }
+}
+
 /// The jamming point a packing above jamming was compressed from: φ_J and
 /// the contact numbers there, with the same rattler rule as the packing's
 /// own (`None` where `Contacts` was not measured).

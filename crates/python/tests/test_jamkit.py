@@ -338,7 +338,7 @@ def test_ctrl_c_raises_keyboard_interrupt_and_keeps_the_packings(tmp_path):
     out = tmp_path / "run"
     # Python turns SIGINT into KeyboardInterrupt only where it was not
     # ignored at start (a shell ignores it in background jobs): the child
-    # asks for Python's own handler, as an interactive session has it.
+    # asks for Python's own handler, as an interactive interpreter has it.
     script = (
         "import signal\n"
         "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
