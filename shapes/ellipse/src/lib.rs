@@ -256,9 +256,55 @@ impl Ellipse {
     }
 
     /// The exact gap of two bodies (module documentation), or `None` when
-    /// it certainly exceeds `max_gap`.
+    /// it certainly exceeds `max_gap`: Halley's iteration from the line of
+    /// centres, with [`Ellipse::exact_gap_safeguarded`] where its guards
+    /// fail.
     #[inline(always)]
     pub fn exact_gap(
+        &self,
+        size_i: f64,
+        o_i: &Axis,
+        size_j: f64,
+        o_j: &Axis,
+        r_ij: &Vector<2>,
+        max_gap: f64,
+    ) -> Option<Solution> {
+        let r = r_ij.norm();
+        // h ≥ |r| − a_i − a_j: skip pairs that are certainly apart.
+        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
+            return None;
+        }
+        let (fi, fj) = (self.form(size_i, o_i), self.form(size_j, o_j));
+        let (x, y) = (r_ij[0], r_ij[1]);
+        // h ≥ g(ψ₀) = r − H_i − H_j at the line of centres: skip when
+        // t = r − max_gap > H_i + H_j, i.e. t r > √U_i + √U_j with
+        // U = r² H² = u(r_ij) (the quadratic form at the separation itself),
+        // tested on squares.
+        let t = r - max_gap;
+        if t > 0.0 {
+            let (ui, uj) = (fi.square((x, y)), fj.square((x, y)));
+            let tr = t * r;
+            let excess = tr * tr - ui - uj;
+            if excess > 0.0 && excess * excess > 4.0 * ui * uj {
+                return None;
+            }
+        }
+        let v0 = if r > 0.0 { (x, y) } else { (1.0, 0.0) };
+        match halley(&fi, &fj, x, y, v0, max_gap) {
+            Fast::Done(s) => Some(s),
+            Fast::Apart => None,
+            Fast::Failed => {
+                count_fallback();
+                self.exact_gap_safeguarded(size_i, o_i, size_j, o_j, r_ij, max_gap)
+            }
+        }
+    }
+
+    /// The exact gap by a safeguarded Newton iteration on `n = e(ψ)` from
+    /// the line of centres (module documentation), or `None` when `g` at
+    /// the line of centres exceeds `max_gap`: what [`Ellipse::exact_gap`]
+    /// runs where Halley's iteration fails its guards.
+    pub fn exact_gap_safeguarded(
         &self,
         size_i: f64,
         o_i: &Axis,
@@ -359,6 +405,33 @@ struct Form {
 }
 
 impl Form {
+    /// `u(v) = vᵀ M v = |v|² H²` of the direction `v` of any length
+    /// (`H² = p + m cos 2(ψ − θ)`).
+    #[inline(always)]
+    fn square(&self, v: (f64, f64)) -> f64 {
+        let l2 = v.0 * v.0 + v.1 * v.1;
+        let w = (v.0 * v.0 - v.1 * v.1, 2.0 * v.0 * v.1);
+        self.p * l2 + self.m * (w.0 * self.c2 + w.1 * self.s2)
+    }
+
+    /// `H, H', H''` and `H'''` at the direction `v = L e(ψ)` of any length
+    /// `L`, each times `L` (homogeneous of degree one), from `w = v²`
+    /// (`L² (cos 2ψ, sin 2ψ)`, as a complex number) and `l2 = L²`:
+    /// `u = H² = p + m cos 2β`, `u' = −2m sin 2β`, `u'' = −4m cos 2β`,
+    /// `u''' = 8m sin 2β` (`β = ψ − θ`), `H' = u'/2H`,
+    /// `H'' = (u''/2 − H'²)/H`, `H''' = (u'''/2 − 3H'H'')/H`.
+    #[inline(always)]
+    fn jet3(&self, w: (f64, f64), l2: f64) -> (SupportJet, f64) {
+        let cc = w.0 * self.c2 + w.1 * self.s2;
+        let ss = w.1 * self.c2 - w.0 * self.s2;
+        let h = (self.p * l2 + self.m * cc).sqrt();
+        let inv = 1.0 / h;
+        let d1 = -self.m * ss * inv;
+        let d2 = (-2.0 * self.m * cc - d1 * d1) * inv;
+        let d3 = (4.0 * self.m * ss - 3.0 * d1 * d2) * inv;
+        (SupportJet { h, d1, d2 }, d3)
+    }
+
     /// `H, H', H''` at the normal whose `(cos 2ψ, sin 2ψ)` is `w`.
     #[inline(always)]
     fn jet(&self, w: (f64, f64)) -> SupportJet {
@@ -373,6 +446,126 @@ impl Form {
             d2: (-2.0 * self.m * cc - d1 * d1) / h,
         }
     }
+}
+
+/// Halley's iteration stops after a step below this (rad): what is left
+/// is `~K·10⁻¹⁵` rad, `K = |g'''²/4g''² − g''''/6g''| = O(1)` (cubic
+/// convergence), which moves `h` by `~10⁻³⁰` (`g` is stationary).
+const HALLEY_TOL: f64 = 1e-5;
+
+/// The longest step of Halley's iteration (rad) before it hands over to
+/// the safeguarded iteration.
+const HALLEY_MAX_STEP: f64 = 1.0;
+
+/// Halley's iteration gives up after this many steps (it takes 2–4 from
+/// the line of centres where it converges at all).
+const HALLEY_CAP: u32 = 12;
+
+/// How [`halley`] ended.
+enum Fast {
+    /// Converged.
+    Done(Solution),
+    /// `g > max_gap` at an iterate: `h > max_gap`.
+    Apart,
+    /// A guard failed: run the safeguarded iteration.
+    Failed,
+}
+
+/// Halley's iteration on `g'(ψ) = 0` (module documentation) from the
+/// direction `v0` (the separation itself: any length will do), for the
+/// bodies `fi`, `fj` at separation `(x, y)`.
+///
+/// The iteration runs on a direction `v = L n` of any length `L > 0`:
+/// `g`, `H` and their derivatives in `ψ` are homogeneous of degree one in
+/// `v`, so the step (a ratio of them) is the same, and a turn by the step
+/// `s` is `v + s v⊥` (the angle `atan s = s − s³/3 + …`, which leaves the
+/// convergence cubic). `v` is normalised once, for the final evaluation.
+#[inline(always)]
+fn halley(fi: &Form, fj: &Form, x: f64, y: f64, v0: (f64, f64), max_gap: f64) -> Fast {
+    // g, g', g'' with both jets, and g''' at the direction v (scaled by |v|).
+    let eval = |v: (f64, f64), l2: f64| {
+        let w = (v.0 * v.0 - v.1 * v.1, 2.0 * v.0 * v.1);
+        let ((ji, ti), (jj, tj)) = (fi.jet3(w, l2), fj.jet3(w, l2));
+        let rn = x * v.0 + y * v.1;
+        let rt = -x * v.1 + y * v.0;
+        (
+            Eval {
+                g: rn - ji.h - jj.h,
+                g1: rt - ji.d1 - jj.d1,
+                g2: -rn - ji.d2 - jj.d2,
+                ji,
+                jj,
+            },
+            -rt - ti - tj,
+        )
+    };
+    let square = |v: (f64, f64)| v.0 * v.0 + v.1 * v.1;
+    let mut v = v0;
+    let (mut cur, mut g3) = eval(v, square(v));
+    let mut len_v = square(v).sqrt();
+    let mut last = f64::INFINITY;
+    for iterations in 1..=HALLEY_CAP {
+        // h = max g ≥ g(ψ) for every ψ (g(v) = |v| g(ψ)).
+        if cur.g > max_gap * len_v {
+            return Fast::Apart;
+        }
+        // Halley: s = −(g'/g'') / (1 − g'g'''/2g''²), with the denominator
+        // above 1/2 (near the optimum it is 1).
+        let (g1, g2) = (cur.g1, cur.g2);
+        let den = 2.0 * g2 * g2 - g1 * g3;
+        if !(g2 < 0.0 && den > g2 * g2) {
+            return Fast::Failed;
+        }
+        let step = -2.0 * g1 * g2 / den;
+        let len = step.abs();
+        // Far from the optimum (a step beyond 1 rad) or not converging
+        // (a step that does not shrink): the safeguarded ascent is safe.
+        if !(len <= HALLEY_MAX_STEP && len < last) {
+            return Fast::Failed;
+        }
+        v = (v.0 - step * v.1, v.1 + step * v.0);
+        if len < HALLEY_TOL {
+            let inv = 1.0 / square(v).sqrt();
+            let n = (v.0 * inv, v.1 * inv);
+            let (end, _) = eval(n, 1.0);
+            if end.g > max_gap {
+                return Fast::Apart;
+            }
+            return Fast::Done(Solution {
+                normal: Vector::<2>::new(n.0, n.1),
+                gap: end.g,
+                jet_i: end.ji,
+                jet_j: end.jj,
+                iterations,
+                converged: true,
+            });
+        }
+        let next;
+        let l2 = square(v);
+        (next, g3) = eval(v, l2);
+        let len_next = l2.sqrt();
+        // A large step must climb: else it ran past the maximum the
+        // safeguarded ascent reaches.
+        if len >= 1e-3 && next.g * len_v < cur.g * len_next {
+            return Fast::Failed;
+        }
+        (cur, len_v, last) = (next, len_next, len);
+    }
+    Fast::Failed
+}
+
+static FALLBACKS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// How many pairs [`Ellipse::exact_gap`] handed over to
+/// [`Ellipse::exact_gap_safeguarded`] in this process (all threads): a
+/// diagnostic, for tests and benchmarks.
+pub fn fallbacks() -> u64 {
+    FALLBACKS.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+#[cold]
+fn count_fallback() {
+    FALLBACKS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
 }
 
 /// One evaluation of `g(ψ)`, `g'`, `g''` with both bodies' jets.
@@ -396,7 +589,8 @@ pub struct Solution {
     pub jet_i: SupportJet,
     /// Body `j`'s at `ψ* + π − θ_j`.
     pub jet_j: SupportJet,
-    /// Newton iterations taken.
+    /// Iterations taken (each evaluates both support functions once, but
+    /// for the safeguarded iteration's halvings).
     pub iterations: u32,
     /// False when the iteration stopped at its cap.
     pub converged: bool,
@@ -662,6 +856,190 @@ mod tests {
             let h = gap(&s, ri, ti, rj, tj, d);
             assert!(h > 0.05, "the case {d:?} must be separated: h = {h}");
             assert_relative_eq!(h, dist(u, v), epsilon = 1e-9);
+        }
+    }
+
+    /// A deterministic uniform stream in `[0, 1)` for the random pairs.
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// `H'''` of [`Form::jet3`] against central differences of its `H''`
+    /// (ε = 1e-5: truncation ~ε²H'''' ≲ 1e-10, round-off ~1e-16/ε ≈ 1e-11;
+    /// tolerance 1e-8); its `H, H', H''` equal [`Form::jet`]'s to round-off
+    /// (1e-15: a multiplication by `1/H` against a division), and at the
+    /// direction `L e(ψ)` all four are `L` times those at `e(ψ)` (1e-14
+    /// relative: a few ulps of `L e(ψ)` squared), as is `√u`
+    /// ([`Form::square`]).
+    #[test]
+    fn third_derivative_matches_finite_differences() {
+        let s = ellipse(2.5);
+        let f = s.form(0.7, &Axis::new(0.4));
+        let eps = 1e-5;
+        let w = |psi: f64| ((2.0 * psi).cos(), (2.0 * psi).sin());
+        for k in 0..40 {
+            let psi = -3.0 + 0.161 * k as f64;
+            let (c, d3) = f.jet3(w(psi), 1.0);
+            let (m, _) = f.jet3(w(psi - eps), 1.0);
+            let (p, _) = f.jet3(w(psi + eps), 1.0);
+            assert_relative_eq!(d3, (p.d2 - m.d2) / (2.0 * eps), epsilon = 1e-8);
+            let old = f.jet(w(psi));
+            assert_relative_eq!(c.h, old.h, epsilon = 1e-15);
+            assert_relative_eq!(c.d1, old.d1, epsilon = 1e-15);
+            assert_relative_eq!(c.d2, old.d2, epsilon = 1e-15);
+            let l = 1.7;
+            let v = (l * psi.cos(), l * psi.sin());
+            let (sc, sd3) = f.jet3((v.0 * v.0 - v.1 * v.1, 2.0 * v.0 * v.1), l * l);
+            for (a, b) in [(sc.h, c.h), (sc.d1, c.d1), (sc.d2, c.d2), (sd3, d3)] {
+                assert_relative_eq!(a, l * b, epsilon = 1e-14, max_relative = 1e-14);
+            }
+            assert_relative_eq!(f.square(v).sqrt(), l * c.h, max_relative = 1e-14);
+        }
+    }
+
+    /// Halley's iteration against the safeguarded iteration on random
+    /// pairs, α from 1.001 to 3, sizes 0.5 to 0.7, separations from deep
+    /// overlap (a third of the short axes) to apart, and near contact
+    /// (|h| < 10⁻³): both converge to round-off, so gaps agree to 1e-13 and
+    /// normals and `H'` to 1e-12 (round-off of the last step scaled by
+    /// `1/k`, `k = −g''`), `H''` to 1e-11. Halley takes at most 5 steps
+    /// and hands over to the safeguarded iteration on no pair with α ≤ 1.5
+    /// and on few with α = 3 (deep overlaps only).
+    #[test]
+    fn halley_matches_the_safeguarded_iteration() {
+        let mut rnd = uniform(11);
+        for aspect in [1.001, 1.1, 1.5, 3.0] {
+            let s = ellipse(aspect);
+            let (mut handed_over, mut near, mut most) = (0, 0, 0);
+            for k in 0..2000 {
+                let (ri, rj) = (0.5 + 0.2 * rnd(), 0.5 + 0.2 * rnd());
+                let (oi, oj) = (Axis::new(6.3 * rnd()), Axis::new(6.3 * rnd()));
+                let phi = 6.3 * rnd();
+                let u = Vector::<2>::new(phi.cos(), phi.sin());
+                let (lo, hi) = (
+                    0.67 * (ri + rj) / s.root,
+                    s.bounding_radius(ri) + s.bounding_radius(rj),
+                );
+                let mut d = u * (lo + (hi - lo) * rnd());
+                if k % 2 == 1 {
+                    // Near contact: move along the line of centres by
+                    // minus the gap, twice (h changes by ~the move).
+                    for _ in 0..2 {
+                        let h = s
+                            .exact_gap_safeguarded(ri, &oi, rj, &oj, &d, f64::INFINITY)
+                            .unwrap()
+                            .gap;
+                        d -= u * (h - 1e-3 * (2.0 * rnd() - 1.0));
+                    }
+                }
+                let old = s
+                    .exact_gap_safeguarded(ri, &oi, rj, &oj, &d, f64::INFINITY)
+                    .unwrap();
+                near += usize::from(old.gap.abs() < 1e-3);
+                let fast = match halley(
+                    &s.form(ri, &oi),
+                    &s.form(rj, &oj),
+                    d[0],
+                    d[1],
+                    (d[0], d[1]),
+                    f64::INFINITY,
+                ) {
+                    Fast::Done(m) => m,
+                    Fast::Apart => unreachable!("max_gap = ∞"),
+                    Fast::Failed => {
+                        handed_over += 1;
+                        // Up to α = 1.5 only overlaps deeper than 0.4,
+                        // most of the short semi-axes (0.41 to 0.57).
+                        assert!(aspect > 1.5 || old.gap < -0.4, "{old:?}");
+                        continue;
+                    }
+                };
+                most = most.max(fast.iterations);
+                let new = s.exact_gap(ri, &oi, rj, &oj, &d, f64::INFINITY).unwrap();
+                assert_eq!(new, fast);
+                assert!(old.converged, "{old:?}");
+                assert_relative_eq!(new.gap, old.gap, epsilon = 1e-13);
+                assert_relative_eq!(new.normal, old.normal, epsilon = 1e-12);
+                for (a, b) in [(new.jet_i, old.jet_i), (new.jet_j, old.jet_j)] {
+                    assert_relative_eq!(a.h, b.h, epsilon = 1e-12);
+                    assert_relative_eq!(a.d1, b.d1, epsilon = 1e-12);
+                    assert_relative_eq!(a.d2, b.d2, epsilon = 1e-11);
+                }
+            }
+            assert!(near > 400, "α = {aspect}: {near} pairs near contact");
+            assert!(most <= 5, "α = {aspect}: {most} steps");
+            // At α = 3 the normal turns by up to ~1.3 rad from the line of
+            // centres even near contact, beyond the reach of the first
+            // steps on about a third of these pairs.
+            assert!(handed_over < 2000 / 100 * 35, "α = {aspect}: {handed_over}");
+        }
+    }
+
+    /// An independent check of where the gap vanishes: the Perram–Wertheim
+    /// contact function `F = max_λ λ(1 − λ) rᵀ C(λ)⁻¹ r`,
+    /// `C(λ) = (1 − λ) M_i + λ M_j` (`M = R diag(a², b²) Rᵀ`, so that
+    /// `H(n)² = nᵀ M n`), is the square of the factor `μ` by which both
+    /// ellipses, scaled about their centres, just touch. So the gap of the
+    /// scaled pair vanishes (to 1e-12: `λ` by golden section to ~1e-9, `F`
+    /// stationary in it) and the gap has the sign of `F − 1`.
+    #[test]
+    fn gap_vanishes_at_the_perram_wertheim_contact() {
+        let mut rnd = uniform(5);
+        for aspect in [1.1, 1.5, 3.0] {
+            let s = ellipse(aspect);
+            for _ in 0..300 {
+                let (ri, rj) = (0.5 + 0.2 * rnd(), 0.5 + 0.2 * rnd());
+                let (ti, tj, phi) = (6.3 * rnd(), 6.3 * rnd(), 6.3 * rnd());
+                let reach = s.bounding_radius(ri) + s.bounding_radius(rj);
+                let d = Vector::<2>::new(phi.cos(), phi.sin()) * (reach * (0.5 + 0.6 * rnd()));
+                let form = |size: f64, theta: f64| {
+                    let (a, b) = s.semi_axes(size);
+                    let (sn, cs) = theta.sin_cos();
+                    // R diag(a², b²) Rᵀ.
+                    [
+                        a * a * cs * cs + b * b * sn * sn,
+                        (a * a - b * b) * cs * sn,
+                        a * a * sn * sn + b * b * cs * cs,
+                    ]
+                };
+                let (mi, mj) = (form(ri, ti), form(rj, tj));
+                let f = |l: f64| {
+                    let c = [0, 1, 2].map(|k| (1.0 - l) * mi[k] + l * mj[k]);
+                    let det = c[0] * c[2] - c[1] * c[1];
+                    let q =
+                        (c[2] * d[0] * d[0] - 2.0 * c[1] * d[0] * d[1] + c[0] * d[1] * d[1]) / det;
+                    l * (1.0 - l) * q
+                };
+                let (mut lo, mut hi) = (0.0, 1.0);
+                let g = 0.5 * (5f64.sqrt() - 1.0);
+                for _ in 0..100 {
+                    let (x1, x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+                    if f(x1) < f(x2) {
+                        lo = x1;
+                    } else {
+                        hi = x2;
+                    }
+                }
+                let mu = f(0.5 * (lo + hi)).sqrt();
+                let (oi, oj) = (Axis::new(ti), Axis::new(tj));
+                let touching = s
+                    .exact_gap(mu * ri, &oi, mu * rj, &oj, &d, f64::INFINITY)
+                    .unwrap();
+                assert!(touching.gap.abs() < 1e-12, "{touching:?}");
+                let h = s
+                    .exact_gap(ri, &oi, rj, &oj, &d, f64::INFINITY)
+                    .unwrap()
+                    .gap;
+                if (mu - 1.0).abs() > 1e-9 {
+                    assert_eq!(h > 0.0, mu > 1.0, "h = {h}, μ = {mu}");
+                }
+            }
         }
     }
 
