@@ -80,7 +80,7 @@ fn pairs(s: &Ellipse, seed: u64) -> Vec<(f64, f64, f64, f64, Vector<2>)> {
 
 /// Each pair's gradient (∂h/∂r_j, ∂h/∂θ_i, ∂h/∂θ_j) against central
 /// differences of its gap, ε = 1e-6. The gap is the maximum of a smooth
-/// function, computed to round-off (Newton's last step < 1e-14 rad), so
+/// function, computed to round-off (~1e-15 rad left in the normal), so
 /// the round-off of the difference is ~1e-16/ε = 1e-10 and its truncation
 /// ~ε² h''' ≲ 1e-10 (h''' ~ 1/k² with k = h + ρ_i + ρ_j ≳ 0.05 here):
 /// a bound of 1e-7 on derivatives of order 0.1–1 catches any wrong term.

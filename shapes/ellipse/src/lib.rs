@@ -38,21 +38,56 @@
 //! quadratic form in the normal `n = e(ψ)`:
 //! `H_i² = nᵀ M_i n = p_i + m_i cos 2(ψ − θ_i)`, `p = (a² + b²)/2`,
 //! `m = (a² − b²)/2` (and the same for `−n`, so body `j` needs no `π`).
-//! [`Axis`] stores `cos 2θ` and `sin 2θ`, so that the maximisation over
-//! `ψ` — the safeguarded Newton iteration of
-//! [`jamkit_planar::gap2d::exact`], run on the unit vector `n`, except that
-//! Newton steps below 10⁻⁶ rad skip the descent test (it is then decided
-//! by round-off and would halve a correct step many times) — costs two square roots and one `sin_cos` (of the step) per
-//! evaluation, and no trigonometry to set up a pair. Tests check it
-//! against `gap2d::exact` with the closed-form `H(β)` to round-off. Since
-//! `h = max_ψ g ≥ g(ψ₀)` at the line of centres `ψ₀`, a pair with
-//! `g(ψ₀) > max_gap` is skipped after one evaluation.
+//! [`Axis`] stores `cos 2θ` and `sin 2θ`, so a pair needs no trigonometry.
+//! With `u = H²`, `u' = −2m sin 2β`, `u'' = −4m cos 2β`, `u''' = 8m sin 2β`
+//! (`β = ψ − θ`),
 //!
-//! NOTE: for *overlapping* bodies `max_ψ` is taken by a safeguarded Newton
-//! iteration from the line of centres, i.e. the local maximum nearest to
-//! it. For the overlaps of a jamming run (`|h| ≪ b`) `g(ψ)` has one
-//! maximum and this is the global one; two ellipses crossed at their
-//! centres can have several.
+//! ```text
+//! H' = u'/2H,   H'' = (u''/2 − H'²)/H,   H''' = (u'''/2 − 3H'H'')/H:
+//! ```
+//!
+//! one square root and one division per body and evaluation.
+//!
+//! **Screen.** `h = max_ψ g ≥ g(ψ₀)` at the line of centres `ψ₀`, so a
+//! pair with `g(ψ₀) > max_gap` is skipped; the test
+//! `r − max_gap > H_i + H_j` is made on squares, without a square root.
+//!
+//! **Halley's iteration** on `g'(ψ) = 0` from the line of centres,
+//!
+//! ```text
+//! δψ = −(g'/g'') / (1 − g' g'''/2g''²),   g''' = −r_ij·e(ψ)⊥ − H_i''' − H_j''',
+//! ```
+//!
+//! converges cubically: 2–3 steps from the line of centres near contact
+//! up to α = 1.5. It runs on a direction `v = L e(ψ)` of any length: `g`,
+//! `H` and their derivatives are homogeneous of degree one in `v`, so the
+//! step is the same, and the turn is `v + δψ v⊥` (by `atan δψ`, which keeps
+//! the convergence cubic), with no square root; `v` is normalised once. It
+//! stops after a step below 10⁻⁵ rad, where what is left is `~K·10⁻¹⁵` rad
+//! (`K = |g'''²/4g''² − g''''/6g''| = O(1)`) and moves `h` by `~10⁻³⁰`, and
+//! the gap and jets are evaluated at the final normal. Every iterate's `g`
+//! is a lower bound on `h`, so a pair leaves as soon as one exceeds
+//! `max_gap`.
+//!
+//! Where a guard fails — `g'' ≥ 0`, Halley's denominator below `1/2`, a
+//! step beyond 1 rad or not shorter than the one before, a step over
+//! 10⁻³ rad that lowers `g`, or 12 steps — [`Ellipse::exact_gap_safeguarded`]
+//! runs: the safeguarded Newton iteration of
+//! [`jamkit_planar::gap2d::exact`] on the unit vector `n` (gradient steps
+//! where `g'' ≥ 0`, steps capped at 0.3 rad and halved until `g` does not
+//! decrease, except that Newton steps below 10⁻⁶ rad skip that test: it is
+//! then decided by round-off), one `sin_cos` per step. That happens for
+//! overlaps deeper than most of the short semi-axis, and at α ≳ 2 where
+//! the normal turns far from the line of centres ([`fallbacks`] counts
+//! them). Tests check both against `gap2d::exact` with the closed-form
+//! `H(β)` and against each other to round-off, and the zero of the gap
+//! against the Perram–Wertheim contact function.
+//!
+//! NOTE: for *overlapping* bodies `max_ψ` is taken by an iteration from
+//! the line of centres, i.e. the local maximum nearest to it. For the
+//! overlaps of a jamming run (`|h| ≪ b`) `g(ψ)` has one maximum and this
+//! is the global one; two ellipses crossed at their centres can have
+//! several.
 //!
 //! ## Inertia and asphericity
 //!
@@ -938,10 +973,10 @@ mod tests {
                         d -= u * (h - 1e-3 * (2.0 * rnd() - 1.0));
                     }
                 }
-                let old = s
+                let safe = s
                     .exact_gap_safeguarded(ri, &oi, rj, &oj, &d, f64::INFINITY)
                     .unwrap();
-                near += usize::from(old.gap.abs() < 1e-3);
+                near += usize::from(safe.gap.abs() < 1e-3);
                 let fast = match halley(
                     &s.form(ri, &oi),
                     &s.form(rj, &oj),
@@ -956,17 +991,17 @@ mod tests {
                         handed_over += 1;
                         // Up to α = 1.5 only overlaps deeper than 0.4,
                         // most of the short semi-axes (0.41 to 0.57).
-                        assert!(aspect > 1.5 || old.gap < -0.4, "{old:?}");
+                        assert!(aspect > 1.5 || safe.gap < -0.4, "{safe:?}");
                         continue;
                     }
                 };
                 most = most.max(fast.iterations);
-                let new = s.exact_gap(ri, &oi, rj, &oj, &d, f64::INFINITY).unwrap();
-                assert_eq!(new, fast);
-                assert!(old.converged, "{old:?}");
-                assert_relative_eq!(new.gap, old.gap, epsilon = 1e-13);
-                assert_relative_eq!(new.normal, old.normal, epsilon = 1e-12);
-                for (a, b) in [(new.jet_i, old.jet_i), (new.jet_j, old.jet_j)] {
+                let got = s.exact_gap(ri, &oi, rj, &oj, &d, f64::INFINITY).unwrap();
+                assert_eq!(got, fast);
+                assert!(safe.converged, "{safe:?}");
+                assert_relative_eq!(got.gap, safe.gap, epsilon = 1e-13);
+                assert_relative_eq!(got.normal, safe.normal, epsilon = 1e-12);
+                for (a, b) in [(got.jet_i, safe.jet_i), (got.jet_j, safe.jet_j)] {
                     assert_relative_eq!(a.h, b.h, epsilon = 1e-12);
                     assert_relative_eq!(a.d1, b.d1, epsilon = 1e-12);
                     assert_relative_eq!(a.d2, b.d2, epsilon = 1e-11);
