@@ -57,6 +57,7 @@ fn spectrum_and_gaps_are_written_and_normalised() {
         let table =
             std::fs::read_to_string(dir.path().join(format!("eigenvalues/{id}.csv"))).unwrap();
         assert_eq!(table.lines().count(), 1 + 3 * 32, "{id}");
+        assert_eq!(r["softest_participation"], "", "no eigenvectors asked for");
     }
     let dos = csv(&dir.path().join("dos.csv"));
     let integral: f64 = dos
@@ -78,6 +79,32 @@ fn spectrum_and_gaps_are_written_and_normalised() {
     assert!(z.windows(2).all(|w| w[1] >= w[0]), "Z(h) must not decrease");
     assert_eq!(*z.last().unwrap(), 1.0);
     assert!(z[0] < 0.01, "almost no gaps below 1e-12: Z = {}", z[0]);
+}
+
+/// With `modes: true`, the softest-mode columns of `results.csv` repeat the
+/// row of `eigenvalues/<id>.csv` of the first mode above `omega_zero`
+/// (below it lie the translations and the quartic modes of the hypostatic
+/// near-disks, so it is not the first row).
+#[test]
+fn softest_mode_columns_repeat_the_first_non_zero_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    common::run_ok(
+        &experiment("[Contacts, Spectrum(modes: true)]"),
+        dir.path(),
+        2,
+    );
+    for r in &csv(&dir.path().join("results.csv")) {
+        let id = &r["id"];
+        let modes = csv(&dir.path().join(format!("eigenvalues/{id}.csv")));
+        let first = modes.iter().position(|m| num(m, "omega") > 1e-5).unwrap();
+        assert!(first > 2, "{id}: zero modes below the softest");
+        let m = &modes[first];
+        assert_eq!(r["softest_omega"], m["omega"], "{id}");
+        assert_eq!(r["softest_participation"], m["participation"], "{id}");
+        assert_eq!(r["softest_rotational_share"], m["rotational_share"], "{id}");
+        let pr = num(r, "softest_participation");
+        assert!((1.0 / 32.0..=1.0).contains(&pr), "{id}: PR = {pr}");
+    }
 }
 
 /// A rerun that asks for other observables measures them on the saved

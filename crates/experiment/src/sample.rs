@@ -21,7 +21,9 @@ use jamkit_engine::{
     AboveJamParams, Fire, JamParams, PressureParams, Progress, Scene, above_jam, compress_to_phi,
     compress_to_pressure, jam,
 };
-use jamkit_format::{JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures};
+use jamkit_format::{
+    JamPoint, Measures, ModuliMeasures, PackingFile, SoftestMode, SpectrumMeasures,
+};
 use jamkit_observe::gaps::{CountGaps, GapCounts};
 use jamkit_observe::spectrum::{self, Spectrum};
 use jamkit_observe::{JammingSummary, RattlerRule, summarize, summarize_with};
@@ -849,6 +851,11 @@ fn measure_spectrum<const D: usize, S: Shape<D>>(
     let start = Instant::now();
     let s = spectrum::measure(scene, rattler, request.hessian, request.modes, &request.dos)?;
     let table = (request.eigenvalues || request.modes).then(|| eigenvalue_table(&s));
+    let softest = s.softest(request.dos.omega_zero).map(|(n, m)| SoftestMode {
+        omega: spectrum::frequency(s.eigenvalues[n]),
+        participation: m.participation,
+        rotational_share: m.rotational_share,
+    });
     let measures = SpectrumMeasures {
         coordinates: s.eigenvalues.len(),
         zero_modes: s.zero,
@@ -857,6 +864,7 @@ fn measure_spectrum<const D: usize, S: Shape<D>>(
         histogram: s.histogram,
         dos: request.dos.clone(),
         wall_s: start.elapsed().as_secs_f64(),
+        softest,
     };
     Ok((measures, table))
 }

@@ -17,8 +17,8 @@ pub mod tables;
 pub use error::FormatError;
 pub use jamkit_core::stats::mean_sem;
 pub use record::{
-    CellContacts, JamPoint, Measures, ModuliMeasures, PackingFile, SpectrumMeasures, Stabilisation,
-    without_configuration, write_atomic,
+    CellContacts, JamPoint, Measures, ModuliMeasures, PackingFile, SoftestMode, SpectrumMeasures,
+    Stabilisation, without_configuration, write_atomic,
 };
 pub use tables::{
     PointSummary, dos_csv, gaps_csv, pooled_histogram, results_csv, summarize_points, summary_csv,

@@ -214,6 +214,22 @@ pub struct SpectrumMeasures {
     pub dos: DosParams,
     /// Seconds for assembly and diagonalisation.
     pub wall_s: f64,
+    /// The softest mode above `dos.omega_zero` (with `modes: true`, when
+    /// there is one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub softest: Option<SoftestMode>,
+}
+
+/// The softest non-zero mode of a spectrum: the lowest eigenvalue with
+/// `ω > omega_zero`, and the shape of its eigenvector.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SoftestMode {
+    /// Its frequency `ω = √λ`.
+    pub omega: f64,
+    /// Its participation ratio, in `[1/N_b, 1]`.
+    pub participation: f64,
+    /// Its share of weight on rotational coordinates.
+    pub rotational_share: f64,
 }
 
 /// One packing on disk (`packings/<id>.json`).

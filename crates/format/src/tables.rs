@@ -259,7 +259,7 @@ const CELL_CONTACTS_COLUMNS: [&str; 4] = [
 /// The columns of `AboveJam`'s jamming point (docs/reference/output-files.md).
 const JAM_POINT_COLUMNS: [&str; 4] = ["jam_phi", "jam_z", "jam_rattlers", "jam_iso_margin"];
 
-const SPECTRUM_COLUMNS: [&str; 9] = [
+const SPECTRUM_COLUMNS: [&str; 12] = [
     "omega_1",
     "omega_star",
     "zero_modes",
@@ -268,6 +268,9 @@ const SPECTRUM_COLUMNS: [&str; 9] = [
     "zero_extra",
     "lambda_min",
     "lambda_max",
+    "softest_omega",
+    "softest_participation",
+    "softest_rotational_share",
     "spectrum_s",
 ];
 
@@ -320,6 +323,9 @@ fn spectrum_cells(s: Option<&SpectrumMeasures>) -> Vec<String> {
         s.zero_modes.extra.to_string(),
         format!("{:e}", s.lambda_min),
         format!("{:e}", s.lambda_max),
+        e(s.softest.map(|m| m.omega)),
+        e(s.softest.map(|m| m.participation)),
+        e(s.softest.map(|m| m.rotational_share)),
         format!("{:.3}", s.wall_s),
     ]
 }

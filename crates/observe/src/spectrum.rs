@@ -133,6 +133,20 @@ pub struct Spectrum {
     pub zero: ZeroModes,
 }
 
+impl Spectrum {
+    /// The softest non-zero mode: the index of the lowest eigenvalue with
+    /// `ω > omega_zero` and its shape (`None` without eigenvectors or
+    /// without such a mode).
+    pub fn softest(&self, omega_zero: f64) -> Option<(usize, ModeShape)> {
+        let modes = self.modes.as_ref()?;
+        let n = self
+            .eigenvalues
+            .iter()
+            .position(|&l| frequency(l) > omega_zero)?;
+        Some((n, modes[n]))
+    }
+}
+
 /// Assemble the Hessian of `scene`, diagonalise it and bin its frequencies.
 pub fn measure<const D: usize, S: jamkit_core::Shape<D>>(
     scene: &mut jamkit_engine::Scene<D, S>,
@@ -186,5 +200,46 @@ mod tests {
         };
         assert_eq!(omega_max_sq(&h, &[1.0, 0.25]).unwrap(), 4.0);
         assert!(omega_max_sq(&h, &[1.0]).is_err());
+    }
+
+    #[test]
+    fn softest_is_the_first_mode_above_the_zero_threshold() {
+        // Two bodies, (x, θ) each: diag(0, 4) and diag(1, 9). The modes are
+        // the unit vectors; λ = 0 is a zero mode, λ = 1 (ω = 1) the softest,
+        // on body 1's translation alone: PR = 1/2, rotational share 0.
+        let h = Hessian {
+            size: 4,
+            body: vec![0, 0, 1, 1],
+            rotational: vec![false, true, false, true],
+            entries: vec![(0, 0, 0.0), (1, 1, 4.0), (2, 2, 1.0), (3, 3, 9.0)],
+        };
+        let (eigenvalues, modes) = eigenmodes(&h).unwrap();
+        let params = DosParams::default();
+        let mut spectrum = Spectrum {
+            histogram: DosHistogram::new(&params),
+            eigenvalues,
+            modes: Some(modes),
+            zero: ZeroModes {
+                total: 1,
+                translations: 0,
+                rattlers: 0,
+                extra: 1,
+            },
+        };
+        let (n, mode) = spectrum.softest(1e-5).unwrap();
+        assert_eq!(n, 1);
+        assert!((spectrum.eigenvalues[n] - 1.0).abs() < 1e-12);
+        assert!((mode.participation - 0.5).abs() < 1e-12, "{mode:?}");
+        assert!(mode.rotational_share.abs() < 1e-12, "{mode:?}");
+        // A threshold above ω = 1 leaves λ = 4: body 0's rotation.
+        let (n, mode) = spectrum.softest(1.5).unwrap();
+        assert!((spectrum.eigenvalues[n] - 4.0).abs() < 1e-12);
+        assert!((mode.rotational_share - 1.0).abs() < 1e-12, "{mode:?}");
+        assert!(
+            spectrum.softest(10.0).is_none(),
+            "every mode is below ω = 10"
+        );
+        spectrum.modes = None;
+        assert!(spectrum.softest(1e-5).is_none(), "no eigenvectors");
     }
 }
