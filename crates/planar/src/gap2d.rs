@@ -105,12 +105,22 @@
 //! where it could run to another stationary point of `g` than the nested
 //! solve's ascent reaches) or than the one before (no quadratic
 //! convergence), or after 30 steps. The
-//! caller then runs the nested solve. Converged after a step below 10⁻⁷
-//! rad on all three angles, the nested solve's tolerance: what is left is
-//! `~C·10⁻¹⁴` rad in each angle and `~10⁻²⁸` in `h` (`L` is stationary),
-//! and the jets are computed at the final point. It is not the nested
-//! solve's result bit for bit: the two stop at different points within
-//! that tolerance.
+//! caller then runs the nested solve.
+//!
+//! **Converged** means: the last Newton step was below
+//! [`JOINT_TOLERANCE`] = 10⁻⁸ rad on all three angles. Convergence being
+//! quadratic, the distance left to the stationary point is `~C s²` after a
+//! step `s`, with `C = O(n³Δ)` the ratio of the system's second to first
+//! derivatives: `≲ C·10⁻¹⁶` rad in each angle, round-off, so that
+//! `|g'(ψ)| = |∂L/∂ψ|` at converged supports is `≲ k·C·10⁻¹⁶` and `h` is
+//! exact to round-off (`L` is stationary). The jets are computed at the
+//! final point. The result is therefore that of the stationary point to
+//! round-off **whatever the start**: from the first-order guesses, or from
+//! the point where the same pair's previous solve ended (a *warm start*,
+//! [`crate::profiled::Profiled`]'s contacts in the engine, which then
+//! converge in one or two steps). It is not the nested solve's result bit
+//! for bit: that one stops after a step below 10⁻⁷ rad on ψ (`~C·10⁻¹⁴`
+//! rad left).
 
 use jamkit_core::math::{Matrix, Unit, Vector, cmul, turn_unit, unit_of_angle};
 use jamkit_core::{Contact, GapHessian};
@@ -504,19 +514,26 @@ fn joint_body<F: Fn(Unit) -> (f64, f64, f64)>(e_beta: Unit, p: Unit, outline: &F
 }
 
 /// The support jet at the support point `p = e^{iφ}` for the direction
-/// `e^{iβ}` ([`polar_support_unit`]'s formulas, without its search).
+/// `e^{iβ}` ([`polar_support_unit`]'s formulas, without its search); `H''`
+/// only with `second` (else NaN: the contacts need `H` and `H'` alone).
 #[inline(always)]
-fn jet_at<F: Fn(Unit) -> (f64, f64, f64)>(e_beta: Unit, p: Unit, outline: &F) -> SupportJet {
+fn jet_at<F: Fn(Unit) -> (f64, f64, f64)>(
+    e_beta: Unit,
+    p: Unit,
+    outline: &F,
+    second: bool,
+) -> SupportJet {
     let (r, r1, r2) = outline(p);
     let d = cmul(p, (e_beta.0, -e_beta.1));
-    let q = r * r + r1 * r1;
-    let k = r * r + 2.0 * r1 * r1 - r * r2;
     let h = r * d.0;
-    SupportJet {
-        h,
-        d1: r * d.1,
-        d2: q * q.sqrt() / k - h,
-    }
+    let d2 = if second {
+        let q = r * r + r1 * r1;
+        let k = r * r + 2.0 * r1 * r1 - r * r2;
+        q * q.sqrt() / k - h
+    } else {
+        f64::NAN
+    };
+    SupportJet { h, d1: r * d.1, d2 }
 }
 
 static JOINT_FALLBACKS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
@@ -542,6 +559,11 @@ const JOINT_CAP: u32 = 30;
 /// nested solve.
 const JOINT_MAX_STEP: f64 = 0.3;
 
+/// [`exact_joint`] has converged after a step below this on all three
+/// angles (rad): the error left, `~C·10⁻¹⁶` with `C = O(n³Δ)` (quadratic
+/// convergence), is round-off, whatever the start.
+pub const JOINT_TOLERANCE: f64 = 1e-8;
+
 /// The exact gap of two convex bodies given by their body-frame polar
 /// outlines `outline(e^{iφ}) = (R, R', R'')` (sizes included), by one
 /// Newton iteration on the normal and both support points at once (module
@@ -550,12 +572,13 @@ const JOINT_MAX_STEP: f64 = 0.3;
 /// better guess is known). `z_i`, `z_j` as in [`exact_unit`].
 ///
 /// `None` where the iteration fails (`q_φ ≤ 0` or `k ≤ 0` at an iterate, a
-/// step longer than 0.3 rad or than the one before, or 30 steps): the caller then runs the
-/// nested solve, [`exact_unit`] on [`polar_support_unit`] supports.
-/// Converged after a step below 10⁻⁷ rad on the normal and both support
-/// points, the nested solve's tolerance: what is left is ~10⁻¹⁴ rad in each
-/// and ~10⁻²⁸ in `h` (the Lagrangian is stationary). The jets are those at
-/// the final point.
+/// step longer than 0.3 rad or than the one before, or 30 steps): the
+/// caller then runs the nested solve, [`exact_unit`] on
+/// [`polar_support_unit`] supports. Converged after a step below
+/// [`JOINT_TOLERANCE`] on the normal and both support points: what is left
+/// is round-off (`~C·10⁻¹⁶` rad in each angle; module documentation), from
+/// any start. The jets are those at the final point, `H''` only with
+/// `second` (NaN without: the contacts need `H` and `H'` alone).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64)>(
@@ -567,6 +590,7 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
     z_j: Unit,
     p_j: Unit,
     outline_j: G,
+    second: bool,
 ) -> Option<ExactGap> {
     let (zi_bar, zj_bar_neg) = ((z_i.0, -z_i.1), (-z_j.0, z_j.1));
     let (mut w, mut pi, mut pj) = (w0, p_i, p_j);
@@ -605,10 +629,10 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
         w = turn_step(w, dpsi);
         pi = turn_step(pi, dphi_i);
         pj = turn_step(pj, dphi_j);
-        if len < 1e-7 {
+        if len < JOINT_TOLERANCE {
             let (ei, ej) = (cmul(w, zi_bar), cmul(w, zj_bar_neg));
-            let jet_i = jet_at(ei, pi, &outline_i);
-            let jet_j = jet_at(ej, pj, &outline_j);
+            let jet_i = jet_at(ei, pi, &outline_i, second);
+            let jet_j = jet_at(ej, pj, &outline_j, second);
             return Some(ExactGap {
                 normal: w,
                 gap: r_ij[0] * w.0 + r_ij[1] * w.1 - jet_i.h - jet_j.h,
@@ -798,7 +822,7 @@ mod tests {
                 polar_support_unit(ei, ei, oi).1.p,
                 polar_support_unit(ej, ej, oj).1.p,
             );
-            let Some(joint) = exact_joint(&d, w0, zi, pi, oi, zj, pj, oj) else {
+            let Some(joint) = exact_joint(&d, w0, zi, pi, oi, zj, pj, oj, true) else {
                 continue;
             };
             joint_steps += 1;

@@ -46,7 +46,7 @@
 use jamkit_core::math::{Unit, cmul};
 use jamkit_core::{
     Contact, ContactLanes, Dims, Family, FamilyInfo, FastContacts, GapHessian, Look, Outline, Pair,
-    PairLanes, ParamSpec, Policy, Shape, ShapeVisitor, contacts_one_by_one,
+    PairLanes, PairMemo, ParamSpec, Policy, Shape, ShapeVisitor, contacts_one_by_one,
 };
 use jamkit_planar::gap2d::{GapModel, Jet3};
 use jamkit_planar::profiled::{NearDiskProfile, Profiled};
@@ -637,6 +637,17 @@ impl Shape<2> for NearDisk {
     #[inline(always)]
     fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, Angle>, max_gap: f64, visit: F) {
         self.shape.contacts(pair, max_gap, visit)
+    }
+
+    #[inline(always)]
+    fn contacts_warm<F: FnMut(Contact<2>)>(
+        &self,
+        pair: &Pair<2, Angle>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+        visit: F,
+    ) {
+        self.shape.contacts_warm(pair, max_gap, memo, visit)
     }
 
     fn gap_hessians<V: FnMut(GapHessian<2>)>(
