@@ -120,7 +120,10 @@
 //! [`crate::profiled::Profiled`]'s contacts in the engine, which then
 //! converge in one or two steps). It is not the nested solve's result bit
 //! for bit: that one stops after a step below 10⁻⁷ rad on ψ (`~C·10⁻¹⁴`
-//! rad left).
+//! rad left). The contacts need `H` and `H'` alone: they take them from
+//! the last iterate, moved along the last step to first order (`O(step²)`,
+//! round-off), and only the Hessian evaluates the jets, `H''` included, at
+//! the final point.
 
 use jamkit_core::math::{Matrix, Unit, Vector, cmul, turn_unit, unit_of_angle};
 use jamkit_core::{Contact, GapHessian};
@@ -464,15 +467,24 @@ pub fn exact_unit<S: Fn(Unit) -> SupportJet, T: Fn(Unit) -> SupportJet>(
     }
 }
 
-/// `z e^{iθ}` for a Newton step `θ` of any length up to about 1 rad,
-/// without a trigonometric call: [`turn_unit`] itself below 10⁻² rad
-/// (Taylor series, exact in double precision), else `e^{iθ/8}` from the same
-/// series squared three times (relative error a few ulps) and the result
-/// renormalised.
+/// `z e^{iθ}` for a Newton step `θ` of any length up to about 1 rad:
+/// below 10⁻² rad [`turn_unit`]'s Taylor series (exact in double
+/// precision), its coefficients multiplied rather than divided (a few
+/// ulps, and no division on the iteration's critical path), and the result
+/// renormalised; else `e^{iθ/8}` by [`turn_unit`] squared three times
+/// (relative error a few ulps) and renormalised.
 #[inline(always)]
 pub fn turn_step(z: Unit, theta: f64) -> Unit {
     if theta.abs() < 1e-2 {
-        return turn_unit(z, theta);
+        let x2 = theta * theta;
+        let s = theta
+            * (1.0 - x2 * (1.0 / 6.0) * (1.0 - x2 * (1.0 / 20.0) * (1.0 - x2 * (1.0 / 42.0))));
+        let c = 1.0
+            - x2 * 0.5
+                * (1.0 - x2 * (1.0 / 12.0) * (1.0 - x2 * (1.0 / 30.0) * (1.0 - x2 * (1.0 / 56.0))));
+        let (c, s) = cmul(z, (c, s));
+        let fix = 1.5 - 0.5 * (c * c + s * s);
+        return (c * fix, s * fix);
     }
     let mut e = turn_unit((1.0, 0.0), 0.125 * theta);
     for _ in 0..3 {
@@ -514,26 +526,19 @@ fn joint_body<F: Fn(Unit) -> (f64, f64, f64)>(e_beta: Unit, p: Unit, outline: &F
 }
 
 /// The support jet at the support point `p = e^{iφ}` for the direction
-/// `e^{iβ}` ([`polar_support_unit`]'s formulas, without its search); `H''`
-/// only with `second` (else NaN: the contacts need `H` and `H'` alone).
+/// `e^{iβ}` ([`polar_support_unit`]'s formulas, without its search).
 #[inline(always)]
-fn jet_at<F: Fn(Unit) -> (f64, f64, f64)>(
-    e_beta: Unit,
-    p: Unit,
-    outline: &F,
-    second: bool,
-) -> SupportJet {
+fn jet_at<F: Fn(Unit) -> (f64, f64, f64)>(e_beta: Unit, p: Unit, outline: &F) -> SupportJet {
     let (r, r1, r2) = outline(p);
     let d = cmul(p, (e_beta.0, -e_beta.1));
+    let q = r * r + r1 * r1;
+    let k = r * r + 2.0 * r1 * r1 - r * r2;
     let h = r * d.0;
-    let d2 = if second {
-        let q = r * r + r1 * r1;
-        let k = r * r + 2.0 * r1 * r1 - r * r2;
-        q * q.sqrt() / k - h
-    } else {
-        f64::NAN
-    };
-    SupportJet { h, d1: r * d.1, d2 }
+    SupportJet {
+        h,
+        d1: r * d.1,
+        d2: q * q.sqrt() / k - h,
+    }
 }
 
 static JOINT_FALLBACKS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
@@ -577,8 +582,11 @@ pub const JOINT_TOLERANCE: f64 = 1e-8;
 /// [`polar_support_unit`] supports. Converged after a step below
 /// [`JOINT_TOLERANCE`] on the normal and both support points: what is left
 /// is round-off (`~C·10⁻¹⁶` rad in each angle; module documentation), from
-/// any start. The jets are those at the final point, `H''` only with
-/// `second` (NaN without: the contacts need `H` and `H'` alone).
+/// any start. With `second`, the jets are those at the final point;
+/// without, `H` and `H'` are those of the last iterate moved along the last
+/// step to first order (an error O(step²) ≤ 10⁻¹⁶, round-off, and no
+/// outline evaluation) and `H''` is NaN (the contacts need `H` and `H'`
+/// alone).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64)>(
@@ -607,7 +615,8 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
         if !(bi.q_phi > 0.0 && bj.q_phi > 0.0) {
             return None;
         }
-        let (ai, aj) = (bi.m / bi.q_phi, bj.m / bj.q_phi);
+        let (inv_i, inv_j) = (1.0 / bi.q_phi, 1.0 / bj.q_phi);
+        let (ai, aj) = (bi.m * inv_i, bj.m * inv_j);
         let along = r_ij[0] * w.0 + r_ij[1] * w.1;
         let l_psi = -r_ij[0] * w.1 + r_ij[1] * w.0 - bi.h_beta - bj.h_beta;
         let k = along - bi.h - bj.h + ai * bi.m + aj * bj.m;
@@ -615,8 +624,8 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
             return None;
         }
         let dpsi = (l_psi + ai * bi.q + aj * bj.q) / k;
-        let dphi_i = ai * dpsi - bi.q / bi.q_phi;
-        let dphi_j = aj * dpsi - bj.q / bj.q_phi;
+        let dphi_i = ai * dpsi - bi.q * inv_i;
+        let dphi_j = aj * dpsi - bj.q * inv_j;
         let len = dpsi.abs().max(dphi_i.abs()).max(dphi_j.abs());
         // No progress: a Newton step that does not shrink (it shrinks
         // quadratically near the optimum).
@@ -630,9 +639,21 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
         pi = turn_step(pi, dphi_i);
         pj = turn_step(pj, dphi_j);
         if len < JOINT_TOLERANCE {
-            let (ei, ej) = (cmul(w, zi_bar), cmul(w, zj_bar_neg));
-            let jet_i = jet_at(ei, pi, &outline_i, second);
-            let jet_j = jet_at(ej, pj, &outline_j, second);
+            let (jet_i, jet_j) = if second {
+                let (ei, ej) = (cmul(w, zi_bar), cmul(w, zj_bar_neg));
+                (jet_at(ei, pi, &outline_i), jet_at(ej, pj, &outline_j))
+            } else {
+                // H = h(φ, β) and H' = ∂h/∂β moved along the last step to
+                // first order (∂h/∂φ = −q, ∂h/∂β = h_β, ∂h_β/∂φ = m,
+                // ∂h_β/∂β = −h): the step is below 10⁻⁸ rad, so what is
+                // left, O(step²), is round-off.
+                let moved = |b: &JointBody, dphi: f64| SupportJet {
+                    h: b.h - b.q * dphi + b.h_beta * dpsi,
+                    d1: b.h_beta + b.m * dphi - b.h * dpsi,
+                    d2: f64::NAN,
+                };
+                (moved(&bi, dphi_i), moved(&bj, dphi_j))
+            };
             return Some(ExactGap {
                 normal: w,
                 gap: r_ij[0] * w.0 + r_ij[1] * w.1 - jet_i.h - jet_j.h,
