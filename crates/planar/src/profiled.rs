@@ -492,7 +492,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         pair: &Pair<2, O>,
         max_gap: f64,
         solve: ExactSolve,
-        mut memo: Option<&mut PairMemo>,
+        memo: Option<&mut PairMemo>,
         second: bool,
     ) -> Option<gap2d::ExactGap> {
         let (size_i, size_j, r_ij) = (pair.size_i, pair.size_j, &pair.r_ij);
@@ -586,7 +586,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             return found;
         }
         let found = found.unwrap_or_else(|| self.nested(pair, u, dpsi, z_i, z_j, &outline));
-        if let Some(memo) = memo.as_deref_mut() {
+        if let Some(memo) = memo {
             *memo = Some(remember(&found, u));
         }
         Some(found)
