@@ -14,7 +14,8 @@
 //!   gradient) of `fourier` near-disks (n = 2, Δ = 0.1) near contact, by
 //!   the paper's first-order gap, and by the exact gap started cold (from
 //!   the first-order guesses, `Shape::contacts`) and warm (from the memo
-//!   of the same pair before a move of 1e-6, `Shape::contacts_warm`).
+//!   of the same pair before a move of 1e-6, `Shape::contacts_warm`;
+//!   `warm_unmoved`: from the memo of the same configuration).
 //!
 //! The N = 1024 packing benchmark is `jamkit bench packing` (one packing is
 //! seconds long, too long for criterion's repetitions).
@@ -134,6 +135,7 @@ fn exact_pair(c: &mut Criterion) {
     let pi = std::f64::consts::PI;
     let mut pairs = Vec::new();
     let mut memos: Vec<PairMemo> = Vec::new();
+    let mut stills: Vec<PairMemo> = Vec::new();
     while pairs.len() < 1024 {
         let (si, sj) = (
             0.5 + 0.2 * rng.random::<f64>(),
@@ -154,12 +156,14 @@ fn exact_pair(c: &mut Criterion) {
                 Vector::<2>::new(r * dir.cos(), r * dir.sin()),
             )
         };
-        let mut memo = None;
+        let (mut memo, mut still) = (None, None);
         let mut found = false;
         exact.contacts_warm(&at(r - 1e-6, 1e-6), 0.0, &mut memo, |_| found = true);
+        exact.contacts_warm(&at(r, 0.0), 0.0, &mut still, |_| found = true);
         if found {
             pairs.push(at(r, 0.0));
             memos.push(memo);
+            stills.push(still);
         }
     }
     let mut group = c.benchmark_group("exact_pair");
@@ -183,6 +187,14 @@ fn exact_pair(c: &mut Criterion) {
     group.bench_function("warm", |b| {
         b.iter(|| {
             scratch.copy_from_slice(&memos);
+            for (p, m) in pairs.iter().zip(&mut scratch) {
+                exact.contacts_warm(p, 0.0, m, |c| sum += c.gap);
+            }
+        })
+    });
+    group.bench_function("warm_unmoved", |b| {
+        b.iter(|| {
+            scratch.copy_from_slice(&stills);
             for (p, m) in pairs.iter().zip(&mut scratch) {
                 exact.contacts_warm(p, 0.0, m, |c| sum += c.gap);
             }
