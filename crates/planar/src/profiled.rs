@@ -474,8 +474,8 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     /// where this solve ended. The far-pair bound and the joint iteration's
     /// reach and safeguards are the cold solve's, and its result is the
     /// same optimum to round-off ([`gap2d::JOINT_TOLERANCE`]), whatever the
-    /// memo holds. `H''` is not computed (NaN): the contacts do not need
-    /// it.
+    /// memo holds. Where the joint iteration converges `H''` is not
+    /// computed (NaN): the contacts do not need it.
     pub fn exact_solve_warm(
         &self,
         pair: &Pair<2, O>,
