@@ -10,6 +10,12 @@
 //!   (`Ŷ_22`, Δ = 0.1, φ = 0.66, random, overlapping) with the first-order
 //!   and the exact gap, the latter by the nested and the joint solver
 //!   (docs/reports/performance.md, "Where the time of a packing goes").
+//! * `exact_pair/{first_order,cold,warm}`: one pair evaluation (gap and
+//!   gradient) of `fourier` near-disks (n = 2, Δ = 0.1) near contact, by
+//!   the paper's first-order gap, and by the exact gap started cold (from
+//!   the first-order guesses, `Shape::contacts`) and warm (from the memo
+//!   of the same pair before a move of 1e-6, `Shape::contacts_warm`;
+//!   `warm_unmoved`: from the memo of the same configuration).
 //!
 //! The N = 1024 packing benchmark is `jamkit bench packing` (one packing is
 //! seconds long, too long for criterion's repetitions).
@@ -111,11 +117,98 @@ fn energy_gradient_harmonic(c: &mut Criterion) {
     group.finish();
 }
 
+fn exact_pair(c: &mut Criterion) {
+    use jamkit_core::{Pair, PairMemo, Rotation2, Shape, Vector};
+    use jamkit_planar::gap2d::GapModel;
+    use rand::RngExt;
+    let shape = |gap| {
+        NearDisk::fourier(&FourierParams {
+            n: 2,
+            delta: 0.1,
+            inertia: None,
+            gap,
+        })
+        .unwrap()
+    };
+    let (first, exact) = (shape(GapModel::FirstOrder), shape(GapModel::Exact));
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let pi = std::f64::consts::PI;
+    let mut pairs = Vec::new();
+    let mut memos: Vec<PairMemo> = Vec::new();
+    let mut stills: Vec<PairMemo> = Vec::new();
+    while pairs.len() < 1024 {
+        let (si, sj) = (
+            0.5 + 0.2 * rng.random::<f64>(),
+            0.5 + 0.2 * rng.random::<f64>(),
+        );
+        let (ti, tj) = (
+            2.0 * pi * rng.random::<f64>(),
+            2.0 * pi * rng.random::<f64>(),
+        );
+        let dir = 2.0 * pi * rng.random::<f64>();
+        let r = (si + sj) * (0.97 + 0.04 * rng.random::<f64>());
+        let at = |r: f64, dt: f64| {
+            Pair::new(
+                si,
+                Rotation2::new(ti + dt),
+                sj,
+                Rotation2::new(tj - dt),
+                Vector::<2>::new(r * dir.cos(), r * dir.sin()),
+            )
+        };
+        let (mut memo, mut still) = (None, None);
+        let mut found = false;
+        exact.contacts_warm(&at(r - 1e-6, 1e-6), 0.0, &mut memo, |_| found = true);
+        exact.contacts_warm(&at(r, 0.0), 0.0, &mut still, |_| found = true);
+        if found {
+            pairs.push(at(r, 0.0));
+            memos.push(memo);
+            stills.push(still);
+        }
+    }
+    let mut group = c.benchmark_group("exact_pair");
+    group.throughput(Throughput::Elements(pairs.len() as u64));
+    let mut sum = 0.0;
+    group.bench_function("first_order", |b| {
+        b.iter(|| {
+            for p in &pairs {
+                first.contacts(p, 0.0, |c| sum += c.gap);
+            }
+        })
+    });
+    group.bench_function("cold", |b| {
+        b.iter(|| {
+            for p in &pairs {
+                exact.contacts(p, 0.0, |c| sum += c.gap);
+            }
+        })
+    });
+    let mut scratch = memos.clone();
+    group.bench_function("warm", |b| {
+        b.iter(|| {
+            scratch.copy_from_slice(&memos);
+            for (p, m) in pairs.iter().zip(&mut scratch) {
+                exact.contacts_warm(p, 0.0, m, |c| sum += c.gap);
+            }
+        })
+    });
+    group.bench_function("warm_unmoved", |b| {
+        b.iter(|| {
+            scratch.copy_from_slice(&stills);
+            for (p, m) in pairs.iter().zip(&mut scratch) {
+                exact.contacts_warm(p, 0.0, m, |c| sum += c.gap);
+            }
+        })
+    });
+    black_box(sum);
+    group.finish();
+}
+
 criterion_group!(
     name = benches;
     // NOTE: no plots: criterion's plotters backend panicked on a machine
     // without system fonts (the numbers are what docs/reports/performance.md uses).
     config = Criterion::default().without_plots();
-    targets = energy_gradient, energy_gradient_near_disks, jam_disks, energy_gradient_harmonic
+    targets = energy_gradient, energy_gradient_near_disks, jam_disks, energy_gradient_harmonic, exact_pair
 );
 criterion_main!(benches);

@@ -1,6 +1,7 @@
 //! What the engine asks and a family answers about a pair of bodies: the
 //! [`Pair`] (sizes, orientations, separation), each [`Contact`] (a gap and
-//! its first derivatives) and, for the Hessian, its [`GapHessian`].
+//! its first derivatives), for the Hessian its [`GapHessian`], and what a
+//! family may keep of a pair's last solve ([`PairMemo`]).
 //!
 //! Gaps depend on the two centres only through `r_ij = r_j − r_i` (minimum
 //! image), so `∂h/∂r_i = −∂h/∂r_j` and a [`Contact`] stores one of them.
@@ -109,3 +110,15 @@ impl<const D: usize, O: Copy> Pair<D, O> {
         }
     }
 }
+
+/// Numbers a family may keep per listed pair between two evaluations
+/// ([`PairMemo`]).
+pub const MEMO_LEN: usize = 6;
+
+/// What a family keeps of one listed pair's last solve, to start the next
+/// one there ([`Shape::contacts_warm`](crate::Shape::contacts_warm)):
+/// `None` for a pair with no solve yet. The engine stores one per pair of
+/// its neighbour list, carries it over by `(i, j)` when the list is rebuilt
+/// and starts a pair new to the list at `None`, so that it is a function of
+/// the run alone (not of threads or shards).
+pub type PairMemo = Option<[f64; MEMO_LEN]>;

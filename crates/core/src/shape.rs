@@ -12,7 +12,9 @@
 //! * the **contacts** between two bodies ([`Shape::contacts`]): each a gap
 //!   `h` (negative when the bodies overlap) with its derivatives with respect
 //!   to the separation and to both bodies' rotational coordinates, and, for
-//!   the Hessian, their second derivatives ([`Shape::gap_hessians`]).
+//!   the Hessian, their second derivatives ([`Shape::gap_hessians`]);
+//!   a family whose gap is an iterative solve may start it where the
+//!   pair's last solve ended ([`Shape::contacts_warm`]).
 //!
 //! Three optional abilities stand beside it: the engine's fast paths
 //! ([`Shape::Fast`], a [`FastContacts`]), the minimiser's and the analysis'
@@ -21,7 +23,7 @@
 //! A near-disk yields one contact per pair, a dimer up to four; the energy is
 //! then `Σ v(h)` over all contacts, with `v` a [`Potential`](crate::Potential).
 
-use crate::contact::{Contact, GapHessian, Pair};
+use crate::contact::{Contact, GapHessian, Pair, PairMemo};
 use crate::error::{Error, Result};
 use crate::lanes::{ContactLanes, PairLanes, SlotPairs};
 use crate::look::Look;
@@ -80,6 +82,27 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
         max_gap: f64,
         visit: F,
     );
+
+    /// [`Shape::contacts`] for a pair of the engine's neighbour list, with
+    /// `memo`, what this method kept of the same pair's last solve (`None`
+    /// for a pair new to the list): a family whose gap is an iterative
+    /// solve may start there and write where it ended. The contacts must
+    /// be those of [`Shape::contacts`] to the tolerance the family states
+    /// for its solver, whatever the memo holds (also one from a very
+    /// different configuration), and a function of `pair` and `memo` alone
+    /// (the engine's runs stay reproducible bit for bit).
+    ///
+    /// The default ignores the memo and calls [`Shape::contacts`].
+    #[inline(always)]
+    fn contacts_warm<F: FnMut(Contact<D>)>(
+        &self,
+        pair: &Pair<D, Self::Orientation>,
+        max_gap: f64,
+        _memo: &mut PairMemo,
+        visit: F,
+    ) {
+        self.contacts(pair, max_gap, visit)
+    }
 
     /// Like [`Shape::contacts`], with the second derivatives of each gap
     /// (for the Hessian; not a hot path). Must visit the same contacts, with

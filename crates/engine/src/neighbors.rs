@@ -9,6 +9,12 @@
 //!
 //! The list is stored compressed (CSR): the partners of `i` are
 //! `partners[start[i]..start[i + 1]]`, all greater than `i`.
+//!
+//! Data kept per pair beside the list (the families' [`PairMemo`]s)
+//! follows a rebuild by [`NeighborList::carry_over`]: a pair listed before
+//! keeps its entry, a pair new to the list starts at the default.
+//!
+//! [`PairMemo`]: jamkit_core::PairMemo
 
 use jamkit_core::{PeriodicBox, Vector};
 
@@ -23,6 +29,8 @@ pub struct NeighborList<const D: usize> {
     /// `[b_i, b_j]` of each pair (read in list order instead of gathered).
     pair_reach: Vec<[f64; 2]>,
     reference: Vec<Vector<D>>,
+    /// The pairs of the build before the last (for [`NeighborList::carry_over`]).
+    previous: (Vec<u32>, Vec<u32>),
     drift: f64,
     builds: u64,
     // Scratch for the cell list, kept to avoid allocating on every rebuild.
@@ -41,6 +49,7 @@ impl<const D: usize> NeighborList<D> {
             owners: Vec::new(),
             pair_reach: Vec::new(),
             reference: Vec::new(),
+            previous: (Vec::new(), Vec::new()),
             drift: 0.0,
             builds: 0,
             cell_of: Vec::new(),
@@ -129,6 +138,8 @@ impl<const D: usize> NeighborList<D> {
         self.reference.extend_from_slice(positions);
         self.start.clear();
         self.start.push(0);
+        std::mem::swap(&mut self.previous.0, &mut self.owners);
+        std::mem::swap(&mut self.previous.1, &mut self.partners);
         self.partners.clear();
         self.owners.clear();
         self.pair_reach.clear();
@@ -142,6 +153,33 @@ impl<const D: usize> NeighborList<D> {
             self.build_all_pairs(bbox, positions, reach);
         } else {
             self.build_cells(bbox, positions, reach, cells);
+        }
+    }
+
+    /// Data kept per pair across the last build: `old` is in the order of
+    /// the pairs before it, and `new` gets one entry per pair of the list
+    /// in the order of [`NeighborList::pairs`], the old entry of the same
+    /// `(i, j)` where there was one, else `T::default()`. Both lists are
+    /// sorted by `(i, j)`, so this is one merge.
+    pub fn carry_over<T: Copy + Default>(&self, old: &[T], new: &mut Vec<T>) {
+        let (old_owners, old_partners) = (&self.previous.0, &self.previous.1);
+        new.clear();
+        if old.len() != old_partners.len() {
+            new.resize(self.partners.len(), T::default());
+            return;
+        }
+        let mut k = 0;
+        for (&i, &j) in self.owners.iter().zip(&self.partners) {
+            while k < old.len() && (old_owners[k], old_partners[k]) < (i, j) {
+                k += 1;
+            }
+            new.push(
+                if k < old.len() && (old_owners[k], old_partners[k]) == (i, j) {
+                    old[k]
+                } else {
+                    T::default()
+                },
+            );
         }
     }
 
@@ -287,6 +325,39 @@ mod tests {
             got.extend(list.partners(i).iter().map(|&j| (i, j as usize)));
         }
         assert_eq!(got, brute(&bbox, &pos, &reach, 0.3));
+    }
+
+    /// Entries kept per pair follow their `(i, j)` through a rebuild that
+    /// drops some pairs and adds others; new pairs start at the default.
+    #[test]
+    fn carry_over_keeps_each_pair_s_entry() {
+        let bbox = PeriodicBox::<2>::cubic(10.0);
+        let mut pos = vec![
+            Vector::<2>::new(1.0, 1.0),
+            Vector::<2>::new(2.0, 1.0),
+            Vector::<2>::new(1.5, 1.8),
+            Vector::<2>::new(6.0, 6.0),
+        ];
+        let reach = [0.5; 4];
+        let mut list = NeighborList::<2>::new(0.3);
+        list.build(&bbox, &pos, &reach);
+        let (o, p) = list.pairs();
+        let before: Vec<(u32, u32)> = o.iter().copied().zip(p.iter().copied()).collect();
+        assert_eq!(before, [(0, 1), (0, 2), (1, 2)]);
+        let tags: Vec<u32> = before.iter().map(|&(i, j)| 10 * i + j + 1).collect();
+        // Body 2 leaves, body 3 joins body 1.
+        pos[2] = Vector::<2>::new(5.0, 5.0);
+        pos[3] = Vector::<2>::new(2.5, 1.5);
+        list.build(&bbox, &pos, &reach);
+        let mut kept = Vec::new();
+        list.carry_over(&tags, &mut kept);
+        let (o, p) = list.pairs();
+        let after: Vec<(u32, u32)> = o.iter().copied().zip(p.iter().copied()).collect();
+        assert_eq!(after, [(0, 1), (1, 3)]);
+        assert_eq!(kept, [2, 0]);
+        // Entries of the wrong length (none kept yet): all default.
+        list.carry_over(&[], &mut kept);
+        assert_eq!(kept, [0, 0]);
     }
 
     /// The cell list finds exactly the pairs an all-pairs scan finds.

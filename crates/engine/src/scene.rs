@@ -9,9 +9,20 @@
 //! ```
 //!
 //! computed with the energy in one pass over the neighbour list.
+//!
+//! On the generic pass (a family with none of the engine's fast kernels)
+//! every listed pair has a [`PairMemo`] beside it, handed to
+//! [`Shape::contacts_warm`]: a family with an iterative gap starts each
+//! pair's solve where its last one ended. The memos belong to the scene's
+//! pairs and follow them through rebuilds of the list by `(i, j)`
+//! ([`NeighborList::carry_over`]; a pair new to the list starts at `None`),
+//! so that a run is the same bits whatever the threads or shards.
 
 use crate::neighbors::NeighborList;
-use jamkit_core::{Contact, FastContacts, GapHessian, Packing, Pair, Potential, Shape, Vector};
+use jamkit_core::{
+    Contact, FastContacts, GapHessian, Kernel, Packing, Pair, PairMemo, Potential, Shape, ShapeExt,
+    Vector,
+};
 
 /// A packing ready to be relaxed.
 #[derive(Clone, Debug)]
@@ -28,6 +39,11 @@ pub struct Scene<const D: usize, S: Shape<D>> {
     body_terms: Vec<f64>,
     /// Scratch: the slots kernel's buffers.
     slot_scratch: crate::slots::Scratch<D>,
+    /// One memo per listed pair, in list order, on the generic pass
+    /// ([`Shape::contacts_warm`]); empty on the fast kernels.
+    memos: Vec<PairMemo>,
+    /// Scratch: the memos of the list before a rebuild.
+    memos_before: Vec<PairMemo>,
     /// Centres and orientations of the last [`Objective::save`](crate::Objective::save).
     pub(crate) saved: (Vec<Vector<D>>, Vec<S::Orientation>),
 }
@@ -52,6 +68,8 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             found: Vec::new(),
             body_terms: Vec::new(),
             slot_scratch: Default::default(),
+            memos: Vec::new(),
+            memos_before: Vec::new(),
             saved: (Vec::new(), Vec::new()),
         };
         scene.rebuild_neighbors();
@@ -121,6 +139,11 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         self.packing.wrap_positions();
         self.neighbors
             .build(&self.packing.bbox, &self.packing.positions, &self.reach);
+        if self.packing.shape.kernel() == Kernel::Pairs {
+            std::mem::swap(&mut self.memos, &mut self.memos_before);
+            self.neighbors
+                .carry_over(&self.memos_before, &mut self.memos);
+        }
     }
 
     fn refresh_neighbors(&mut self) {
@@ -272,8 +295,10 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             return unsafe { self.pair_sum_avx2(grad) };
         }
         let mut found = std::mem::take(&mut self.found);
-        let e = self.pair_sum(grad, &mut found);
+        let mut memos = std::mem::take(&mut self.memos);
+        let e = self.pair_sum(grad, &mut found, &mut memos);
         self.found = found;
+        self.memos = memos;
         e
     }
 
@@ -284,7 +309,13 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     pub fn energy_gradient_generic(&mut self, grad: &mut [f64]) -> f64 {
         self.refresh_neighbors();
         let mut found = Vec::new();
-        self.pair_sum(grad, &mut found)
+        let mut memos = std::mem::take(&mut self.memos);
+        memos.resize(self.neighbors.pair_count(), None);
+        let e = self.pair_sum(grad, &mut found, &mut memos);
+        if self.packing.shape.kernel() == Kernel::Pairs {
+            self.memos = memos;
+        }
+        e
     }
 
     /// [`Scene::pair_sum`] compiled with AVX2.
@@ -292,8 +323,10 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     #[target_feature(enable = "avx2")]
     unsafe fn pair_sum_avx2(&mut self, grad: &mut [f64]) -> f64 {
         let mut found = std::mem::take(&mut self.found);
-        let e = self.pair_sum(grad, &mut found);
+        let mut memos = std::mem::take(&mut self.memos);
+        let e = self.pair_sum(grad, &mut found, &mut memos);
         self.found = found;
+        self.memos = memos;
         e
     }
 
@@ -303,7 +336,9 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     /// Two phases per chunk of the list: the family's contacts of every pair
     /// whose bounding balls overlap, into a buffer; then the sums in list
     /// order, `V += v(h)`, `g_j += v' ∂h/∂q_j`, and `g_i += v' ∂h/∂q_i` in
-    /// registers until `i`'s partners end (added to `g_i` then).
+    /// registers until `i`'s partners end (added to `g_i` then). Each pair's
+    /// contacts come from [`Shape::contacts_warm`] with its memo in `memos`
+    /// (one per listed pair).
     ///
     /// NOTE: one pass that summed inside the family's callback kept `V` and
     /// `g_i` on the stack (a store-to-load latency per pair) and made the
@@ -312,7 +347,12 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     /// as in that one pass, so the results are the same bits (bodies with no
     /// contact add nothing, where the one pass added exact zeros).
     #[inline(always)]
-    fn pair_sum(&self, grad: &mut [f64], found: &mut Vec<(u32, Contact<D>)>) -> f64 {
+    fn pair_sum(
+        &self,
+        grad: &mut [f64],
+        found: &mut Vec<(u32, Contact<D>)>,
+        memos: &mut [PairMemo],
+    ) -> f64 {
         const CHUNK: usize = 64;
         grad.fill(0.0);
         let p = &self.packing;
@@ -326,6 +366,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         let stride = D + k;
         let potential = self.potential;
         let (owners, partners) = self.neighbors.pairs();
+        let memos = &mut memos[..partners.len()];
         let mut energy = 0.0;
         let mut owner = usize::MAX;
         let mut gi_r = Vector::<D>::zeros();
@@ -341,9 +382,10 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
                 if d.norm_squared() >= cut * cut {
                     continue;
                 }
-                p.shape.contacts(
+                p.shape.contacts_warm(
                     &Pair::new(sizes[i], orientations[i], sizes[j], orientations[j], d),
                     0.0,
+                    &mut memos[pair],
                     |c| found.push((pair as u32, c)),
                 );
             }

@@ -105,12 +105,25 @@
 //! where it could run to another stationary point of `g` than the nested
 //! solve's ascent reaches) or than the one before (no quadratic
 //! convergence), or after 30 steps. The
-//! caller then runs the nested solve. Converged after a step below 10⁻⁷
-//! rad on all three angles, the nested solve's tolerance: what is left is
-//! `~C·10⁻¹⁴` rad in each angle and `~10⁻²⁸` in `h` (`L` is stationary),
-//! and the jets are computed at the final point. It is not the nested
-//! solve's result bit for bit: the two stop at different points within
-//! that tolerance.
+//! caller then runs the nested solve.
+//!
+//! **Converged** means: the last Newton step was below
+//! [`JOINT_TOLERANCE`] = 10⁻⁸ rad on all three angles. Convergence being
+//! quadratic, the distance left to the stationary point is `~C s²` after a
+//! step `s`, with `C = O(n³Δ)` the ratio of the system's second to first
+//! derivatives: `≲ C·10⁻¹⁶` rad in each angle, round-off, so that
+//! `|g'(ψ)| = |∂L/∂ψ|` at converged supports is `≲ k·C·10⁻¹⁶` and `h` is
+//! exact to round-off (`L` is stationary). The jets are computed at the
+//! final point. The result is therefore that of the stationary point to
+//! round-off **whatever the start**: from the first-order guesses, or from
+//! the point where the same pair's previous solve ended (a *warm start*,
+//! [`crate::profiled::Profiled`]'s contacts in the engine, which then
+//! converge in one or two steps). It is not the nested solve's result bit
+//! for bit: that one stops after a step below 10⁻⁷ rad on ψ (`~C·10⁻¹⁴`
+//! rad left). The contacts need `H` and `H'` alone: they take them from
+//! the last iterate, moved along the last step to first order (`O(step²)`,
+//! round-off), and only the Hessian evaluates the jets, `H''` included, at
+//! the final point.
 
 use jamkit_core::math::{Matrix, Unit, Vector, cmul, turn_unit, unit_of_angle};
 use jamkit_core::{Contact, GapHessian};
@@ -454,15 +467,24 @@ pub fn exact_unit<S: Fn(Unit) -> SupportJet, T: Fn(Unit) -> SupportJet>(
     }
 }
 
-/// `z e^{iθ}` for a Newton step `θ` of any length up to about 1 rad,
-/// without a trigonometric call: [`turn_unit`] itself below 10⁻² rad
-/// (Taylor series, exact in double precision), else `e^{iθ/8}` from the same
-/// series squared three times (relative error a few ulps) and the result
-/// renormalised.
+/// `z e^{iθ}` for a Newton step `θ` of any length up to about 1 rad:
+/// below 10⁻² rad [`turn_unit`]'s Taylor series (exact in double
+/// precision), its coefficients multiplied rather than divided (a few
+/// ulps, and no division on the iteration's critical path), and the result
+/// renormalised; else `e^{iθ/8}` by [`turn_unit`] squared three times
+/// (relative error a few ulps) and renormalised.
 #[inline(always)]
 pub fn turn_step(z: Unit, theta: f64) -> Unit {
     if theta.abs() < 1e-2 {
-        return turn_unit(z, theta);
+        let x2 = theta * theta;
+        let s = theta
+            * (1.0 - x2 * (1.0 / 6.0) * (1.0 - x2 * (1.0 / 20.0) * (1.0 - x2 * (1.0 / 42.0))));
+        let c = 1.0
+            - x2 * 0.5
+                * (1.0 - x2 * (1.0 / 12.0) * (1.0 - x2 * (1.0 / 30.0) * (1.0 - x2 * (1.0 / 56.0))));
+        let (c, s) = cmul(z, (c, s));
+        let fix = 1.5 - 0.5 * (c * c + s * s);
+        return (c * fix, s * fix);
     }
     let mut e = turn_unit((1.0, 0.0), 0.125 * theta);
     for _ in 0..3 {
@@ -542,6 +564,11 @@ const JOINT_CAP: u32 = 30;
 /// nested solve.
 const JOINT_MAX_STEP: f64 = 0.3;
 
+/// [`exact_joint`] has converged after a step below this on all three
+/// angles (rad): the error left, `~C·10⁻¹⁶` with `C = O(n³Δ)` (quadratic
+/// convergence), is round-off, whatever the start.
+pub const JOINT_TOLERANCE: f64 = 1e-8;
+
 /// The exact gap of two convex bodies given by their body-frame polar
 /// outlines `outline(e^{iφ}) = (R, R', R'')` (sizes included), by one
 /// Newton iteration on the normal and both support points at once (module
@@ -550,12 +577,16 @@ const JOINT_MAX_STEP: f64 = 0.3;
 /// better guess is known). `z_i`, `z_j` as in [`exact_unit`].
 ///
 /// `None` where the iteration fails (`q_φ ≤ 0` or `k ≤ 0` at an iterate, a
-/// step longer than 0.3 rad or than the one before, or 30 steps): the caller then runs the
-/// nested solve, [`exact_unit`] on [`polar_support_unit`] supports.
-/// Converged after a step below 10⁻⁷ rad on the normal and both support
-/// points, the nested solve's tolerance: what is left is ~10⁻¹⁴ rad in each
-/// and ~10⁻²⁸ in `h` (the Lagrangian is stationary). The jets are those at
-/// the final point.
+/// step longer than 0.3 rad or than the one before, or 30 steps): the
+/// caller then runs the nested solve, [`exact_unit`] on
+/// [`polar_support_unit`] supports. Converged after a step below
+/// [`JOINT_TOLERANCE`] on the normal and both support points: what is left
+/// is round-off (`~C·10⁻¹⁶` rad in each angle; module documentation), from
+/// any start. With `second`, the jets are those at the final point;
+/// without, `H` and `H'` are those of the last iterate moved along the last
+/// step to first order (an error O(step²) ≤ 10⁻¹⁶, round-off, and no
+/// outline evaluation) and `H''` is NaN (the contacts need `H` and `H'`
+/// alone).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64)>(
@@ -567,6 +598,7 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
     z_j: Unit,
     p_j: Unit,
     outline_j: G,
+    second: bool,
 ) -> Option<ExactGap> {
     let (zi_bar, zj_bar_neg) = ((z_i.0, -z_i.1), (-z_j.0, z_j.1));
     let (mut w, mut pi, mut pj) = (w0, p_i, p_j);
@@ -583,7 +615,8 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
         if !(bi.q_phi > 0.0 && bj.q_phi > 0.0) {
             return None;
         }
-        let (ai, aj) = (bi.m / bi.q_phi, bj.m / bj.q_phi);
+        let (inv_i, inv_j) = (1.0 / bi.q_phi, 1.0 / bj.q_phi);
+        let (ai, aj) = (bi.m * inv_i, bj.m * inv_j);
         let along = r_ij[0] * w.0 + r_ij[1] * w.1;
         let l_psi = -r_ij[0] * w.1 + r_ij[1] * w.0 - bi.h_beta - bj.h_beta;
         let k = along - bi.h - bj.h + ai * bi.m + aj * bj.m;
@@ -591,8 +624,8 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
             return None;
         }
         let dpsi = (l_psi + ai * bi.q + aj * bj.q) / k;
-        let dphi_i = ai * dpsi - bi.q / bi.q_phi;
-        let dphi_j = aj * dpsi - bj.q / bj.q_phi;
+        let dphi_i = ai * dpsi - bi.q * inv_i;
+        let dphi_j = aj * dpsi - bj.q * inv_j;
         let len = dpsi.abs().max(dphi_i.abs()).max(dphi_j.abs());
         // No progress: a Newton step that does not shrink (it shrinks
         // quadratically near the optimum).
@@ -605,10 +638,22 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
         w = turn_step(w, dpsi);
         pi = turn_step(pi, dphi_i);
         pj = turn_step(pj, dphi_j);
-        if len < 1e-7 {
-            let (ei, ej) = (cmul(w, zi_bar), cmul(w, zj_bar_neg));
-            let jet_i = jet_at(ei, pi, &outline_i);
-            let jet_j = jet_at(ej, pj, &outline_j);
+        if len < JOINT_TOLERANCE {
+            let (jet_i, jet_j) = if second {
+                let (ei, ej) = (cmul(w, zi_bar), cmul(w, zj_bar_neg));
+                (jet_at(ei, pi, &outline_i), jet_at(ej, pj, &outline_j))
+            } else {
+                // H = h(φ, β) and H' = ∂h/∂β moved along the last step to
+                // first order (∂h/∂φ = −q, ∂h/∂β = h_β, ∂h_β/∂φ = m,
+                // ∂h_β/∂β = −h): the step is below 10⁻⁸ rad, so what is
+                // left, O(step²), is round-off.
+                let moved = |b: &JointBody, dphi: f64| SupportJet {
+                    h: b.h - b.q * dphi + b.h_beta * dpsi,
+                    d1: b.h_beta + b.m * dphi - b.h * dpsi,
+                    d2: f64::NAN,
+                };
+                (moved(&bi, dphi_i), moved(&bj, dphi_j))
+            };
             return Some(ExactGap {
                 normal: w,
                 gap: r_ij[0] * w.0 + r_ij[1] * w.1 - jet_i.h - jet_j.h,
@@ -798,7 +843,7 @@ mod tests {
                 polar_support_unit(ei, ei, oi).1.p,
                 polar_support_unit(ej, ej, oj).1.p,
             );
-            let Some(joint) = exact_joint(&d, w0, zi, pi, oi, zj, pj, oj) else {
+            let Some(joint) = exact_joint(&d, w0, zi, pi, oi, zj, pj, oj, true) else {
                 continue;
             };
             joint_steps += 1;

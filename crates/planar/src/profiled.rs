@@ -51,8 +51,8 @@ use crate::first_order::{Profile, gap_hessian};
 use crate::gap2d::{self, GapModel, Jet3, SupportJet, direction};
 use jamkit_core::math::{Unit, cmul, turn_unit};
 use jamkit_core::{
-    Angle, BodyOrientation, Contact, Error, GapHessian, Look, NoFastPath, Outline, Pair, Policy,
-    RotVec, Rotation2, Shape, Vector,
+    Angle, BodyOrientation, Contact, Error, GapHessian, Look, NoFastPath, Outline, Pair, PairMemo,
+    Policy, RotVec, Rotation2, Shape, Vector,
 };
 use std::f64::consts::PI;
 use std::fmt::Debug;
@@ -401,17 +401,25 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             .expect("with_gap admits the higher gap models only with a third derivative")
     }
 
-    /// The contact of the second-order or the exact gap.
+    /// The contact of the second-order or the exact gap (the exact one
+    /// started from `memo` where given, [`Profiled::exact_solve_warm`]).
     ///
     /// NOTE: kept out of line and cold: inlined into the pair loop, these
     /// paths made `fourier`'s first-order packings 17 % slower (n = 2,
     /// Δ = 0.1, N = 256, same bits).
     #[cold]
     #[inline(never)]
-    fn beyond_first_order(&self, pair: &Pair<2, O>, max_gap: f64) -> Option<Contact<2>> {
+    fn beyond_first_order(
+        &self,
+        pair: &Pair<2, O>,
+        max_gap: f64,
+        memo: Option<&mut PairMemo>,
+    ) -> Option<Contact<2>> {
         match self.gap {
             GapModel::SecondOrder => Some(self.second_order(pair).contact(&pair.r_ij)),
-            _ => self.exact_gap(pair, max_gap).map(|e| e.contact()),
+            _ => self
+                .exact_in(pair, max_gap, ExactSolve::Joint, memo, false)
+                .map(|e| e.contact()),
         }
     }
 
@@ -429,19 +437,13 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         )
     }
 
-    /// The exact gap (see [`gap2d::exact_joint`]), or `None` when it
-    /// certainly exceeds `max_gap`: [`Profiled::exact_solve`] by the joint
-    /// iteration.
-    #[inline]
-    fn exact_gap(&self, pair: &Pair<2, O>, max_gap: f64) -> Option<gap2d::ExactGap> {
-        self.exact_solve(pair, max_gap, ExactSolve::Joint)
-    }
-
     /// The exact gap of a pair, or `None` when it certainly exceeds
     /// `max_gap` (or, with [`ExactSolve::JointAlone`], where the joint
-    /// iteration fails), by the solver `solve` ([`ExactSolve`]). In
-    /// the body frame the outline is `R(φ)/R⁰ = 1 + Δ P(−φ)`, and
-    /// orientation `θ` turns it counter-clockwise by `θ`.
+    /// iteration fails), by the solver `solve` ([`ExactSolve`]), started
+    /// cold (from the first-order guesses below): the solve of
+    /// [`Shape::contacts`] and [`Shape::gap_hessians`]. In the body frame
+    /// the outline is `R(φ)/R⁰ = 1 + Δ P(−φ)`, and orientation `θ` turns it
+    /// counter-clockwise by `θ`.
     ///
     /// Two uses of the first-order gap `h₁` (cheap):
     /// * a bound: `h ≥ h₁ − (s_i + s_j)`, with `s = R⁰ Δ² P'²_max / (1 − Δ P_max)`
@@ -459,6 +461,39 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         pair: &Pair<2, O>,
         max_gap: f64,
         solve: ExactSolve,
+    ) -> Option<gap2d::ExactGap> {
+        self.exact_in(pair, max_gap, solve, None, true)
+    }
+
+    /// The exact gap as the engine's pair loop finds it
+    /// ([`Shape::contacts_warm`]): the joint iteration started where the
+    /// pair's last solve ended (`memo`: the normal relative to the line of
+    /// centres and each support point relative to its body's direction, as
+    /// unit complex numbers), else, or where that fails, the cold solve of
+    /// [`Profiled::exact_solve`] with [`ExactSolve::Joint`]; `memo` gets
+    /// where this solve ended. The far-pair bound and the joint iteration's
+    /// reach and safeguards are the cold solve's, and its result is the
+    /// same optimum to round-off ([`gap2d::JOINT_TOLERANCE`]), whatever the
+    /// memo holds. Where the joint iteration converges `H''` is not
+    /// computed (NaN): the contacts do not need it.
+    pub fn exact_solve_warm(
+        &self,
+        pair: &Pair<2, O>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+    ) -> Option<gap2d::ExactGap> {
+        self.exact_in(pair, max_gap, ExactSolve::Joint, Some(memo), false)
+    }
+
+    /// [`Profiled::exact_solve`] with a memo (warm start and record, for
+    /// [`ExactSolve::Joint`]) and `H''` only with `second`.
+    fn exact_in(
+        &self,
+        pair: &Pair<2, O>,
+        max_gap: f64,
+        solve: ExactSolve,
+        memo: Option<&mut PairMemo>,
+        second: bool,
     ) -> Option<gap2d::ExactGap> {
         let (size_i, size_j, r_ij) = (pair.size_i, pair.size_j, &pair.r_ij);
         let r = r_ij.norm();
@@ -483,38 +518,91 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             (1.0 + d * f, -d * df, d * ddf)
         };
         let (z_i, z_j) = (pair.o_i.unit(), pair.o_j.unit());
+        let (zi_bar, zj_bar_neg) = ((z_i.0, -z_i.1), (-z_j.0, z_j.1));
         // The joint iteration only where it finds the nested solve's
         // optimum: with `r > 2 Σ R⁰ max(c, s)` ([`Profiled::joint_reach`]),
         // `g'' = −r cos(ψ − θ_ij) − H_i'' − H_j'' < 0` wherever
         // `cos(ψ − θ_ij) ≥ 1/2`, and `g` there exceeds every value outside
         // (`≤ r/2 − Σ R⁰ min R`): one maximum in that cone, the global one,
         // which the nested solve's ascent from `ψ₀` reaches. A joint result
-        // outside the cone goes to the nested solve.
+        // outside the cone goes to the nested solve, wherever it started.
         if solve == ExactSolve::JointAlone && r <= self.joint_reach * (size_i + size_j) {
             return None;
         }
-        if solve != ExactSolve::Nested && r > self.joint_reach * (size_i + size_j) {
+        let found = if solve != ExactSolve::Nested && r > self.joint_reach * (size_i + size_j) {
             let sized = |size: f64| {
                 move |p: Unit| {
                     let (r, r1, r2) = outline(p);
                     (size * r, size * r1, size * r2)
                 }
             };
-            let w0 = gap2d::turn_step(u, dpsi);
-            // From each support point's first-order offset from its
-            // direction, δ = atan(R'/R) ≈ R'/R⁰ = ∂h₁/∂θ / R⁰ (error O(Δ²)).
-            let (e_i, e_j) = (
-                gap2d::turn_step(cmul(w0, (z_i.0, -z_i.1)), first.grad_rot_i[0] / size_i),
-                gap2d::turn_step(cmul(w0, (-z_j.0, z_j.1)), first.grad_rot_j[0] / size_j),
-            );
-            let joint =
-                gap2d::exact_joint(r_ij, w0, z_i, e_i, sized(size_i), z_j, e_j, sized(size_j))
-                    .filter(|e| e.normal.0 * r_ij[0] + e.normal.1 * r_ij[1] >= 0.5 * r);
-            if joint.is_some() || solve == ExactSolve::JointAlone {
-                return joint;
+            let joint = |w0: Unit, e_i: Unit, e_j: Unit| {
+                gap2d::exact_joint(
+                    r_ij,
+                    w0,
+                    z_i,
+                    e_i,
+                    sized(size_i),
+                    z_j,
+                    e_j,
+                    sized(size_j),
+                    second,
+                )
+                .filter(|e| e.normal.0 * r_ij[0] + e.normal.1 * r_ij[1] >= 0.5 * r)
+            };
+            // Warm: the normal and the support points where the last solve
+            // of this pair left them, relative to the line of centres and to
+            // each body's direction (a pair that turned as a whole starts at
+            // its optimum).
+            let warm = match memo.as_deref() {
+                Some(Some([a0, a1, di0, di1, dj0, dj1])) => {
+                    let w0 = cmul(u, (*a0, *a1));
+                    joint(
+                        w0,
+                        cmul(cmul(w0, zi_bar), (*di0, *di1)),
+                        cmul(cmul(w0, zj_bar_neg), (*dj0, *dj1)),
+                    )
+                }
+                _ => None,
+            };
+            let joint = warm.or_else(|| {
+                let w0 = gap2d::turn_step(u, dpsi);
+                // From each support point's first-order offset from its
+                // direction, δ = atan(R'/R) ≈ R'/R⁰ = ∂h₁/∂θ / R⁰ (error O(Δ²)).
+                let (e_i, e_j) = (
+                    gap2d::turn_step(cmul(w0, zi_bar), first.grad_rot_i[0] / size_i),
+                    gap2d::turn_step(cmul(w0, zj_bar_neg), first.grad_rot_j[0] / size_j),
+                );
+                joint(w0, e_i, e_j)
+            });
+            if joint.is_none() && solve == ExactSolve::Joint {
+                gap2d::count_joint_fallback();
             }
-            gap2d::count_joint_fallback();
+            joint
+        } else {
+            None
+        };
+        if solve == ExactSolve::JointAlone {
+            return found;
         }
+        let found = found.unwrap_or_else(|| self.nested(pair, u, dpsi, z_i, z_j, &outline));
+        if let Some(memo) = memo {
+            *memo = Some(remember(&found, u));
+        }
+        Some(found)
+    }
+
+    /// The nested solve ([`gap2d::exact_unit`] on
+    /// [`gap2d::polar_support_unit`] supports) from the normal `u e^{i dψ}`.
+    fn nested<F: Fn(Unit) -> (f64, f64, f64) + Copy>(
+        &self,
+        pair: &Pair<2, O>,
+        u: Unit,
+        dpsi: f64,
+        z_i: Unit,
+        z_j: Unit,
+        outline: &F,
+    ) -> gap2d::ExactGap {
         // Each body's support search starts where its previous one ended,
         // turned by the change of direction: after the first Newton step on
         // ψ the support point moves by ~1e-4 rad and one inner step suffices.
@@ -529,7 +617,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
                     }
                     None => e,
                 };
-                let (j, sp) = gap2d::polar_support_unit(e, p0, outline);
+                let (j, sp) = gap2d::polar_support_unit(e, p0, *outline);
                 last.set(Some((e, sp)));
                 SupportJet {
                     h: size * j.h,
@@ -538,15 +626,30 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
                 }
             }
         };
-        Some(gap2d::exact_unit(
-            r_ij,
+        gap2d::exact_unit(
+            &pair.r_ij,
             turn_unit(u, dpsi),
             z_i,
-            support(size_i),
+            support(pair.size_i),
             z_j,
-            support(size_j),
-        ))
+            support(pair.size_j),
+        )
     }
+}
+
+/// The memo of a solve that ended at `e` ([`Profiled::exact_solve_warm`]):
+/// the normal relative to the line of centres, `n ū`, and each support
+/// point relative to its body's direction, `e^{iδ} = (H, H')/|(H, H')|`
+/// (`H = R cos δ`, `H' = R sin δ`).
+#[inline(always)]
+fn remember(e: &gap2d::ExactGap, u: Unit) -> [f64; 6] {
+    let a = cmul(e.normal, (u.0, -u.1));
+    let unit = |j: &SupportJet| {
+        let inv = 1.0 / (j.h * j.h + j.d1 * j.d1).sqrt();
+        (j.h * inv, j.d1 * inv)
+    };
+    let (di, dj) = (unit(&e.jet_i), unit(&e.jet_j));
+    [a.0, a.1, di.0, di.1, dj.0, dj.1]
 }
 
 impl<P: NearDiskProfile, O: PlanarOrientation> Outline for Profiled<P, O> {
@@ -625,9 +728,32 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
         let contact = if self.gap == GapModel::FirstOrder {
             Some(self.first_order(pair))
         } else {
-            self.beyond_first_order(pair, max_gap)
+            self.beyond_first_order(pair, max_gap, None)
         };
         if let Some(c) = contact {
+            visit(c);
+        }
+    }
+
+    /// The exact gap started where the pair's last solve ended
+    /// ([`Profiled::exact_solve_warm`]); the other gap models as
+    /// [`Shape::contacts`].
+    #[inline(always)]
+    fn contacts_warm<F: FnMut(Contact<2>)>(
+        &self,
+        pair: &Pair<2, O>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+        mut visit: F,
+    ) {
+        if self.gap != GapModel::Exact {
+            return self.contacts(pair, max_gap, visit);
+        }
+        let r = pair.r_ij.norm();
+        if r - self.bounding_radius(pair.size_i) - self.bounding_radius(pair.size_j) > max_gap {
+            return;
+        }
+        if let Some(c) = self.beyond_first_order(pair, max_gap, Some(memo)) {
             visit(c);
         }
     }
@@ -653,7 +779,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
                 return Ok(());
             }
             GapModel::Exact => {
-                if let Some(e) = self.exact_gap(pair, max_gap) {
+                if let Some(e) = self.exact_solve(pair, max_gap, ExactSolve::Joint) {
                     visit(e.hessian());
                 }
                 return Ok(());

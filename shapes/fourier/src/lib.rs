@@ -46,7 +46,7 @@
 use jamkit_core::math::{Unit, cmul};
 use jamkit_core::{
     Contact, ContactLanes, Dims, Family, FamilyInfo, FastContacts, GapHessian, Look, Outline, Pair,
-    PairLanes, ParamSpec, Policy, Shape, ShapeVisitor, contacts_one_by_one,
+    PairLanes, PairMemo, ParamSpec, Policy, Shape, ShapeVisitor, contacts_one_by_one,
 };
 use jamkit_planar::gap2d::{GapModel, Jet3};
 use jamkit_planar::profiled::{NearDiskProfile, Profiled};
@@ -400,6 +400,7 @@ impl NearDiskProfile for FourierProfile {
         }
     }
 
+    #[inline(always)]
     fn jet3(&self, cos: f64, sin: f64) -> Option<Jet3> {
         Some(self.jet(cos, sin))
     }
@@ -411,8 +412,22 @@ impl NearDiskProfile for FourierProfile {
 }
 
 impl FourierProfile {
-    /// `[F, F', F'', F‴]` at `e^{iA} = (cos, sin)`.
+    /// `[F, F', F'', F‴]` at `e^{iA} = (cos, sin)`; the paper's family (one
+    /// mode with no phase) with no loop, bit for bit the loop's numbers
+    /// (`cmul(p, (1, 0)) = p` and `0 − x = −x`).
+    #[inline(always)]
     fn jet(&self, cos: f64, sin: f64) -> Jet3 {
+        if let [m] = self.modes[..]
+            && m.b == 0.0
+        {
+            let (n, p) = (m.n as f64, cpow((cos, sin), m.n));
+            return [
+                m.a * p.1,
+                m.a * n * p.0,
+                -(m.a * n * n * p.1),
+                -(m.a * n * n * n * p.0),
+            ];
+        }
         let mut o = [0.0; 4];
         for (m, &phase) in self.modes.iter().zip(&self.phases) {
             let n = m.n as f64;
@@ -637,6 +652,17 @@ impl Shape<2> for NearDisk {
     #[inline(always)]
     fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, Angle>, max_gap: f64, visit: F) {
         self.shape.contacts(pair, max_gap, visit)
+    }
+
+    #[inline(always)]
+    fn contacts_warm<F: FnMut(Contact<2>)>(
+        &self,
+        pair: &Pair<2, Angle>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+        visit: F,
+    ) {
+        self.shape.contacts_warm(pair, max_gap, memo, visit)
     }
 
     fn gap_hessians<V: FnMut(GapHessian<2>)>(
