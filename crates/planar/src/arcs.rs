@@ -271,14 +271,23 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
             size * (z.1 * c.0 + z.0 * c.1),
         )
     };
+    // First each arc against the other body's bounding circle (its
+    // arcs' farthest reach), then the pairs of arcs that pass.
+    let (bound_i, bound_j) = (bound_of(i), bound_of(j));
     for arc_a in i.arcs {
         let ca = place(zi, arc_a.centre, i.size);
+        if norm(r_ij[0] - ca.0, r_ij[1] - ca.1) - i.size * arc_a.radius > bound_j + cut {
+            continue;
+        }
         for arc_b in j.arcs {
             if !arc_a.convex && !arc_b.convex {
                 continue;
             }
             let cb = place(zj, arc_b.centre, j.size);
-            let apart = (r_ij[0] + cb.0 - ca.0).hypot(r_ij[1] + cb.1 - ca.1)
+            if norm(r_ij[0] + cb.0, r_ij[1] + cb.1) - j.size * arc_b.radius > bound_i + cut {
+                continue;
+            }
+            let apart = norm(r_ij[0] + cb.0 - ca.0, r_ij[1] + cb.1 - ca.1)
                 - i.size * arc_a.radius
                 - j.size * arc_b.radius;
             if apart > cut {
@@ -287,6 +296,20 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
             pair_of_arcs(i, arc_a, j, arc_b, r_ij, max_gap, &mut visit);
         }
     }
+}
+
+#[inline(always)]
+fn norm(x: f64, y: f64) -> f64 {
+    (x * x + y * y).sqrt()
+}
+
+/// The radius of a circle about the body's centre that holds all its arcs.
+fn bound_of<F>(b: &ArcBody<'_, F>) -> f64 {
+    b.size
+        * b.arcs
+            .iter()
+            .map(|a| norm(a.centre.0, a.centre.1) + a.radius)
+            .fold(0.0, f64::max)
 }
 
 /// The contacts of one pair of arcs.
