@@ -51,8 +51,8 @@
 //! point moves as the square root of the distance in `ψ`, so the grid is
 //! uniform in `u` with `ψ = lo + (hi − lo)(3u² − 2u³)`, in which it moves
 //! smoothly (at least 4 cells, and one per 0.1 rad). Every sign change is
-//! refined by Newton's method safeguarded by bisection, to a step below
-//! 10⁻¹³ rad. Two stationary points within one cell (near a fold,
+//! refined by Newton's method safeguarded by bisection, stopped after a
+//! step below 10⁻⁹ rad. Two stationary points within one cell (near a fold,
 //! `k ≈ 0`) can be missed.
 
 use crate::gap2d::{ExactGap, SupportJet};
@@ -192,7 +192,8 @@ pub fn split_arcs<F: PolarOutline>(outline: &F, samples: usize) -> Vec<OutlineAr
 /// frame, within the arc's normal range; outside it, the nearer end): its
 /// polar angle `φ` and the arc's support jet `(H, H', H'')` there (unit
 /// size). Newton's method on `ν(φ) = β` safeguarded by bisection on the
-/// arc, to a step below 10⁻¹⁴ rad.
+/// arc, stopped after a Newton step below 10⁻⁹ rad (what is left is
+/// ~C·10⁻¹⁸) or a bracket below 10⁻¹⁴ rad.
 pub fn arc_support<F: PolarOutline>(arc: &OutlineArc, beta: f64, outline: &F) -> (f64, SupportJet) {
     let (a, b) = arc.phi;
     let sign = if arc.convex { 1.0 } else { -1.0 };
@@ -210,15 +211,13 @@ pub fn arc_support<F: PolarOutline>(arc: &OutlineArc, beta: f64, outline: &F) ->
         }
         let df = sign * curvature_numerator(o) / (o.0 * o.0 + o.1 * o.1);
         let newton = phi - f / df;
-        let next = if df > 0.0 && newton > lo && newton < hi {
-            newton
-        } else {
-            0.5 * (lo + hi)
-        };
+        let is_newton = df > 0.0 && newton > lo && newton < hi;
+        let next = if is_newton { newton } else { 0.5 * (lo + hi) };
         let step = (next - phi).abs();
         phi = next;
         o = outline(unit_of_angle(phi));
-        if step < 1e-14 || hi - lo < 1e-14 {
+        // After a Newton step below 1e-9 what is left is ~C·1e-18.
+        if (is_newton && step < 1e-9) || hi - lo < 1e-14 {
             break;
         }
     }
@@ -403,7 +402,7 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
         let right = eval(x1);
         let inside = |phi: f64, arc: &OutlineArc| phi >= arc.phi.0 && phi < arc.phi.1;
         if (left.g1 > 0.0) != (right.g1 > 0.0)
-            && let Some((psi, steps, e)) = refine(&eval, at(k - 1), x1, left.g1 > 0.0)
+            && let Some((psi, steps, e)) = refine(&eval, (at(k - 1), left.g1), (x1, right.g1))
             && e.g <= max_gap
             && -e.g2 * e.rho_sign > 0.0
             && inside(e.phis.0, arc_a)
@@ -423,17 +422,20 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
     }
 }
 
-/// The root of `g'` in `[x0, x1]` (`g'(x0) > 0` iff `positive_left`):
-/// Newton's method on `g'` safeguarded by bisection, to a step below 10⁻¹³
-/// rad; the root, the steps taken and the evaluation there.
+/// The root of `g'` in `[x0, x1]`, given `g'` at both ends (of opposite
+/// signs): Newton's method on `g'` from the secant's root, safeguarded by
+/// bisection, stopped after a Newton step below 10⁻⁹ rad (what is left is
+/// ~C·10⁻¹⁸) or a bracket below 10⁻¹⁴ rad; the root, the steps taken and
+/// the evaluation there.
 fn refine<E: Fn(f64) -> Eval>(
     eval: &E,
-    x0: f64,
-    x1: f64,
-    positive_left: bool,
+    (x0, f0): (f64, f64),
+    (x1, f1): (f64, f64),
 ) -> Option<(f64, u32, Eval)> {
+    let positive_left = f0 > 0.0;
     let (mut lo, mut hi) = (x0, x1);
-    let mut x = 0.5 * (x0 + x1);
+    // The secant's root first.
+    let mut x = x0 + (x1 - x0) * (f0 / (f0 - f1)).clamp(0.01, 0.99);
     let mut e = eval(x);
     for steps in 1..=200 {
         if (e.g1 > 0.0) == positive_left {
@@ -442,15 +444,12 @@ fn refine<E: Fn(f64) -> Eval>(
             hi = x;
         }
         let newton = x - e.g1 / e.g2;
-        let next = if newton.is_finite() && newton > lo && newton < hi {
-            newton
-        } else {
-            0.5 * (lo + hi)
-        };
+        let is_newton = newton.is_finite() && newton > lo && newton < hi;
+        let next = if is_newton { newton } else { 0.5 * (lo + hi) };
         let step = (next - x).abs();
         x = next;
         e = eval(x);
-        if step < 1e-13 || hi - lo < 1e-13 {
+        if (is_newton && step < 1e-9) || hi - lo < 1e-14 {
             return Some((x, steps, e));
         }
     }
