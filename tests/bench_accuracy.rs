@@ -82,8 +82,8 @@ fn quick_accuracy_bench_writes_tables_figures_and_the_orders_of_the_models() {
         );
     }
 
-    // Pairs: 3 models × n = 2…5 × 6 values of Δ. Exact is refused exactly
-    // where the outline is non-convex (n = 4, 5 at Δ = 0.3), and there the
+    // Pairs: 3 models × n = 2…5 × 6 values of Δ. Exact is not measured
+    // exactly where the outline is non-convex (n = 4, 5 at Δ = 0.3), and there the
     // other models have a time but no error.
     let pairs = rows(&out.join("pairs.csv"));
     assert_eq!(pairs.len(), 3 * 4 * 6);

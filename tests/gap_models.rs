@@ -24,7 +24,7 @@ fn fourier(n: u32, delta: f64, gap: GapModel) -> NearDisk {
 }
 
 /// Three modes with phases (n = 2, 3, 7), Δ = 0.1 (still convex; at 0.2
-/// the n = 7 mode makes it non-convex, which `Exact` refuses): the hard case.
+/// the n = 7 mode makes it non-convex): the hard case.
 fn multi_mode(gap: GapModel) -> NearDisk {
     let m = |n, a, b| Mode { n, a, b };
     NearDisk::fourier_sum(&FourierSumParams {
@@ -236,21 +236,25 @@ fn new_models_are_symmetric_and_rotation_invariant() {
     }
 }
 
-/// The exact gap needs a convex outline: a non-convex one is refused with
-/// the field, the value and what is allowed; the other models only warn.
+/// On a non-convex outline the exact gap takes the outline's arcs between
+/// inflection points (several contacts per pair) and flags nothing; the
+/// approximate models, which assume one contact per pair, warn; on a
+/// convex outline `Exact` has no arcs (the convex exact gap).
 #[test]
-fn exact_gap_refuses_non_convex_outlines() {
-    let p = |gap| FourierParams {
+fn exact_gap_of_non_convex_outlines_has_arcs_and_no_warning() {
+    let p = |gap, delta| FourierParams {
         n: 5,
-        delta: 0.5,
+        delta,
         inertia: None,
         gap,
     };
-    let e = NearDisk::fourier(&p(GapModel::Exact)).unwrap_err();
-    assert_eq!(e.field(), Some("params.gap"));
-    assert!(e.allowed().unwrap().contains("convex"), "{e:?}");
-    let s = NearDisk::fourier(&p(GapModel::SecondOrder)).unwrap();
+    let s = NearDisk::fourier(&p(GapModel::Exact, 0.5)).unwrap();
+    assert_eq!(s.profiled().arcs().map(|a| a.len()), Some(10));
+    assert!(s.policy().warnings.is_empty(), "{:?}", s.policy().warnings);
+    let s = NearDisk::fourier(&p(GapModel::SecondOrder, 0.5)).unwrap();
     assert!(!s.policy().warnings.is_empty());
+    let s = NearDisk::fourier(&p(GapModel::Exact, 0.1)).unwrap();
+    assert!(s.is_convex() && s.profiled().arcs().is_none());
 }
 
 /// The exact gap skips pairs whose first-order gap `h₁` exceeds the cut by

@@ -214,7 +214,7 @@ struct PairRow {
     n: u32,
     delta: f64,
     convex: bool,
-    /// `None`: the model refused the shape (Exact, non-convex).
+    /// `None`: not measured (Exact on a non-convex outline).
     ns: Option<f64>,
     /// `None`: no exact reference (or the reference itself).
     max_err: Option<f64>,
@@ -317,7 +317,7 @@ fn pairs_csv(pairs: &[PairRow]) -> String {
     let mut s = format!("{PAIRS_COLUMNS}\n");
     for r in pairs {
         let note = match (r.model, r.convex) {
-            (GapModel::Exact, false) => "refused: non-convex outline",
+            (GapModel::Exact, false) => "not measured: non-convex outline",
             (GapModel::Exact, true) => "reference",
             (_, false) => "no exact reference",
             _ => "",
@@ -356,8 +356,8 @@ fn pair_tables(plan: &Plan, rows: &[PairRow], fitted: &[Slope]) -> String {
          and directions, centres within ±Δ·0.6 of the disks' contact distance), \
          repeated for at least {} ms; largest and RMS error of the gap `h` against \
          `Exact` over the same pairs, in units of the size (the larger body has \
-         R⁰ = {}). Empty errors: no exact reference (non-convex outline, which \
-         `Exact` refuses).\n",
+         R⁰ = {}). Empty errors: no exact reference (non-convex outline, where \
+         `Exact` has several contacts per pair; not measured).\n",
         plan.pairs,
         SIZES.0,
         SIZES.1,
@@ -394,7 +394,7 @@ fn pair_tables(plan: &Plan, rows: &[PairRow], fitted: &[Slope]) -> String {
                 if e.ns.is_some() {
                     ns(e)
                 } else {
-                    "refused".into()
+                    "not measured".into()
                 },
             );
         }
@@ -624,7 +624,7 @@ mod tests {
                 "",
                 "",
                 "",
-                "refused: non-convex outline"
+                "not measured: non-convex outline"
             ]
         );
         assert_eq!(line("Exact", "2", "0.3")[7], "reference");
@@ -656,7 +656,7 @@ mod tests {
         // The header and one line per n and Δ.
         assert_eq!(body.len(), 1 + NS.len() * DELTAS.len(), "{md}");
         assert!(
-            md.contains("| 4 | 0.3 | no | 10.0 |  |  | 30.0 |  |  | refused |"),
+            md.contains("| 4 | 0.3 | no | 10.0 |  |  | 30.0 |  |  | not measured |"),
             "{md}"
         );
         assert!(

@@ -19,7 +19,8 @@ pub enum GapModel {
     FirstOrder,
     /// The first-order gap with its `O(Δ²)` correction.
     SecondOrder,
-    /// The true signed distance along the common normal (convex outlines).
+    /// The true signed distance along the common normal (of each contact,
+    /// for the 2D near-disks' non-convex outlines).
     Exact,
 }
 

@@ -714,6 +714,34 @@ impl ExactGap {
         g.qi_qj[0][0] = hi * hj * inv_k;
         g
     }
+
+    /// [`ExactGap::hessian`] for a stationary point of either kind: `k` of
+    /// either sign (a contact of a concave arc, `crate::arcs`, has `k < 0`),
+    /// and `H''` large near an inflection point, where
+    /// `−H_i'' + H_i''²/k` is written `−H_i'' (h + H_i + ρ_j)/k` (no
+    /// cancellation). Zero second derivatives at `k = 0`.
+    pub fn hessian_signed(&self) -> GapHessian<2> {
+        let (c, s) = self.normal;
+        let nt = Vector::<2>::new(-s, c);
+        let (hi, hj) = (self.jet_i.d2, self.jet_j.d2);
+        let (rho_i, rho_j) = (self.jet_i.h + hi, self.jet_j.h + hj);
+        let k = self.gap + rho_i + rho_j;
+        let inv_k = if k != 0.0 && k.is_finite() {
+            1.0 / k
+        } else {
+            0.0
+        };
+        let contact = self.contact();
+        let mut g =
+            GapHessian::translational(self.gap, contact.grad_r, nt * nt.transpose() * inv_k);
+        g.contact = contact;
+        g.r_qi[0] = nt * (hi * inv_k);
+        g.r_qj[0] = nt * (hj * inv_k);
+        g.qi_qi[0][0] = -hi * (self.gap + self.jet_i.h + rho_j) * inv_k;
+        g.qj_qj[0][0] = -hj * (self.gap + self.jet_j.h + rho_i) * inv_k;
+        g.qi_qj[0][0] = hi * hj * inv_k;
+        g
+    }
 }
 
 #[cfg(test)]

@@ -14,11 +14,15 @@
 //!   and `lobed`);
 //! * [`gap2d`]: the second-order near-disk gap and the exact gap of convex
 //!   outlines (support functions), with second derivatives (used by the
-//!   near-disks' `SecondOrder` and `Exact` gap models and by `ellipse`).
+//!   near-disks' `SecondOrder` and `Exact` gap models and by `ellipse`);
+//! * [`arcs`]: the exact gap of smooth non-convex outlines, split at their
+//!   inflection points into arcs, with several contacts per pair (the
+//!   near-disks' `Exact` gap model beyond convexity).
 //!
 //! The planar orientation type itself, [`jamkit_core::Rotation2`], lives in
 //! core beside the `Shape` trait.
 
+pub mod arcs;
 pub mod first_order;
 pub mod gap2d;
 pub mod profiled;

@@ -47,6 +47,7 @@
 //! for every even mode) gets the unflipped pair, which it cannot tell
 //! apart.
 
+use crate::arcs::{self, OutlineArc};
 use crate::first_order::{Profile, gap_hessian};
 use crate::gap2d::{self, GapModel, Jet3, SupportJet, direction};
 use jamkit_core::math::{Unit, cmul, turn_unit};
@@ -184,6 +185,9 @@ pub struct Profiled<P, O = Angle<1>> {
     /// runs: `2 max(max(H − ρ), max R − min R)` over the outline
     /// ([`Profiled::exact_solve`]).
     joint_reach: f64,
+    /// The outline's arcs between inflection points, for the exact gap of
+    /// a non-convex outline ([`crate::arcs`]); `None` otherwise.
+    arcs: Option<std::sync::Arc<Vec<OutlineArc>>>,
     orientation: PhantomData<O>,
 }
 
@@ -232,6 +236,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             gap: GapModel::FirstOrder,
             exact_slack: f64::INFINITY,
             joint_reach: f64::INFINITY,
+            arcs: None,
             orientation: PhantomData,
         };
         let min_r = shape.min_relative_radius();
@@ -250,8 +255,10 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     }
 
     /// The same shape with the gap model `gap`. The second-order and the
-    /// exact gap need the profile's [`NearDiskProfile::jet3`], the exact
-    /// one a convex outline; errors name `params.gap`.
+    /// exact gap need the profile's [`NearDiskProfile::jet3`]; errors name
+    /// `params.gap`. On a non-convex outline the exact gap is the arcs'
+    /// ([`crate::arcs`]: several contacts per pair), on a convex one the
+    /// convex exact gap.
     pub fn with_gap(mut self, gap: GapModel) -> jamkit_core::Result<Self> {
         if gap != GapModel::FirstOrder && self.profile.jet3(1.0, 0.0).is_none() {
             return Err(Error::invalid(
@@ -263,15 +270,21 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
                 ),
             ));
         }
+        self.arcs = None;
         if gap == GapModel::Exact && !self.is_convex() {
-            return Err(Error::invalid(
-                "params.gap",
-                "Exact",
-                format!(
-                    "needs a convex outline, and Δ = {} makes it non-convex (the common normal is then not unique); use FirstOrder or SecondOrder, or a smaller Δ",
-                    self.delta
-                ),
-            ));
+            let arcs = arcs::split_arcs(&|p: Unit| self.unit_outline(p), 8192);
+            if arcs.len() < 2 {
+                return Err(Error::invalid(
+                    "params.gap",
+                    "Exact",
+                    format!(
+                        "found no inflection point on the non-convex outline at Δ = {} ({}) on 8192 angles: the outline is too finely wrinkled for the exact gap",
+                        self.delta,
+                        self.profile.describe()
+                    ),
+                ));
+            }
+            self.arcs = Some(std::sync::Arc::new(arcs));
         }
         let (d, f_max) = (self.delta, self.range.1);
         // The bound needs R_max/R_min = (1 + ΔP)/(1 − ΔP) < 1.85.
@@ -306,6 +319,65 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     /// The gap model.
     pub fn gap_model(&self) -> GapModel {
         self.gap
+    }
+
+    /// The arcs of a non-convex outline with the exact gap ([`crate::arcs`]),
+    /// `None` for every other shape.
+    pub fn arcs(&self) -> Option<&[OutlineArc]> {
+        self.arcs.as_deref().map(|a| a.as_slice())
+    }
+
+    /// The body-frame outline at unit size, `(R, R', R'')` at `e^{iφ}`:
+    /// `R(φ) = 1 + Δ P(−φ)` (needs the profile's third-order jet).
+    pub fn unit_outline(&self, p: Unit) -> (f64, f64, f64) {
+        let d = self.delta;
+        let [f, df, ddf, _] = self.jet3((p.0, -p.1));
+        (1.0 + d * f, -d * df, d * ddf)
+    }
+
+    /// Every exact contact of a pair of non-convex bodies with gap at most
+    /// `max_gap` ([`arcs::arc_contacts`]: all of them with overlaps up to
+    /// the depth of two lobes, `Δ (max P − min P)(R_i⁰ + R_j⁰)`; called only when
+    /// [`Profiled::arcs`] is set), or, given `arcs`, those of these arcs
+    /// (e.g. the whole outline as one arc, for tests).
+    pub fn arc_contacts(
+        &self,
+        pair: &Pair<2, O>,
+        max_gap: f64,
+        arcs: Option<&[OutlineArc]>,
+        visit: &mut dyn FnMut(gap2d::ExactGap),
+    ) {
+        let Some(arcs) = arcs.or(self.arcs()) else {
+            return;
+        };
+        let outline = |p: Unit| self.unit_outline(p);
+        let theta = |o: &O| {
+            let (c, s) = o.unit();
+            s.atan2(c)
+        };
+        let body = |size: f64, o: &O| arcs::ArcBody {
+            arcs,
+            outline: &outline,
+            size,
+            theta: theta(o),
+        };
+        arcs::arc_contacts(
+            &body(pair.size_i, &pair.o_i),
+            &body(pair.size_j, &pair.o_j),
+            &pair.r_ij,
+            max_gap,
+            self.delta * (self.range.1 - self.range.0) * (pair.size_i + pair.size_j),
+            visit,
+        );
+    }
+
+    /// [`Shape::contacts`] beyond the bounding test for a non-convex exact
+    /// gap: out of line, so that the other models' pair loop keeps one call
+    /// site of `visit`.
+    #[cold]
+    #[inline(never)]
+    fn several_contacts(&self, pair: &Pair<2, O>, max_gap: f64, visit: &mut dyn FnMut(Contact<2>)) {
+        self.arc_contacts(pair, max_gap, None, &mut |e| visit(e.contact()));
     }
 
     /// The profile.
@@ -690,10 +762,10 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
 
     /// Rattlers below three contacts, as for the paper's near-disks
     /// (`d + 1`); near-disks jam hypostatic; a warning where the outline is
-    /// not convex.
+    /// not convex and the gap is an approximate one (one contact per pair).
     fn policy(&self) -> Policy {
         let mut warnings = Vec::new();
-        if !self.is_convex() {
+        if self.arcs.is_none() && !self.is_convex() {
             warnings.push(format!(
                 "non-convex outline (Δ = {}, {}): the first-order gap assumes convex bodies with one contact per pair",
                 self.delta,
@@ -727,8 +799,11 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
         // pair loop 6 %.
         let contact = if self.gap == GapModel::FirstOrder {
             Some(self.first_order(pair))
-        } else {
+        } else if self.arcs.is_none() {
             self.beyond_first_order(pair, max_gap, None)
+        } else {
+            self.several_contacts(pair, max_gap, &mut visit);
+            None
         };
         if let Some(c) = contact {
             visit(c);
@@ -746,7 +821,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
         memo: &mut PairMemo,
         mut visit: F,
     ) {
-        if self.gap != GapModel::Exact {
+        if self.gap != GapModel::Exact || self.arcs.is_some() {
             return self.contacts(pair, max_gap, visit);
         }
         let r = pair.r_ij.norm();
@@ -776,6 +851,10 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
             GapModel::FirstOrder => {}
             GapModel::SecondOrder => {
                 visit(self.second_order(pair).chain(r_ij));
+                return Ok(());
+            }
+            GapModel::Exact if self.arcs.is_some() => {
+                self.arc_contacts(pair, max_gap, None, &mut |e| visit(e.hessian_signed()));
                 return Ok(());
             }
             GapModel::Exact => {

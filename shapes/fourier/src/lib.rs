@@ -87,7 +87,7 @@ pub const FOURIER_INFO: FamilyInfo = FamilyInfo {
 /// The `gap` parameter shared by both near-disk families.
 const GAP_SPEC: ParamSpec = ParamSpec {
     name: "gap",
-    about: "gap model, a string: \"FirstOrder\" (the paper's, error O(Δ²)), \"SecondOrder\" (error O(Δ³)), \"Exact\" (common normal; convex outlines only); None: FirstOrder",
+    about: "gap model, a string: \"FirstOrder\" (the paper's, error O(Δ²)), \"SecondOrder\" (error O(Δ³)), \"Exact\" (common normals; several contacts per pair on a non-convex outline); None: FirstOrder",
     is_list: false,
     default: Some("None"),
     absent_is_omitted: false,

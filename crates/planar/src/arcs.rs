@@ -1,0 +1,457 @@
+//! Contacts of smooth **non-convex** star-shaped outlines: several per pair
+//! (see `docs/explanation/gap-models.md`, "Exact, non-convex outlines").
+//!
+//! ## Arcs
+//!
+//! A polar outline `R(φ)` (body frame) has the outward normal angle
+//! `ν(φ) = φ − atan(R'/R)`, with `ν' = N/(R² + R'²)`,
+//! `N = R² + 2R'² − R R''`. Its inflection points (the zeros of `N`) cut it
+//! into **arcs** ([`OutlineArc`]) on which `ν` is monotonic: increasing on a
+//! *convex* arc (`N > 0`), decreasing on a *concave* one. On an arc the
+//! point with the normal `β` is unique; its height along `e(β)` is the arc's
+//! support function `H_A(β) = R cos δ` (`δ = φ − β`), with
+//! `H_A' = R sin δ` and `H_A'' = ρ − H_A`, `ρ = (R² + R'²)^{3/2}/N` the
+//! signed radius of curvature (negative on a concave arc): the formulas of
+//! the convex support function ([`crate::gap2d::polar_support`]) restricted
+//! to the arc.
+//!
+//! ## Contacts
+//!
+//! For an arc `A` of body `i` and an arc `B` of body `j`, on the normal
+//! angles `ψ` that both arcs reach (`ψ − θ_i` in `A`'s range, `ψ + π − θ_j`
+//! in `B`'s),
+//!
+//! ```text
+//! g_AB(ψ) = r_ij·e(ψ) − H_A(ψ − θ_i) − H_B(ψ + π − θ_j),   k = −g_AB'' = g_AB + ρ_A + ρ_B.
+//! ```
+//!
+//! A stationary point `g_AB'(ψ*) = 0` is a common normal of the two arcs,
+//! and `h = g_AB(ψ*)` the signed distance along it. It is a **contact**
+//! when its support points lie in the arcs (half-open in `φ`, so that a
+//! point at an inflection belongs to one arc) and `k ρ_A ρ_B > 0`: a
+//! maximum of `g_AB` for two convex arcs, a minimum for a convex arc
+//! against a concave one. At `h = 0` this is the condition that the
+//! outlines touch without crossing (the signed curvatures add up to a
+//! positive one). Concave–concave pairs are not searched: at `h ≤ 0` they
+//! cross, and they meet the rule only at `h > |ρ_A| + |ρ_B|`.
+//!
+//! By the envelope theorem the derivatives are those of the convex exact
+//! gap ([`crate::gap2d`]) with the arc's jets; the second derivatives divide
+//! by `k`, of either sign ([`crate::gap2d::ExactGap::hessian_signed`]).
+//!
+//! ## The search
+//!
+//! Arc pairs whose bounding circles are farther apart than
+//! `max(max_gap, 0) + reach` are skipped: their contacts have `h` above
+//! the cut or an overlap deeper than `reach` (the near-disks take the
+//! depth of two lobes, `Δ (max P − min P)(R_i⁰ + R_j⁰)`). On each
+//! remaining pair `g_AB'` is sampled on the angles `ψ` both arcs reach, on
+//! a grid that resolves their ends: every end is the end of an arc's normal
+//! range, where `ν` is stationary (an inflection point) and the support
+//! point moves as the square root of the distance in `ψ`, so the grid is
+//! uniform in `u` with `ψ = lo + (hi − lo)(3u² − 2u³)`, in which it moves
+//! smoothly (at least 4 cells, and one per 0.1 rad). Every sign change is
+//! refined by Newton's method safeguarded by bisection, stopped after a
+//! step below 10⁻⁹ rad. Two stationary points within one cell (near a fold,
+//! `k ≈ 0`) can be missed.
+
+use crate::gap2d::{ExactGap, SupportJet};
+use jamkit_core::math::{Unit, Vector, unit_of_angle};
+use std::f64::consts::{PI, TAU};
+
+/// A polar outline `φ ↦ (R, R', R'')` (body frame, unit size) at
+/// `e^{iφ}`.
+pub trait PolarOutline: Fn(Unit) -> (f64, f64, f64) {}
+impl<F: Fn(Unit) -> (f64, f64, f64)> PolarOutline for F {}
+
+/// One arc of an outline between consecutive inflection points, or the
+/// whole of a convex outline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutlineArc {
+    /// Polar angles of its ends, `φ₀ < φ₁ ≤ φ₀ + 2π` (body frame).
+    pub phi: (f64, f64),
+    /// Normal angles `ν(φ₀)`, `ν(φ₁)`, continuous along the arc.
+    pub nu: (f64, f64),
+    /// Convex (`ν` increasing) or concave (`ν` decreasing).
+    pub convex: bool,
+    /// Centre of a circle containing the arc (body frame, unit size).
+    pub centre: (f64, f64),
+    /// Its radius.
+    pub radius: f64,
+}
+
+impl OutlineArc {
+    /// The normal angles the arc reaches, `(lowest, highest)`.
+    pub fn normal_range(&self) -> (f64, f64) {
+        if self.convex {
+            self.nu
+        } else {
+            (self.nu.1, self.nu.0)
+        }
+    }
+}
+
+/// `R² + 2R'² − R R''`: positive where the outline is convex.
+#[inline]
+pub fn curvature_numerator((r, r1, r2): (f64, f64, f64)) -> f64 {
+    r * r + 2.0 * r1 * r1 - r * r2
+}
+
+#[inline]
+fn normal_angle(phi: f64, (r, r1, _): (f64, f64, f64)) -> f64 {
+    phi - (r1 / r).atan()
+}
+
+/// Cut the outline at its inflection points (sign changes of `N` on
+/// `samples` angles, refined by bisection to round-off) into arcs, in order
+/// of `φ`. A convex outline is one arc, `φ ∈ [0, 2π]`.
+pub fn split_arcs<F: PolarOutline>(outline: &F, samples: usize) -> Vec<OutlineArc> {
+    let at = |phi: f64| outline(unit_of_angle(phi));
+    let n_of = |phi: f64| curvature_numerator(at(phi));
+    let mut zeros = Vec::new();
+    let step = TAU / samples as f64;
+    let mut prev = n_of(0.0);
+    for k in 1..=samples {
+        let phi = step * k as f64;
+        let cur = n_of(phi);
+        if (prev > 0.0) != (cur > 0.0) {
+            let (mut lo, mut hi) = (phi - step, phi);
+            for _ in 0..80 {
+                let mid = 0.5 * (lo + hi);
+                if (n_of(mid) > 0.0) == (prev > 0.0) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            zeros.push(0.5 * (lo + hi));
+        }
+        prev = cur;
+    }
+    let ends: Vec<(f64, f64)> = if zeros.is_empty() {
+        vec![(0.0, TAU)]
+    } else {
+        let m = zeros.len();
+        (0..m)
+            .map(|k| {
+                let a = zeros[k];
+                let b = if k + 1 < m {
+                    zeros[k + 1]
+                } else {
+                    zeros[0] + TAU
+                };
+                (a, b)
+            })
+            .collect()
+    };
+    ends.into_iter()
+        .map(|(a, b)| {
+            let convex = n_of(0.5 * (a + b)) > 0.0;
+            let (nu_a, nu_b) = (normal_angle(a, at(a)), normal_angle(b, at(b)));
+            // Bounding circle: the box of 512 points of the arc, padded by
+            // what the points between samples can add (half a spacing
+            // times the largest speed |dp/dφ| = √(R² + R'²) seen, doubled).
+            let m = 512;
+            let pts: Vec<(f64, f64, f64)> = (0..=m)
+                .map(|s| {
+                    let phi = a + (b - a) * s as f64 / m as f64;
+                    let (r, r1, _) = at(phi);
+                    (r * phi.cos(), r * phi.sin(), (r * r + r1 * r1).sqrt())
+                })
+                .collect();
+            let fold = |f: fn(f64, f64) -> f64, g: fn(&(f64, f64, f64)) -> f64, init: f64| {
+                pts.iter().map(g).fold(init, f)
+            };
+            let (x0, x1) = (
+                fold(f64::min, |p| p.0, f64::INFINITY),
+                fold(f64::max, |p| p.0, f64::NEG_INFINITY),
+            );
+            let (y0, y1) = (
+                fold(f64::min, |p| p.1, f64::INFINITY),
+                fold(f64::max, |p| p.1, f64::NEG_INFINITY),
+            );
+            let speed = fold(f64::max, |p| p.2, 0.0);
+            let centre = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+            let far = pts
+                .iter()
+                .map(|p| (p.0 - centre.0).hypot(p.1 - centre.1))
+                .fold(0.0, f64::max);
+            let radius = far + (b - a) / m as f64 * speed + 1e-12;
+            OutlineArc {
+                phi: (a, b),
+                nu: (nu_a, nu_b),
+                convex,
+                centre,
+                radius,
+            }
+        })
+        .collect()
+}
+
+/// The point of `arc` whose outward normal has the angle `beta` (body
+/// frame, within the arc's normal range; outside it, the nearer end): its
+/// polar angle `φ` and the arc's support jet `(H, H', H'')` there (unit
+/// size). Newton's method on `ν(φ) = β` safeguarded by bisection on the
+/// arc, stopped after a Newton step below 10⁻⁹ rad (what is left is
+/// ~C·10⁻¹⁸) or a bracket below 10⁻¹⁴ rad.
+pub fn arc_support<F: PolarOutline>(arc: &OutlineArc, beta: f64, outline: &F) -> (f64, SupportJet) {
+    let (a, b) = arc.phi;
+    let sign = if arc.convex { 1.0 } else { -1.0 };
+    let (lo_nu, hi_nu) = (arc.nu.0, arc.nu.1);
+    let t = ((beta - lo_nu) / (hi_nu - lo_nu)).clamp(0.0, 1.0);
+    let (mut lo, mut hi) = (a, b);
+    let mut phi = a + (b - a) * t;
+    let mut o = outline(unit_of_angle(phi));
+    for _ in 0..100 {
+        let f = sign * (normal_angle(phi, o) - beta);
+        if f > 0.0 {
+            hi = phi;
+        } else {
+            lo = phi;
+        }
+        let df = sign * curvature_numerator(o) / (o.0 * o.0 + o.1 * o.1);
+        let newton = phi - f / df;
+        let is_newton = df > 0.0 && newton > lo && newton < hi;
+        let next = if is_newton { newton } else { 0.5 * (lo + hi) };
+        let step = (next - phi).abs();
+        phi = next;
+        o = outline(unit_of_angle(phi));
+        // After a Newton step below 1e-9 what is left is ~C·1e-18.
+        if (is_newton && step < 1e-9) || hi - lo < 1e-14 {
+            break;
+        }
+    }
+    let (r, r1, _) = o;
+    let (sd, cd) = (phi - beta).sin_cos();
+    let q = r * r + r1 * r1;
+    let rho = q * q.sqrt() / curvature_numerator(o);
+    let h = r * cd;
+    (
+        phi,
+        SupportJet {
+            h,
+            d1: r * sd,
+            d2: rho - h,
+        },
+    )
+}
+
+/// One body as [`arc_contacts`] sees it: its arcs and outline (unit size),
+/// size and orientation angle.
+pub struct ArcBody<'a, F> {
+    /// The arcs of its outline ([`split_arcs`]).
+    pub arcs: &'a [OutlineArc],
+    /// Its outline at unit size.
+    pub outline: &'a F,
+    /// `R⁰`.
+    pub size: f64,
+    /// `θ`.
+    pub theta: f64,
+}
+
+/// Visit every contact (module documentation) of bodies `i` and `j` at
+/// separation `r_ij` whose gap is at most `max_gap`, as an [`ExactGap`]
+/// (sizes included): every one with `−reach ≤ h ≤ max_gap` and perhaps
+/// deeper ones (arc pairs whose bounding circles are more than
+/// `max(max_gap, 0) + reach` apart are skipped).
+pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
+    i: &ArcBody<'_, F>,
+    j: &ArcBody<'_, G>,
+    r_ij: &Vector<2>,
+    max_gap: f64,
+    reach: f64,
+    mut visit: V,
+) {
+    let cut = max_gap.max(0.0) + reach;
+    let (zi, zj) = (unit_of_angle(i.theta), unit_of_angle(j.theta));
+    let place = |z: Unit, c: (f64, f64), size: f64| {
+        (
+            size * (z.0 * c.0 - z.1 * c.1),
+            size * (z.1 * c.0 + z.0 * c.1),
+        )
+    };
+    // First each arc against the other body's bounding circle (its
+    // arcs' farthest reach), then the pairs of arcs that pass.
+    let (bound_i, bound_j) = (bound_of(i), bound_of(j));
+    for arc_a in i.arcs {
+        let ca = place(zi, arc_a.centre, i.size);
+        if norm(r_ij[0] - ca.0, r_ij[1] - ca.1) - i.size * arc_a.radius > bound_j + cut {
+            continue;
+        }
+        for arc_b in j.arcs {
+            if !arc_a.convex && !arc_b.convex {
+                continue;
+            }
+            let cb = place(zj, arc_b.centre, j.size);
+            if norm(r_ij[0] + cb.0, r_ij[1] + cb.1) - j.size * arc_b.radius > bound_i + cut {
+                continue;
+            }
+            let apart = norm(r_ij[0] + cb.0 - ca.0, r_ij[1] + cb.1 - ca.1)
+                - i.size * arc_a.radius
+                - j.size * arc_b.radius;
+            if apart > cut {
+                continue;
+            }
+            pair_of_arcs(i, arc_a, j, arc_b, r_ij, max_gap, &mut visit);
+        }
+    }
+}
+
+#[inline(always)]
+fn norm(x: f64, y: f64) -> f64 {
+    (x * x + y * y).sqrt()
+}
+
+/// The radius of a circle about the body's centre that holds all its arcs.
+fn bound_of<F>(b: &ArcBody<'_, F>) -> f64 {
+    b.size
+        * b.arcs
+            .iter()
+            .map(|a| norm(a.centre.0, a.centre.1) + a.radius)
+            .fold(0.0, f64::max)
+}
+
+/// The contacts of one pair of arcs.
+#[allow(clippy::too_many_arguments)]
+fn pair_of_arcs<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
+    i: &ArcBody<'_, F>,
+    arc_a: &OutlineArc,
+    j: &ArcBody<'_, G>,
+    arc_b: &OutlineArc,
+    r_ij: &Vector<2>,
+    max_gap: f64,
+    visit: &mut V,
+) {
+    let (na, nb) = (arc_a.normal_range(), arc_b.normal_range());
+    let (a_lo, a_len) = (i.theta + na.0, na.1 - na.0);
+    let b_lo0 = j.theta - PI + nb.0;
+    let b_len = nb.1 - nb.0;
+    // Shift B's range by whole turns so that it starts at or after
+    // a_lo − b_len, then visit every overlap with A's.
+    let turns = ((a_lo - b_len - b_lo0) / TAU).ceil();
+    let mut shift = turns * TAU;
+    while b_lo0 + shift < a_lo + a_len {
+        let lo = a_lo.max(b_lo0 + shift);
+        let hi = (a_lo + a_len).min(b_lo0 + shift + b_len);
+        if hi > lo {
+            piece(i, arc_a, j, arc_b, shift, (lo, hi), r_ij, max_gap, visit);
+        }
+        shift += TAU;
+    }
+}
+
+/// `g`, `g'`, `g''` of an arc pair at `ψ`, the jets (sizes included) and
+/// the support points' polar angles.
+struct Eval {
+    g: f64,
+    g1: f64,
+    g2: f64,
+    jets: (SupportJet, SupportJet),
+    rho_sign: f64,
+    phis: (f64, f64),
+}
+
+#[allow(clippy::too_many_arguments)]
+fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
+    i: &ArcBody<'_, F>,
+    arc_a: &OutlineArc,
+    j: &ArcBody<'_, G>,
+    arc_b: &OutlineArc,
+    shift: f64,
+    (lo, hi): (f64, f64),
+    r_ij: &Vector<2>,
+    max_gap: f64,
+    visit: &mut V,
+) {
+    let eval = |psi: f64| {
+        let (pa, ja) = arc_support(arc_a, psi - i.theta, i.outline);
+        let (pb, jb) = arc_support(arc_b, psi - shift + PI - j.theta, j.outline);
+        let (s, c) = psi.sin_cos();
+        let along = r_ij[0] * c + r_ij[1] * s;
+        let scale = |jet: SupportJet, size: f64| SupportJet {
+            h: size * jet.h,
+            d1: size * jet.d1,
+            d2: size * jet.d2,
+        };
+        let (ja_s, jb_s) = (scale(ja, i.size), scale(jb, j.size));
+        Eval {
+            g: along - ja_s.h - jb_s.h,
+            g1: -r_ij[0] * s + r_ij[1] * c - ja_s.d1 - jb_s.d1,
+            g2: -along - ja_s.d2 - jb_s.d2,
+            jets: (ja_s, jb_s),
+            rho_sign: (ja.h + ja.d2).signum() * (jb.h + jb.d2).signum(),
+            phis: (pa, pb),
+        }
+    };
+    // Both ends of a piece are ends of an arc's normal range, where the
+    // support point moves as the square root of the distance in ψ (ν is
+    // stationary at an inflection point): the grid is uniform in u with
+    // ψ = lo + (hi − lo)(3u² − 2u³), in which it moves smoothly.
+    let cells = ((hi - lo) / 0.1).ceil().max(4.0) as usize;
+    let at = |k: usize| {
+        let u = k as f64 / cells as f64;
+        if k == cells {
+            hi
+        } else {
+            lo + (hi - lo) * u * u * (3.0 - 2.0 * u)
+        }
+    };
+    let mut left = eval(lo);
+    for k in 1..=cells {
+        let x1 = at(k);
+        let right = eval(x1);
+        let inside = |phi: f64, arc: &OutlineArc| phi >= arc.phi.0 && phi < arc.phi.1;
+        if (left.g1 > 0.0) != (right.g1 > 0.0)
+            && let Some((psi, steps, e)) = refine(&eval, (at(k - 1), left.g1), (x1, right.g1))
+            && e.g <= max_gap
+            && -e.g2 * e.rho_sign > 0.0
+            && inside(e.phis.0, arc_a)
+            && inside(e.phis.1, arc_b)
+        {
+            let (s, c) = psi.sin_cos();
+            visit(ExactGap {
+                normal: (c, s),
+                gap: e.g,
+                jet_i: e.jets.0,
+                jet_j: e.jets.1,
+                iterations: steps,
+                converged: true,
+            });
+        }
+        left = right;
+    }
+}
+
+/// The root of `g'` in `[x0, x1]`, given `g'` at both ends (of opposite
+/// signs): Newton's method on `g'` from the secant's root, safeguarded by
+/// bisection, stopped after a Newton step below 10⁻⁹ rad (what is left is
+/// ~C·10⁻¹⁸) or a bracket below 10⁻¹⁴ rad; the root, the steps taken and
+/// the evaluation there.
+fn refine<E: Fn(f64) -> Eval>(
+    eval: &E,
+    (x0, f0): (f64, f64),
+    (x1, f1): (f64, f64),
+) -> Option<(f64, u32, Eval)> {
+    let positive_left = f0 > 0.0;
+    let (mut lo, mut hi) = (x0, x1);
+    // The secant's root first.
+    let mut x = x0 + (x1 - x0) * (f0 / (f0 - f1)).clamp(0.01, 0.99);
+    let mut e = eval(x);
+    for steps in 1..=200 {
+        if (e.g1 > 0.0) == positive_left {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let newton = x - e.g1 / e.g2;
+        let is_newton = newton.is_finite() && newton > lo && newton < hi;
+        let next = if is_newton { newton } else { 0.5 * (lo + hi) };
+        let step = (next - x).abs();
+        x = next;
+        e = eval(x);
+        if (is_newton && step < 1e-9) || hi - lo < 1e-14 {
+            return Some((x, steps, e));
+        }
+    }
+    None
+}

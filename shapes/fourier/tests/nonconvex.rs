@@ -1,0 +1,514 @@
+//! The exact gap of non-convex near-disks (`gap: "Exact"` beyond
+//! Δ(n + 1/n) = 1): several contacts per pair, from the outline's arcs
+//! between inflection points (`jamkit_planar::arcs`).
+//!
+//! What is checked: the derivatives against finite differences on random
+//! pairs with two, three and more overlapping contacts; the energy along
+//! paths on which contacts come and go; the convex exact gap recovered by
+//! the arc search on a convex outline; and every contact against an
+//! independent check on fine polygons (point in polygon, distance to the
+//! polygon).
+
+use jamkit_core::{Contact, GapHessian, Pair, Rotation2, Shape, Vector};
+use jamkit_fourier::{FourierParams, NearDisk};
+use jamkit_planar::arcs::split_arcs;
+use jamkit_planar::gap2d::{ExactGap, GapModel};
+use jamkit_planar::profiled::ExactSolve;
+use std::f64::consts::TAU;
+
+/// A small deterministic generator (splitmix64), uniform in `[0, 1)`.
+struct Uniform(u64);
+
+impl Uniform {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn fourier(n: u32, delta: f64, gap: GapModel) -> NearDisk {
+    NearDisk::fourier(&FourierParams {
+        n,
+        delta,
+        inertia: None,
+        gap,
+    })
+    .unwrap()
+}
+
+/// A pair: sizes, angles, separation.
+#[derive(Clone, Copy, Debug)]
+struct Config {
+    size: [f64; 2],
+    theta: [f64; 2],
+    r: [f64; 2],
+}
+
+impl Config {
+    fn pair(&self) -> Pair<2, Rotation2> {
+        Pair::new(
+            self.size[0],
+            Rotation2::new(self.theta[0]),
+            self.size[1],
+            Rotation2::new(self.theta[1]),
+            Vector::<2>::new(self.r[0], self.r[1]),
+        )
+    }
+
+    /// Moved by `eps` along coordinate `c` (0, 1: r_j; 2: θ_i; 3: θ_j).
+    fn moved(&self, c: usize, eps: f64) -> Self {
+        let mut m = *self;
+        match c {
+            0 | 1 => m.r[c] += eps,
+            2 => m.theta[0] += eps,
+            _ => m.theta[1] += eps,
+        }
+        m
+    }
+
+    /// A random pair of sizes 1 and 1.4 (either way round) at random
+    /// angles, the centres `(R_i + R_j)(1 + spread·(2u − 1) Δ/n)` apart:
+    /// lobes interlocked or about to.
+    fn random(rng: &mut Uniform, n: u32, delta: f64, spread: f64) -> Self {
+        let size = if rng.next() < 0.5 {
+            [1.0, 1.4]
+        } else {
+            [1.4, 1.0]
+        };
+        let a = TAU * rng.next();
+        let d = (size[0] + size[1]) * (1.0 + spread * (2.0 * rng.next() - 1.0) * delta / n as f64);
+        Self {
+            size,
+            theta: [TAU * rng.next(), TAU * rng.next()],
+            r: [d * a.cos(), d * a.sin()],
+        }
+    }
+}
+
+impl Config {
+    /// A body of size 1 at a random angle in the valley of a body of size
+    /// 8 (the valley's bottom towards `a = π/2n` at `θ_i = 0`), up to
+    /// 3 lobe heights deep: it touches the wide valley with several teeth.
+    fn in_valley(rng: &mut Uniform, n: u32, delta: f64) -> Self {
+        let a = std::f64::consts::PI / (2.0 * n as f64) + 0.3 * (2.0 * rng.next() - 1.0) / n as f64;
+        let d = 8.0 * (1.0 - delta / n as f64) + 1.0 - 3.0 * delta / n as f64 * rng.next();
+        Self {
+            size: [8.0, 1.0],
+            theta: [0.0, TAU * rng.next()],
+            r: [d * a.cos(), d * a.sin()],
+        }
+    }
+}
+
+fn contacts(s: &NearDisk, c: &Config, max_gap: f64) -> Vec<Contact<2>> {
+    let mut out = Vec::new();
+    s.contacts(&c.pair(), max_gap, |k| out.push(k));
+    out
+}
+
+fn hessians(s: &NearDisk, c: &Config, max_gap: f64) -> Vec<GapHessian<2>> {
+    let mut out = Vec::new();
+    s.gap_hessians(&c.pair(), max_gap, |k| out.push(k)).unwrap();
+    out
+}
+
+/// The first derivatives of a contact in the order of [`Config::moved`].
+fn gradient(c: &Contact<2>) -> [f64; 4] {
+    [c.grad_r[0], c.grad_r[1], c.grad_rot_i[0], c.grad_rot_j[0]]
+}
+
+/// The second derivatives in the same order.
+fn second(h: &GapHessian<2>) -> [[f64; 4]; 4] {
+    let rows = [
+        [h.rr[(0, 0)], h.rr[(0, 1)], h.r_qi[0][0], h.r_qj[0][0]],
+        [h.rr[(1, 0)], h.rr[(1, 1)], h.r_qi[0][1], h.r_qj[0][1]],
+        [0.0, 0.0, h.qi_qi[0][0], h.qi_qj[0][0]],
+        [0.0, 0.0, h.qi_qj[0][0], h.qj_qj[0][0]],
+    ];
+    let mut m = rows;
+    m[2][0] = rows[0][2];
+    m[2][1] = rows[1][2];
+    m[3][0] = rows[0][3];
+    m[3][1] = rows[1][3];
+    m
+}
+
+/// The contact of `list` whose normal is nearest `of`'s, if within `tol`.
+fn matching<'a>(list: &'a [Contact<2>], of: &Contact<2>, tol: f64) -> Option<&'a Contact<2>> {
+    list.iter()
+        .map(|c| ((c.grad_r - of.grad_r).norm(), c))
+        .filter(|(d, _)| *d < tol)
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, c)| c)
+}
+
+/// `k = h + ρ_i + ρ_j` of a contact (from its Hessian: `∂²h/∂r_j²` is
+/// `n⊥n⊥ᵀ/k`).
+fn curvature_k(h: &GapHessian<2>) -> f64 {
+    1.0 / h.rr.trace()
+}
+
+/// Random pairs of non-convex near-disks (n = 8, Δ = 0.3; n = 16,
+/// Δ = 0.2; n = 3, Δ = 0.8; n = 4, Δ = 0.7), lobes interlocked or about
+/// to, a third of them a small body in the valley of one 8 times larger:
+/// gradients and second derivatives of every contact with h ≤ 1 against
+/// central differences (step 1e-6: truncation ~1e-12 × third derivative,
+/// round-off ~1e-10; tolerance 2e-6 on the gradient, 2e-4 relative to the
+/// largest second derivative of the contact, which grows as 1/k).
+/// Contacts within 0.05 of a fold (|k| < 0.05, where two stationary points
+/// are about to merge) are not differentiated. Among the pairs, some have
+/// two and some three contacts, and some overlap at two and at three.
+/// (Four never occur here: the normals at a pair's contact points are
+/// nearly parallel, so the points lie within about one lobe of the line of
+/// centres.)
+#[test]
+fn derivatives_match_finite_differences_with_several_contacts() {
+    let mut rng = Uniform(11);
+    let (mut by_count, mut overlapping) = ([0usize; 6], [0usize; 6]);
+    let mut checked = 0;
+    for &(n, delta) in &[(8u32, 0.3), (16, 0.2), (3, 0.8), (4, 0.7)] {
+        let s = fourier(n, delta, GapModel::Exact);
+        assert!(!s.is_convex());
+        for k in 0..60 {
+            let c = if k % 3 == 0 {
+                Config::in_valley(&mut rng, n, delta)
+            } else {
+                Config::random(&mut rng, n, delta, 2.0)
+            };
+            let cut = 1.0;
+            let list = hessians(&s, &c, cut);
+            let plain = contacts(&s, &c, cut);
+            // `contacts` and `gap_hessians` visit the same contacts.
+            assert_eq!(list.len(), plain.len());
+            for (a, b) in list.iter().zip(&plain) {
+                assert_eq!(a.contact, *b);
+            }
+            by_count[list.len().min(5)] += 1;
+            overlapping[list.iter().filter(|h| h.contact.gap < 0.0).count().min(5)] += 1;
+            let eps = 1e-6;
+            for h in &list {
+                if curvature_k(h).abs() < 0.05 || h.contact.gap > cut - 1e-3 {
+                    continue;
+                }
+                let g = gradient(&h.contact);
+                let m = second(h);
+                for k in 0..4 {
+                    let (p, q) = (c.moved(k, eps), c.moved(k, -eps));
+                    let (hp, hq) = (hessians(&s, &p, 2.0 * cut), hessians(&s, &q, 2.0 * cut));
+                    let lp: Vec<_> = hp.iter().map(|x| x.contact).collect();
+                    let lq: Vec<_> = hq.iter().map(|x| x.contact).collect();
+                    let (Some(a), Some(b)) = (
+                        matching(&lp, &h.contact, 1e-3),
+                        matching(&lq, &h.contact, 1e-3),
+                    ) else {
+                        panic!("{c:?}: contact {h:?} lost under a move of {eps} along {k}");
+                    };
+                    let fd = (a.gap - b.gap) / (2.0 * eps);
+                    assert!(
+                        (fd - g[k]).abs() < 2e-6,
+                        "n = {n}, {c:?}, coordinate {k}: {fd} against {}",
+                        g[k]
+                    );
+                    let (ga, gb) = (gradient(a), gradient(b));
+                    let scale = 1.0 + m.iter().flatten().fold(0.0f64, |x, y| x.max(y.abs()));
+                    for l in 0..4 {
+                        let fd2 = (ga[l] - gb[l]) / (2.0 * eps);
+                        assert!(
+                            (fd2 - m[l][k]).abs() < 2e-4 * scale,
+                            "n = {n}, {c:?}, ∂²h/∂{l}∂{k}: {fd2} against {} (k = {})",
+                            m[l][k],
+                            curvature_k(h)
+                        );
+                    }
+                }
+                checked += 1;
+            }
+        }
+    }
+    eprintln!(
+        "{checked} contacts checked; pairs by contacts {by_count:?}, by overlapping contacts {overlapping:?}"
+    );
+    assert!(checked > 200, "{checked} contacts checked");
+    assert!(
+        by_count[2] > 0 && by_count[3] > 0 && overlapping[2] > 0 && overlapping[3] > 0,
+        "pairs by number of contacts: {by_count:?}, overlapping {overlapping:?}"
+    );
+}
+
+/// The outline of a body as a polygon of `m` vertices (lab frame,
+/// counter-clockwise, at polar angles 2πk/m about its centre `c`).
+struct Polygon {
+    c: [f64; 2],
+    v: Vec<[f64; 2]>,
+}
+
+impl Polygon {
+    fn new(s: &NearDisk, size: f64, theta: f64, c: [f64; 2], m: usize) -> Self {
+        let v = (0..m)
+            .map(|k| {
+                let phi = TAU * k as f64 / m as f64;
+                // R(φ) = R⁰ [1 + Δ F(θ − φ)] in the lab direction φ.
+                let r = size * s.relative_radius(theta - phi);
+                [c[0] + r * phi.cos(), c[1] + r * phi.sin()]
+            })
+            .collect();
+        Self { c, v }
+    }
+
+    /// The sector of `p` (the polygon is star-shaped about its centre).
+    fn sector(&self, p: [f64; 2]) -> usize {
+        let m = self.v.len();
+        let a = (p[1] - self.c[1]).atan2(p[0] - self.c[0]).rem_euclid(TAU);
+        ((a / TAU * m as f64) as usize).min(m - 1)
+    }
+
+    /// Whether `p` is inside: on the inner side of its sector's edge.
+    fn contains(&self, p: [f64; 2]) -> bool {
+        let m = self.v.len();
+        let k = self.sector(p);
+        let (a, b) = (self.v[k], self.v[(k + 1) % m]);
+        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0.0
+    }
+
+    /// The distance from `p` to the polygon's edges within 64 sectors of
+    /// its own.
+    fn distance(&self, p: [f64; 2]) -> f64 {
+        let m = self.v.len();
+        let k = self.sector(p) + m;
+        (k - 64..k + 64)
+            .map(|e| {
+                let (a, b) = (self.v[e % m], self.v[(e + 1) % m]);
+                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy))
+                    .clamp(0.0, 1.0);
+                (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// How deep the other polygon's vertices reach into this one (0: none
+    /// inside).
+    fn depth_of(&self, other: &Polygon) -> f64 {
+        other
+            .v
+            .iter()
+            .filter(|p| self.contains(**p))
+            .map(|p| self.distance(*p))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The support points of a contact: `a` on body `i` (centre at 0), `b` on
+/// body `j` (centre at `r`).
+fn support_points(e: &ExactGap, r: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    let (c, s) = e.normal;
+    let a = [
+        e.jet_i.h * c - e.jet_i.d1 * s,
+        e.jet_i.h * s + e.jet_i.d1 * c,
+    ];
+    let b = [
+        r[0] - e.jet_j.h * c + e.jet_j.d1 * s,
+        r[1] - e.jet_j.h * s - e.jet_j.d1 * c,
+    ];
+    (a, b)
+}
+
+/// Random pairs of n = 8 (Δ = 0.3) and n = 16 (Δ = 0.2) near contact
+/// against polygons of 8192 vertices (edges of ~8e-4 R⁰; a chord leaves the
+/// outline by ≲ 1e-6 R⁰ at the sharpest tip): the pair overlaps as
+/// polygons exactly when the model has a contact with h < 0, and the
+/// deepest vertex of either polygon inside the other is as deep as the
+/// model's deepest contact, to 2e-5 R⁰ (pairs whose deepest point is
+/// within 2e-5 of touching are not judged). Every overlapping contact's
+/// support points are a distance |h| apart along the normal, each inside
+/// the other polygon at distance |h| from its edge (same tolerance).
+#[test]
+fn contacts_agree_with_fine_polygons() {
+    let mut rng = Uniform(5);
+    let mut judged = [0usize; 2];
+    for &(n, delta) in &[(8u32, 0.3), (16, 0.2)] {
+        let s = fourier(n, delta, GapModel::Exact);
+        for _ in 0..150 {
+            let c = Config::random(&mut rng, n, delta, 1.2);
+            let mut found = Vec::new();
+            s.profiled()
+                .arc_contacts(&c.pair(), 0.0, None, &mut |e| found.push(e));
+            let pi = Polygon::new(&s, c.size[0], c.theta[0], [0.0, 0.0], 8192);
+            let pj = Polygon::new(&s, c.size[1], c.theta[1], c.r, 8192);
+            let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
+            let model = found.iter().map(|e| -e.gap).fold(0.0, f64::max);
+            for e in found.iter().filter(|e| e.gap < -2e-5) {
+                let (a, b) = support_points(e, c.r);
+                let (cs, sn) = e.normal;
+                // The normal is converged to ~1e-13 rad; near an inflection
+                // point a support point moves by ρ δψ with ρ up to ~1e3.
+                assert!((b[0] - a[0] - e.gap * cs).abs() < 1e-9, "{c:?}: {e:?}");
+                assert!((b[1] - a[1] - e.gap * sn).abs() < 1e-9, "{c:?}: {e:?}");
+                assert!(pj.contains(a) && pi.contains(b), "{c:?}: {e:?}");
+                assert!((pj.distance(a) + e.gap).abs() < 2e-5, "{c:?}: {e:?}");
+                assert!((pi.distance(b) + e.gap).abs() < 2e-5, "{c:?}: {e:?}");
+            }
+            if depth.max(model) < 2e-5 {
+                continue;
+            }
+            judged[usize::from(depth > 0.0)] += 1;
+            assert!(
+                (depth - model).abs() < 2e-5,
+                "n = {n}, {c:?}: polygons {depth}, model {model} from {found:?}"
+            );
+        }
+    }
+    assert!(judged[1] > 150, "{judged:?} (apart, overlapping)");
+}
+
+/// Along paths on which contacts appear and leave, the harmonic energy
+/// Σ_{h<0} h²/2 changes step by step by no more than its derivative
+/// allows: |E(t + dt) − E(t)| ≤ 1.5 max|dE/dt| dt + 1e-15 at the two ends
+/// of the step (dE/dt from the contacts' gradients and the path's velocity;
+/// a contact born or lost at h < 0 would jump by h²/2). On each path the
+/// number of overlapping contacts changes, and it reaches two. The paths:
+/// a body of size 1 rolled (turned and carried) over a quarter turn of a
+/// body of size 4 along its outline, a tenth of a lobe of the small one
+/// deep; two bodies of size 1 and 1.4 slid past each other, turning, a
+/// tenth of a lobe deep. (Deeper, a path can cross a fold at h < 0, where
+/// the energy does jump: `docs/explanation/gap-models.md`.)
+#[test]
+fn energy_is_continuous_as_contacts_come_and_go() {
+    for &(n, delta) in &[(8u32, 0.3), (16, 0.2)] {
+        let s = fourier(n, delta, GapModel::Exact);
+        let lobe = delta / n as f64;
+        let rolled = |t: f64| {
+            let a = 0.5 * std::f64::consts::PI * t;
+            // The big body's radius towards the small one, plus the small
+            // one's, less half a lobe.
+            let d = 4.0 * s.relative_radius(0.2 - a) + 1.0 - 0.1 * lobe;
+            Config {
+                size: [4.0, 1.0],
+                theta: [0.2, 0.7 + 5.0 * a],
+                r: [d * a.cos(), d * a.sin()],
+            }
+        };
+        let slid = |t: f64| Config {
+            size: [1.0, 1.4],
+            theta: [0.3, 1.0 + 0.5 * t],
+            r: [2.4 * (1.0 - 0.1 * lobe), 0.8 * t - 0.4],
+        };
+        let paths: [&dyn Fn(f64) -> Config; 2] = [&rolled, &slid];
+        let mut two = false;
+        for path in paths {
+            let energy = |t: f64| {
+                let c = path(t);
+                let list = contacts(&s, &c, 0.0);
+                let e: f64 = list.iter().map(|k| 0.5 * k.gap * k.gap).sum();
+                let (p, q) = (path(t + 1e-6), path(t - 1e-6));
+                let v = [
+                    (p.r[0] - q.r[0]) / 2e-6,
+                    (p.r[1] - q.r[1]) / 2e-6,
+                    (p.theta[0] - q.theta[0]) / 2e-6,
+                    (p.theta[1] - q.theta[1]) / 2e-6,
+                ];
+                let de: f64 = list
+                    .iter()
+                    .map(|k| {
+                        let g = gradient(k);
+                        k.gap * (0..4).map(|a| g[a] * v[a]).sum::<f64>()
+                    })
+                    .sum();
+                (e, de, list.len())
+            };
+            let steps = 4000;
+            let dt = 1.0 / steps as f64;
+            let mut prev = energy(0.0);
+            let mut counts = vec![prev.2];
+            for k in 1..=steps {
+                let cur = energy(k as f64 * dt);
+                let bound = 1.5 * prev.1.abs().max(cur.1.abs()) * dt + 1e-15;
+                assert!(
+                    (cur.0 - prev.0).abs() <= bound,
+                    "n = {n}, t = {}: E {} → {} ({} → {} contacts), bound {bound}",
+                    k as f64 * dt,
+                    prev.0,
+                    cur.0,
+                    prev.2,
+                    cur.2
+                );
+                counts.push(cur.2);
+                prev = cur;
+            }
+            counts.dedup();
+            eprintln!("n = {n}: counts {counts:?}");
+            assert!(counts.len() > 2, "n = {n}: contact counts {counts:?}");
+            two |= counts.contains(&2);
+        }
+        assert!(two, "n = {n}: never two overlapping contacts");
+    }
+}
+
+/// On a convex outline (n = 3, Δ = 0.2; n = 16, Δ = 0.04) the arc search,
+/// with the whole outline as its one arc, finds one contact per pair, the
+/// convex exact gap's (nested solve) to round-off: gap 1e-13, normal and
+/// torques 1e-10, second derivatives 1e-7 relative (the two solvers stop
+/// within ~1e-14 rad of the optimum by different routes). And `Exact` on a
+/// convex outline keeps the convex code path (no arcs).
+#[test]
+fn convex_outlines_give_the_convex_exact_gap() {
+    let mut rng = Uniform(3);
+    for &(n, delta) in &[(3u32, 0.2), (16, 0.04)] {
+        let s = fourier(n, delta, GapModel::Exact);
+        assert!(s.is_convex() && s.profiled().arcs().is_none());
+        let p = s.profiled();
+        let whole = split_arcs(&|u| p.unit_outline(u), 8192);
+        assert_eq!(whole.len(), 1);
+        for _ in 0..200 {
+            let c = Config::random(&mut rng, n, delta, 3.0);
+            let pair = c.pair();
+            let convex = p
+                .exact_solve(&pair, f64::INFINITY, ExactSolve::Nested)
+                .unwrap();
+            let mut found = Vec::new();
+            p.arc_contacts(&pair, f64::INFINITY, Some(&whole), &mut |e| found.push(e));
+            assert_eq!(found.len(), 1, "{c:?}: {found:?}");
+            let a = found[0];
+            assert!((a.gap - convex.gap).abs() < 1e-13, "{a:?} {convex:?}");
+            let (ca, cb) = (a.contact(), convex.contact());
+            for (x, y) in gradient(&ca).iter().zip(gradient(&cb)) {
+                assert!((x - y).abs() < 1e-10, "{ca:?} {cb:?}");
+            }
+            let (ha, hb) = (second(&a.hessian_signed()), second(&convex.hessian()));
+            for (x, y) in ha.iter().flatten().zip(hb.iter().flatten()) {
+                assert!((x - y).abs() < 1e-7 * (1.0 + y.abs()), "{ha:?} {hb:?}");
+            }
+        }
+    }
+}
+
+/// The arcs of a non-convex outline alternate convex and concave, cover the
+/// circle once, and meet at inflection points (R² + 2R'² − RR'' = 0 to
+/// round-off); the normal angle turns by 2π in all. n = 8 at Δ = 0.3 has
+/// two inflection points per lobe: 16 arcs.
+#[test]
+fn arcs_alternate_and_cover_the_outline() {
+    let s = fourier(8, 0.3, GapModel::Exact);
+    let p = s.profiled();
+    let arcs = p.arcs().unwrap();
+    assert_eq!(arcs.len(), 16);
+    let mut turn = 0.0;
+    for (k, a) in arcs.iter().enumerate() {
+        let next = &arcs[(k + 1) % arcs.len()];
+        assert_ne!(a.convex, next.convex);
+        assert!(
+            (next.phi.0 - a.phi.1)
+                .rem_euclid(TAU)
+                .min(TAU - (next.phi.0 - a.phi.1).rem_euclid(TAU))
+                < 1e-15
+        );
+        let (c, sn) = (a.phi.0.cos(), a.phi.0.sin());
+        let (r, r1, r2) = p.unit_outline((c, sn));
+        assert!((r * r + 2.0 * r1 * r1 - r * r2).abs() < 1e-12);
+        turn += a.nu.1 - a.nu.0;
+    }
+    assert!((turn - TAU).abs() < 1e-12, "{turn}");
+}
