@@ -1,5 +1,5 @@
 //! Contacts of smooth **non-convex** star-shaped outlines: several per pair
-//! (see `docs/explanation/gap-models.md`, "Exact, non-convex outlines").
+//! (see `docs/explanation/non-convex-gap.md`).
 //!
 //! ## Arcs
 //!
