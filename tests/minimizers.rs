@@ -235,17 +235,25 @@ fn force_criteria_hold_where_they_stop() {
     }
 }
 
-/// `force_tol_per_body: true` together with another criterion is refused,
-/// naming the field.
+/// `force_tol_per_body: true` is the per-body sum whatever
+/// `force_criterion` holds (the default `Max`, or the `Sum` that run
+/// directories of the paper's path record); settings that contradict
+/// each other are refused, naming the field.
 #[test]
-fn conflicting_force_criteria_are_refused() {
-    let p = FireParams {
-        force_tol_per_body: true,
-        force_criterion: ForceCriterion::Max,
-        ..FireParams::default()
-    };
-    let err = p.validate("minimizer").unwrap_err().to_string();
-    assert!(err.contains("minimizer.force_tol_per_body"), "{err}");
+fn conflicting_minimizer_settings_are_refused() {
+    for criterion in [
+        ForceCriterion::Sum,
+        ForceCriterion::PerBody,
+        ForceCriterion::Max,
+    ] {
+        let p = FireParams {
+            force_tol_per_body: true,
+            force_criterion: criterion,
+            ..FireParams::default()
+        };
+        assert!(p.validate("minimizer").is_ok(), "{criterion:?}");
+        assert_eq!(p.criterion(), ForceCriterion::PerBody, "{criterion:?}");
+    }
     let p = FireParams {
         newton: Some(NewtonParams {
             shift: 2.0,
@@ -593,6 +601,26 @@ fn the_family_chooses_fires_masses_and_the_settings_record_its_choice() {
     assert_eq!(recorded(nmer(2, "")), None);
     assert_eq!(recorded(nmer(3, ", minimizer: (masses: Plain)")), None);
     assert_eq!(recorded(small_experiment("sphere", 2, "{}", 8, "")), None);
+}
+
+/// A run directory of packings made under the paper's summed force rule
+/// (jamkit's default before `Max`; they record `force_criterion: "Sum"`)
+/// is refused under the default, with the rule named and the fix said,
+/// and resumed under an explicit `force_criterion: Sum`.
+#[test]
+fn summed_force_rule_packings_are_refused_under_the_default_and_resume_as_sum() {
+    assert_eq!(FireParams::default().criterion(), ForceCriterion::Max);
+    assert_eq!(FireParams::paper().criterion(), ForceCriterion::Sum);
+    common::refused_then_resumed(
+        &small_experiment("sphere", 2, "{}", 16, ", minimizer: (force_criterion: Sum)"),
+        &small_experiment("sphere", 2, "{}", 16, ""),
+        &[
+            "minimizer.force_criterion",
+            "\"Max\"",
+            "\"Sum\" (the default before \"Max\"",
+            "--set minimizer.force_criterion=Sum",
+        ],
+    );
 }
 
 /// A run directory of plain-mass dimer packings (as every run made before
