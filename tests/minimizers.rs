@@ -749,8 +749,10 @@ fn lbfgs_is_the_family_choice_of_3d_dimers_only() {
 /// default packings of the other families, and 3D dimers with
 /// `--no-lbfgs` (experiment files: `lbfgs: None`), have the hashes that
 /// `jamkit bench packing` of commit a8cbafb (FIRE for every family)
-/// printed for these arguments. The 3D dimers' default,
-/// `--lbfgs-after 0 --lbfgs-blocks`, makes other packings here.
+/// printed for these arguments (with the force rule and the search of
+/// that commit's defaults, `--force-criterion sum --search extrapolated`).
+/// The 3D dimers' default, `--lbfgs-after 0 --lbfgs-blocks`, makes other
+/// packings here.
 #[test]
 fn the_lbfgs_default_leaves_other_families_and_no_lbfgs_as_they_were() {
     let hash = bench_hash;
@@ -764,6 +766,11 @@ fn the_lbfgs_default_leaves_other_families_and_no_lbfgs_as_they_were() {
         ([&dimers3[..], &["--no-lbfgs"]].concat(), "f9c97aeec4c4ba37"),
     ];
     for (args, old) in cases {
+        let args = [
+            &args[..],
+            &["--force-criterion", "sum", "--search", "extrapolated"],
+        ]
+        .concat();
         assert_eq!(hash(&args), old, "{args:?}");
     }
     let new = hash(&dimers3);

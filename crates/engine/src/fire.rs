@@ -967,6 +967,7 @@ pub(crate) mod tests {
             let mut fire = Fire::new(FireParams {
                 energy_tol: 1e-300,
                 force_tol: 1e-20,
+                force_criterion: ForceCriterion::Sum,
                 ..params
             });
             let out = fire.minimize(&mut q).unwrap();
@@ -992,6 +993,7 @@ pub(crate) mod tests {
             let out = Fire::new(FireParams {
                 energy_tol: 1e-300,
                 force_tol: 1e-20,
+                force_criterion: ForceCriterion::Sum,
                 newton: None,
                 masses,
                 ..FireParams::default()
