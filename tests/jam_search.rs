@@ -1,8 +1,9 @@
-//! The extrapolated jamming search (`protocol.search: Extrapolated`): the
-//! slope it extrapolates with is the derivative of the relaxed energy
-//! (finite differences), one leap lands where `V/N ∝ (φ − φ_J)²` says, the
-//! search ends in the paper's window, and it is the default, with the
-//! paper's `Bisection` left out of recorded settings.
+//! The extrapolated jamming searches (`protocol.search: Extrapolated`, and
+//! `Adaptive`, the default): the slope they extrapolate with is the
+//! derivative of the relaxed energy (finite differences), one leap lands
+//! where `V/N ∝ (φ − φ_J)²` says, the searches end in the paper's window,
+//! and `Adaptive` is the default, with the paper's `Bisection` left out of
+//! recorded settings.
 
 use jamkit_core::{Potential, Shape};
 use jamkit_engine::{
@@ -142,6 +143,10 @@ fn extrapolated_search_ends_in_the_window_in_fewer_minimisations() {
                 let (p, e, m) = run::<2, _>(near_disk(), seed, JamSearch::Extrapolated);
                 (p, e, m, "near-disks, extrapolated")
             },
+            {
+                let (p, e, m) = run::<2, _>(near_disk(), seed, JamSearch::Adaptive);
+                (p, e, m, "near-disks, adaptive")
+            },
         ] {
             assert!(
                 e > window.energy_low && e < window.energy_high,
@@ -149,7 +154,7 @@ fn extrapolated_search_ends_in_the_window_in_fewer_minimisations() {
             );
             if search.ends_with("bisection") {
                 paper += m;
-            } else {
+            } else if search.ends_with("extrapolated") {
                 leaps += m;
             }
         }
@@ -160,15 +165,16 @@ fn extrapolated_search_ends_in_the_window_in_fewer_minimisations() {
     );
 }
 
-/// `Extrapolated` is the default (its ensembles are the bisection's:
-/// docs/reports/minimizers.md, "The defaults against the paper's path"). `experiment.ron` always names the search, so a run
+/// `Adaptive` is the default (its ensembles are the bisection's:
+/// docs/reports/minimizers.md, "The defaults against the paper's path").
+/// `experiment.ron` always names the search, so a run
 /// directory reads back as the search it was made with; a packing's
 /// recorded settings leave out `search: Bisection`, as packings made before
 /// the field existed (all bisection packings) record nothing, so that those
 /// still resume under an explicit `Bisection`, and never under the default.
 #[test]
-fn extrapolated_is_the_default_and_bisection_is_left_out_of_settings() {
-    assert_eq!(JamParams::default().search, JamSearch::Extrapolated);
+fn adaptive_is_the_default_and_bisection_is_left_out_of_settings() {
+    assert_eq!(JamParams::default().search, JamSearch::Adaptive);
     let protocol = |search: &str| {
         let text = format!(
             r#"(name: "s", family: "sphere", dim: 2, particles: 8, samples: 1, seed: 1{search})"#
@@ -179,10 +185,13 @@ fn extrapolated_is_the_default_and_bisection_is_left_out_of_settings() {
         (settings["protocol"]["Jam"].get("search").cloned(), written)
     };
     let (default, written) = protocol("");
-    assert_eq!(default, Some(serde_json::json!("Extrapolated")));
-    assert!(written.contains("search:Extrapolated"), "{written}");
-    let (explicit, written) = protocol(", protocol: Jam(search: Extrapolated)");
+    assert_eq!(default, Some(serde_json::json!("Adaptive")));
+    assert!(written.contains("search:Adaptive"), "{written}");
+    let (explicit, written) = protocol(", protocol: Jam(search: Adaptive)");
     assert_eq!(explicit, default);
+    assert!(written.contains("search:Adaptive"), "{written}");
+    let (extrapolated, written) = protocol(", protocol: Jam(search: Extrapolated)");
+    assert_eq!(extrapolated, Some(serde_json::json!("Extrapolated")));
     assert!(written.contains("search:Extrapolated"), "{written}");
     let (bisection, written) = protocol(", protocol: Jam(search: Bisection)");
     assert_eq!(bisection, None, "bisection settings name no search");
@@ -193,8 +202,8 @@ fn extrapolated_is_the_default_and_bisection_is_left_out_of_settings() {
     assert!(err.to_string().contains("Halving"), "{err}");
 }
 
-/// A run directory of bisection packings (as every run made before
-/// `Extrapolated` became the default) is refused under the default, with
+/// A run directory of bisection packings (as every run made before the
+/// extrapolated searches existed) is refused under the default, with
 /// the search named and the fix said, and resumed under an explicit
 /// `search: Bisection`.
 #[test]
@@ -210,9 +219,33 @@ fn bisection_packings_are_refused_under_the_default_and_resume_as_bisection() {
         &experiment(""),
         &[
             "protocol.Jam.search",
-            "\"Extrapolated\"",
+            "\"Adaptive\"",
             "\"Bisection\" (not written",
             "add `search: Bisection`",
+        ],
+    );
+}
+
+/// A run directory of packings of the `Extrapolated` search (jamkit's
+/// default before `Adaptive`) is refused under the default, with the
+/// search named and the fix said, and resumed under an explicit
+/// `search: Extrapolated`.
+#[test]
+fn extrapolated_packings_are_refused_under_the_default_and_resume_as_extrapolated() {
+    let experiment = |protocol: &str| {
+        let text = format!(
+            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3{protocol})"#
+        );
+        Experiment::from_ron(&text, "inline").unwrap()
+    };
+    common::refused_then_resumed(
+        &experiment(", protocol: Jam(search: Extrapolated)"),
+        &experiment(""),
+        &[
+            "protocol.Jam.search",
+            "\"Adaptive\"",
+            "\"Extrapolated\" (the default before \"Adaptive\"",
+            "--set protocol.search=Extrapolated",
         ],
     );
 }

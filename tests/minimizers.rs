@@ -235,17 +235,25 @@ fn force_criteria_hold_where_they_stop() {
     }
 }
 
-/// `force_tol_per_body: true` together with another criterion is refused,
-/// naming the field.
+/// `force_tol_per_body: true` is the per-body sum whatever
+/// `force_criterion` holds (the default `Max`, or the `Sum` that run
+/// directories of the paper's path record); settings that contradict
+/// each other are refused, naming the field.
 #[test]
-fn conflicting_force_criteria_are_refused() {
-    let p = FireParams {
-        force_tol_per_body: true,
-        force_criterion: ForceCriterion::Max,
-        ..FireParams::default()
-    };
-    let err = p.validate("minimizer").unwrap_err().to_string();
-    assert!(err.contains("minimizer.force_tol_per_body"), "{err}");
+fn conflicting_minimizer_settings_are_refused() {
+    for criterion in [
+        ForceCriterion::Sum,
+        ForceCriterion::PerBody,
+        ForceCriterion::Max,
+    ] {
+        let p = FireParams {
+            force_tol_per_body: true,
+            force_criterion: criterion,
+            ..FireParams::default()
+        };
+        assert!(p.validate("minimizer").is_ok(), "{criterion:?}");
+        assert_eq!(p.criterion(), ForceCriterion::PerBody, "{criterion:?}");
+    }
     let p = FireParams {
         newton: Some(NewtonParams {
             shift: 2.0,
@@ -461,7 +469,8 @@ impl Shape<2> for DisksWithoutHessian {
 
 /// A family without a Hessian is minimised by FIRE alone under the default
 /// minimiser (the Newton finish is skipped, not an error), and ends where
-/// the paper's FIRE ends: the same steps, the same energy.
+/// the paper's FIRE with the same force rule ends: the same steps, the
+/// same energy.
 #[test]
 fn a_family_without_hessian_is_minimised_by_fire_alone() {
     let scene = compressed::<2, _>(DisksWithoutHessian, 32, 1, 0.9);
@@ -478,7 +487,12 @@ fn a_family_without_hessian_is_minimised_by_fire_alone() {
     assert_eq!(out.reason, StopReason::Force);
     assert_eq!(out.newton_iterations, 0);
     let mut paper = scene.clone();
-    let reference = Fire::new(FireParams::paper()).minimize(&mut paper).unwrap();
+    let reference = Fire::new(FireParams {
+        force_criterion: ForceCriterion::default(),
+        ..FireParams::paper()
+    })
+    .minimize(&mut paper)
+    .unwrap();
     assert_eq!((out.steps, out.energy), (reference.steps, reference.energy));
 }
 
@@ -593,6 +607,26 @@ fn the_family_chooses_fires_masses_and_the_settings_record_its_choice() {
     assert_eq!(recorded(nmer(2, "")), None);
     assert_eq!(recorded(nmer(3, ", minimizer: (masses: Plain)")), None);
     assert_eq!(recorded(small_experiment("sphere", 2, "{}", 8, "")), None);
+}
+
+/// A run directory of packings made under the paper's summed force rule
+/// (jamkit's default before `Max`; they record `force_criterion: "Sum"`)
+/// is refused under the default, with the rule named and the fix said,
+/// and resumed under an explicit `force_criterion: Sum`.
+#[test]
+fn summed_force_rule_packings_are_refused_under_the_default_and_resume_as_sum() {
+    assert_eq!(FireParams::default().criterion(), ForceCriterion::Max);
+    assert_eq!(FireParams::paper().criterion(), ForceCriterion::Sum);
+    common::refused_then_resumed(
+        &small_experiment("sphere", 2, "{}", 16, ", minimizer: (force_criterion: Sum)"),
+        &small_experiment("sphere", 2, "{}", 16, ""),
+        &[
+            "minimizer.force_criterion",
+            "\"Max\"",
+            "\"Sum\" (the default before \"Max\"",
+            "--set minimizer.force_criterion=Sum",
+        ],
+    );
 }
 
 /// A run directory of plain-mass dimer packings (as every run made before
@@ -715,8 +749,10 @@ fn lbfgs_is_the_family_choice_of_3d_dimers_only() {
 /// default packings of the other families, and 3D dimers with
 /// `--no-lbfgs` (experiment files: `lbfgs: None`), have the hashes that
 /// `jamkit bench packing` of commit a8cbafb (FIRE for every family)
-/// printed for these arguments. The 3D dimers' default,
-/// `--lbfgs-after 0 --lbfgs-blocks`, makes other packings here.
+/// printed for these arguments (with the force rule and the search of
+/// that commit's defaults, `--force-criterion sum --search extrapolated`).
+/// The 3D dimers' default, `--lbfgs-after 0 --lbfgs-blocks`, makes other
+/// packings here.
 #[test]
 fn the_lbfgs_default_leaves_other_families_and_no_lbfgs_as_they_were() {
     let hash = bench_hash;
@@ -730,6 +766,11 @@ fn the_lbfgs_default_leaves_other_families_and_no_lbfgs_as_they_were() {
         ([&dimers3[..], &["--no-lbfgs"]].concat(), "f9c97aeec4c4ba37"),
     ];
     for (args, old) in cases {
+        let args = [
+            &args[..],
+            &["--force-criterion", "sum", "--search", "extrapolated"],
+        ]
+        .concat();
         assert_eq!(hash(&args), old, "{args:?}");
     }
     let new = hash(&dimers3);

@@ -415,7 +415,11 @@ fn check_sparse_against_dense<const D: usize, S: Shape<D>>(
 ) -> moduli::Moduli {
     let name = format!("{} D = {D}", scene.packing().shape.family());
     let summary = summarize_with(&mut scene, rule);
-    let dense = moduli::measure(&mut scene, &summary.rattler, &ModuliParams::default()).unwrap();
+    let dense_params = ModuliParams {
+        solver: ModuliSolver::Dense,
+        ..Default::default()
+    };
+    let dense = moduli::measure(&mut scene, &summary.rattler, &dense_params).unwrap();
     let params = ModuliParams {
         solver: ModuliSolver::Sparse,
         ..Default::default()
@@ -528,7 +532,11 @@ fn sparse_moduli_fall_back_to_dense_and_say_why() {
         ..Default::default()
     };
     // No rattler mask: the rattlers' rows stay, with no contact or too few.
-    let dense = moduli::measure(&mut scene, &[], &ModuliParams::default()).unwrap();
+    let dense_params = ModuliParams {
+        solver: ModuliSolver::Dense,
+        ..Default::default()
+    };
+    let dense = moduli::measure(&mut scene, &[], &dense_params).unwrap();
     let m = moduli::measure(&mut scene, &[], &sparse).unwrap();
     eprintln!("{:?}", m.dense_fallback);
     assert!(dense.zero_modes.extra > 0, "{dense:?}");

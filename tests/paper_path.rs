@@ -28,6 +28,7 @@ fn paper_path_is_the_paper_fields_set_one_by_one_bit_for_bit() {
         "minimizer.newton=None",
         "minimizer.masses=Plain",
         "minimizer.lbfgs=None",
+        "minimizer.force_criterion=Sum",
         "protocol.search=Bisection",
     ]);
     let default = near_disks(&[]);
@@ -49,6 +50,7 @@ fn paper_path_is_the_paper_fields_set_one_by_one_bit_for_bit() {
     for part in [
         "paper_path: true",
         "search: Bisection",
+        "force_criterion: Sum",
         "newton: None",
         "lbfgs: None",
     ] {
@@ -64,8 +66,12 @@ fn a_file_that_contradicts_the_paper_path_is_refused_naming_the_field() {
             "minimizer.variant",
         ),
         (
-            &["paper_path=true", "minimizer.force_criterion=Max"][..],
+            &["paper_path=true", "minimizer.force_criterion=PerBody"][..],
             "minimizer.force_criterion",
+        ),
+        (
+            &["paper_path=true", "protocol.search=Extrapolated"][..],
+            "protocol.search",
         ),
         (
             &[
@@ -86,7 +92,8 @@ fn a_file_that_contradicts_the_paper_path_is_refused_naming_the_field() {
     Plan::new(&near_disks(&[
         "paper_path=true",
         "minimizer.newton=None",
-        "protocol.search=Extrapolated",
+        "minimizer.force_criterion=Max",
+        "protocol.search=Adaptive",
     ]))
     .unwrap();
 }

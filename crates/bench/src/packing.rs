@@ -113,6 +113,9 @@ pub enum SearchArg {
     Bisection,
     /// The decompression the pressure predicts.
     Extrapolated,
+    /// The predicted decompression, and a compression step that grows
+    /// again where the jamming point has moved up (the default).
+    Adaptive,
 }
 
 /// FIRE's masses in `bench packing`.
@@ -253,6 +256,7 @@ impl Options {
             search: match self.search {
                 Some(SearchArg::Bisection) => JamSearch::Bisection,
                 Some(SearchArg::Extrapolated) => JamSearch::Extrapolated,
+                Some(SearchArg::Adaptive) => JamSearch::Adaptive,
                 None if self.minimizer == MinimizerArg::Paper => JamSearch::Bisection,
                 None => JamSearch::default(),
             },

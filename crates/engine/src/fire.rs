@@ -17,10 +17,12 @@
 //! stiffness matrix instead ([`crate::precon`]): the same rules in that
 //! metric.
 //!
-//! Minimisation stops when `V/N < energy_tol` or `Σ_a (∂V/∂q_a)² < force_tol`
-//! (the paper's criteria, with `10⁻¹⁶` and `10⁻²⁵`). With
-//! `force_tol_per_body` the force sum is divided by `N` first, as in the
-//! paper author's public code.
+//! Minimisation stops when `V/N < energy_tol` or when the force measure
+//! of [`ForceCriterion`] is below `force_tol` (`10⁻¹⁶` and `10⁻²⁵`). The
+//! default measure is the largest `(∂V/∂q_a)²`, which does not tighten
+//! per body as `N` grows; the paper's is the sum `Σ_a (∂V/∂q_a)²`
+//! ([`FireParams::paper`]); with `force_tol_per_body` the sum is divided by
+//! `N` first, as in the paper author's public code.
 
 use crate::lbfgs::{LbfgsChoice, LbfgsEnd, LbfgsWork};
 use crate::newton::{NewtonEnd, NewtonParams, NewtonWork};
@@ -36,13 +38,13 @@ use std::sync::atomic::{AtomicU64, Ordering};
 pub enum ForceCriterion {
     /// `Σ_a (∂V/∂q_a)²`, the paper's rule as written: `N` times stricter per
     /// body at `N` bodies than at one.
-    #[default]
     Sum,
     /// `Σ_a (∂V/∂q_a)² / N`, the paper author's public code (also
     /// `force_tol_per_body: true`).
     PerBody,
     /// `max_a (∂V/∂q_a)²`: every coordinate's residual force below
-    /// `√force_tol`, whatever `N`.
+    /// `√force_tol`, whatever `N` (the default).
+    #[default]
     Max,
 }
 
@@ -118,11 +120,10 @@ pub struct FireParams {
     pub f_alpha: f64,
     /// Stop when `V/N` falls below this.
     pub energy_tol: f64,
-    /// Stop when `Σ (∂V/∂q)²` (or that sum divided by `N`, see
-    /// `force_tol_per_body`) falls below this.
+    /// Stop when the force measure of `force_criterion` falls below this.
     pub force_tol: f64,
     /// Divide the force sum by `N` before comparing (the author's public
-    /// code; the same as `force_criterion: PerBody`).
+    /// code): `force_criterion: PerBody`, whatever `force_criterion` says.
     pub force_tol_per_body: bool,
     /// The force measure of the stopping rule (`Sum`, `PerBody`, `Max`).
     pub force_criterion: ForceCriterion,
@@ -191,7 +192,7 @@ impl Default for FireParams {
             energy_tol: 1e-16,
             force_tol: 1e-25,
             force_tol_per_body: false,
-            force_criterion: ForceCriterion::Sum,
+            force_criterion: ForceCriterion::Max,
             max_steps: 20_000_000,
             newton: Some(NewtonParams::default()),
             masses: Masses::Family,
@@ -224,10 +225,12 @@ impl FireParams {
         }
     }
 
-    /// FIRE with the Newton finish at its default settings.
+    /// FIRE with the Newton finish at its default settings and the default
+    /// force criterion, with plain masses and no L-BFGS.
     pub fn fire_newton() -> Self {
         Self {
             newton: Some(NewtonParams::default()),
+            force_criterion: ForceCriterion::default(),
             ..Self::paper()
         }
     }
@@ -367,16 +370,6 @@ impl FireParams {
                 format!("{prefix}.max_steps"),
                 0,
                 "must be at least 1",
-            ));
-        }
-        if self.force_tol_per_body && self.force_criterion != ForceCriterion::Sum {
-            return Err(Error::invalid(
-                format!("{prefix}.force_tol_per_body"),
-                true,
-                format!(
-                    "must be false with force_criterion: {:?} (force_tol_per_body: true is force_criterion: PerBody; give one of the two)",
-                    self.force_criterion
-                ),
             ));
         }
         if let Some(newton) = &self.newton {
@@ -974,6 +967,7 @@ pub(crate) mod tests {
             let mut fire = Fire::new(FireParams {
                 energy_tol: 1e-300,
                 force_tol: 1e-20,
+                force_criterion: ForceCriterion::Sum,
                 ..params
             });
             let out = fire.minimize(&mut q).unwrap();
@@ -999,6 +993,7 @@ pub(crate) mod tests {
             let out = Fire::new(FireParams {
                 energy_tol: 1e-300,
                 force_tol: 1e-20,
+                force_criterion: ForceCriterion::Sum,
                 newton: None,
                 masses,
                 ..FireParams::default()

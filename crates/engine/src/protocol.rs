@@ -5,6 +5,9 @@
 //! after minimisation keep compressing; when `V/N > E_low`, decompress with
 //! `ε → −ε/2`, and halve and reverse again every time `V/N` crosses `E_low`.
 //! Stop when `E_low < V/N < E_high` (the paper: `10⁻¹⁶` and `2·10⁻¹⁶`).
+//! That is [`JamSearch::Bisection`]; the default, [`JamSearch::Adaptive`],
+//! decompresses a jammed state by the step its pressure predicts and lets
+//! the compression step grow again where the jamming point has moved up.
 //!
 //! **To a packing fraction.** Step `φ` by `ε` towards the target (the last
 //! step lands on it exactly), minimising after each step.
@@ -36,10 +39,11 @@ pub struct JamParams {
     pub energy_high: f64,
     /// Give up after this many changes of `φ`.
     pub max_density_steps: u64,
-    /// How a jammed state (`V/N ≥ E_high`) is decompressed: by the step
-    /// that the state's own pressure predicts (`Extrapolated`, the default)
-    /// or by the paper's halved steps (`Bisection`, the paper's path bit for
-    /// bit).
+    /// How the search moves: the paper's halved steps (`Bisection`, the
+    /// paper's path bit for bit), decompressions by the step that a jammed
+    /// state's own pressure predicts (`Extrapolated`), and with them
+    /// compressions whose step grows again where the jamming point has
+    /// moved up (`Adaptive`, the default).
     pub search: JamSearch,
 }
 
@@ -51,11 +55,18 @@ pub enum JamSearch {
     /// The paper's moves, except that a jammed state's decompression is
     /// the step to the window that `V/N ∝ (φ − φ_J)^α` predicts from its
     /// `V/N` and its pressure (module docs), where that step stays above
-    /// the last unjammed `φ`. The default: its ensembles are the
-    /// bisection's (docs/reports/minimizers.md, "The defaults against the
-    /// paper's path").
-    #[default]
+    /// the last unjammed `φ`.
     Extrapolated,
+    /// `Extrapolated`, and a compression step that doubles (up to `eps`)
+    /// from the [`REGROW_AFTER`]-th state in a row found short of the
+    /// target: the search has then passed the `φ` where it last found the
+    /// packing jammed, so a minimisation has moved the jamming point up
+    /// (a rearrangement while unjamming), and the halved steps would creep
+    /// to it. The default: its ensembles are the bisection's
+    /// (docs/reports/minimizers.md, "The defaults against the paper's
+    /// path").
+    #[default]
+    Adaptive,
 }
 
 impl JamSearch {
@@ -66,6 +77,13 @@ impl JamSearch {
     }
 }
 
+/// How many states in a row found short of the target, counting the one
+/// that ended the last decompression, before [`JamSearch::Adaptive`]
+/// doubles its compression step: after a crossing the step is half the
+/// last one, so two such steps are back at the last jammed `φ`, and the
+/// third state below the target is beyond it.
+pub const REGROW_AFTER: u32 = 3;
+
 impl Default for JamParams {
     fn default() -> Self {
         Self {
@@ -73,7 +91,7 @@ impl Default for JamParams {
             energy_low: 1e-16,
             energy_high: 2e-16,
             max_density_steps: 200_000,
-            search: JamSearch::Extrapolated,
+            search: JamSearch::Adaptive,
         }
     }
 }
@@ -240,20 +258,27 @@ enum Verdict {
 /// judge, and change φ by ε, reversing and halving ε on every crossing of
 /// the target, until the judge says done. `judge` gets the relaxed scene and
 /// `V/N`, and returns its verdict and a description of the state for the
-/// error raised after `max_steps` changes of φ.
+/// error raised after `max_steps` changes of φ. `leap` may replace a
+/// decompression's step; with `regrow` the compression step doubles, up to
+/// the initial `eps`, from the [`REGROW_AFTER`]-th state in a row below the
+/// target ([`JamSearch::Adaptive`]).
 fn bisect<const D: usize, S: Shape<D>>(
     scene: &mut Scene<D, S>,
     fire: &mut Fire,
     eps: f64,
     max_steps: u64,
+    regrow: bool,
     mut judge: impl FnMut(&mut Scene<D, S>, f64) -> (Verdict, String),
     mut leap: impl FnMut(&mut Scene<D, S>, f64) -> Option<f64>,
 ) -> Result<ProtocolOutcome> {
     let mut tally = Tally::default();
+    let initial = eps;
     let mut eps = eps;
     let mut steps = 0;
     // The largest φ found short of the target so far.
     let mut under_at = f64::NEG_INFINITY;
+    // States found short of the target in a row.
+    let mut unders = 0;
     fire.set_from_jammed(false);
     loop {
         let e = tally.relax(scene, fire)?;
@@ -273,12 +298,19 @@ fn bisect<const D: usize, S: Shape<D>>(
         fire.set_from_jammed(over);
         if !over {
             under_at = under_at.max(scene.phi());
-        } else if let Some(step) = leap(scene, e) {
-            // A predicted decompression, kept above the last state found
-            // short of the target (else the halved step stands).
-            let phi = scene.phi();
-            if step < 0.0 && phi + step > under_at {
-                eps = step;
+            unders += 1;
+            if regrow && unders >= REGROW_AFTER {
+                eps = (2.0 * eps).min(initial);
+            }
+        } else {
+            unders = 0;
+            if let Some(step) = leap(scene, e) {
+                // A predicted decompression, kept above the last state found
+                // short of the target (else the halved step stands).
+                let phi = scene.phi();
+                if step < 0.0 && phi + step > under_at {
+                    eps = step;
+                }
             }
         }
         if steps >= max_steps {
@@ -307,6 +339,7 @@ pub fn jam<const D: usize, S: Shape<D>>(
         fire,
         params.eps,
         params.max_density_steps,
+        params.search == JamSearch::Adaptive,
         |_, e| {
             let verdict = if e > params.energy_low && e < params.energy_high {
                 Verdict::Done
@@ -319,7 +352,9 @@ pub fn jam<const D: usize, S: Shape<D>>(
         },
         |scene, e| match params.search {
             JamSearch::Bisection => None,
-            JamSearch::Extrapolated => extrapolated_step(scene, e, target.max(e * LEAP)),
+            JamSearch::Extrapolated | JamSearch::Adaptive => {
+                extrapolated_step(scene, e, target.max(e * LEAP))
+            }
         },
     )
 }
@@ -502,6 +537,7 @@ pub fn compress_to_pressure<const D: usize, S: Shape<D>>(
         fire,
         params.eps,
         params.max_density_steps,
+        false,
         |scene, _| {
             let p = scene.pressure();
             let verdict = if (p - params.pressure).abs() < params.tol * params.pressure {
@@ -518,4 +554,75 @@ pub fn compress_to_pressure<const D: usize, S: Shape<D>>(
         },
         |_, _| None,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fire::FireParams;
+    use jamkit_core::{Packing, SizeDistribution};
+    use jamkit_sphere::Sphere;
+    use rand::SeedableRng;
+
+    /// Minimisations the bisection takes from φ = 0.01 to a jamming point
+    /// that moves from `0.0203` to `0.0203 + jump` at the first state found
+    /// jammed (a rearrangement), judged by φ alone on a dilute scene (no
+    /// contacts, so every minimisation ends at once), with and without
+    /// regrowth.
+    fn density_steps(jump: f64, regrow: bool) -> u64 {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let sizes = SizeDistribution::default().sample(4, &mut rng);
+        let packing = Packing::<2, Sphere>::random(Sphere, sizes, 0.01, &mut rng).unwrap();
+        let mut scene = Scene::new(packing, Potential::Harmonic, 0.2);
+        let mut fire = Fire::new(FireParams::paper());
+        let mut phi_j = 0.0203;
+        let mut moved = false;
+        let outcome = bisect(
+            &mut scene,
+            &mut fire,
+            1e-3,
+            100_000,
+            regrow,
+            |scene, _| {
+                let phi = scene.phi();
+                let verdict = if (phi - phi_j).abs() < 1e-9 {
+                    Verdict::Done
+                } else if phi > phi_j {
+                    if !moved {
+                        (moved, phi_j) = (true, phi_j + jump);
+                    }
+                    Verdict::Over
+                } else {
+                    Verdict::Under
+                };
+                (verdict, String::new())
+            },
+            |_, _| None,
+        )
+        .unwrap();
+        assert!(
+            (outcome.phi - phi_j).abs() < 1e-9,
+            "{} {phi_j}",
+            outcome.phi
+        );
+        outcome.minimizations
+    }
+
+    /// A jamming point that moves up once the search has crossed it: the
+    /// halved steps (2.5·10⁻⁴ after the crossing) creep there, the regrown
+    /// ones double back to `eps` = 10⁻³: fewer minimisations for a move of
+    /// 2·10⁻³, fewer than half for one of 0.05 (about 200 creeping steps
+    /// against about 50). Without a move both take the same path: a third
+    /// state below the target in a row does not occur.
+    #[test]
+    fn regrowth_reaches_a_jamming_point_that_moved_up_in_fewer_steps() {
+        let (creep, regrown) = (density_steps(2e-3, false), density_steps(2e-3, true));
+        assert!(regrown < creep, "regrown {regrown}, halved {creep}");
+        let (creep, regrown) = (density_steps(0.05, false), density_steps(0.05, true));
+        assert!(
+            2 * regrown < creep,
+            "a far move: regrown {regrown}, halved {creep}"
+        );
+        assert_eq!(density_steps(0.0, false), density_steps(0.0, true));
+    }
 }

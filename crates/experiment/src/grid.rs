@@ -330,9 +330,9 @@ pub fn settings(experiment: &Experiment, point: &Point, seed: u64) -> serde_json
 /// The protocol as a packing records it: as written to `experiment.ron`,
 /// except that `search: Bisection` is left out. Packings made before the
 /// field existed were bisection packings and record no `search`, so they
-/// still resume under an explicit `search: Bisection`; the default,
-/// `Extrapolated`, is always written, so no packing of one search is ever
-/// taken for the other's.
+/// still resume under an explicit `search: Bisection`; the others
+/// (`Adaptive`, the default, and `Extrapolated`) are always written, so no
+/// packing of one search is ever taken for another's.
 fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
     let mut value = serde_json::to_value(protocol).expect("protocol serialises");
     if let Some(jam) = value.get_mut("Jam").and_then(|j| j.as_object_mut())

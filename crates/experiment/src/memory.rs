@@ -289,7 +289,7 @@ mod tests {
     fn dense_moduli_and_saddle_escapes_are_counted_sparse_moduli_are_not() {
         let memory = dense_bytes(90_000, 2);
         let sphere = ("sphere", 3, 0);
-        let dense = experiment("Moduli()", "Pressure(pressure: 1e-3)");
+        let dense = experiment("Moduli(solver: Dense)", "Pressure(pressure: 1e-3)");
         let err = check_dense_solves(
             &dense_solves(&dense, &dense.protocol),
             sphere,
@@ -304,8 +304,10 @@ mod tests {
                 && err.contains("use Moduli(solver: Sparse)"),
             "{err}"
         );
-        let sparse = experiment("Moduli(solver: Sparse)", "Pressure(pressure: 1e-3)");
-        assert!(dense_solves(&sparse, &sparse.protocol).is_empty());
+        for sparse in ["Moduli(solver: Sparse)", "Moduli()"] {
+            let sparse = experiment(sparse, "Pressure(pressure: 1e-3)");
+            assert!(dense_solves(&sparse, &sparse.protocol).is_empty());
+        }
         let escape = experiment("Contacts", "Jam(escape_saddles: true)");
         let err = check_dense_solves(
             &dense_solves(&escape, &escape.protocol),

@@ -71,6 +71,16 @@ pub(crate) fn check(e: &Experiment) -> Result<(), ExperimentError> {
             ));
         }
     }
+    if let Protocol::Jam { search, .. } | Protocol::AboveJam { search, .. } = &e.protocol
+        && !matches!(search, JamSearch::Bisection)
+        && *search != JamSearch::default()
+    {
+        return Err(ExperimentError::invalid(
+            "protocol.search",
+            format!("{search:?}"),
+            "paper_path: true runs the paper's bisection: leave this field out, or drop paper_path",
+        ));
+    }
     for axis in &e.scan {
         for key in axis.keys() {
             if MINIMIZER_FIELDS.contains(&key.as_str()) || key == "protocol.search" {

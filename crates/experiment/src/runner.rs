@@ -282,10 +282,8 @@ fn refuse_other_settings(jobs: &[Job], packing_dir: &Path) -> Result<(), Experim
             continue;
         };
         if let Some((key, here, mut there)) = lock::first_difference(&job.settings, &old.settings) {
-            if there == "(not set)"
-                && let Some(unwritten) = unwritten_setting(&key)
-            {
-                there = unwritten.to_string();
+            if let Some(former) = former_default(&key, &there) {
+                there = former.to_string();
             }
             return Err(ExperimentError::SettingsDiffer {
                 file: path.display().to_string(),
@@ -298,9 +296,28 @@ fn refuse_other_settings(jobs: &[Job], packing_dir: &Path) -> Result<(), Experim
     Ok(())
 }
 
-/// What a setting that a packing does not record stood for, where the
-/// settings leave a value out so that packings made before it existed
-/// resume (`sample::settings`), with how to resume them.
+/// A packing's setting that was jamkit's default before today's, said
+/// with how to resume such packings. Where the settings leave a value out
+/// so that packings made before it existed resume (`sample::settings`),
+/// the packing records it as `(not set)`.
+fn former_default(key: &str, there: &str) -> Option<&'static str> {
+    match (key, there) {
+        // Packings of the paper's summed force rule, the default before `Max`.
+        ("minimizer.force_criterion", "\"Sum\"") => Some(
+            "\"Sum\" (the default before \"Max\": add `force_criterion: Sum` to the \
+             minimizer, or `--set minimizer.force_criterion=Sum`, to resume them)",
+        ),
+        // Packings of the extrapolated search, the default before `Adaptive`.
+        ("protocol.Jam.search" | "protocol.AboveJam.search", "\"Extrapolated\"") => Some(
+            "\"Extrapolated\" (the default before \"Adaptive\": add `search: Extrapolated` \
+             to the protocol, or `--set protocol.search=Extrapolated`, to resume them)",
+        ),
+        (_, "(not set)") => unwritten_setting(key),
+        _ => None,
+    }
+}
+
+/// What a setting that a packing does not record stood for.
 fn unwritten_setting(key: &str) -> Option<&'static str> {
     match key {
         // Bisection packings record no search (`protocol_settings`).

@@ -162,10 +162,12 @@ pub enum Protocol {
         /// (docs/reports/sanity.md), so the escape is a diagnostic, not a fix.
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         escape_saddles: bool,
-        /// How a jammed state is decompressed: `Extrapolated` (the step its
-        /// pressure predicts, the default; docs/explanation/physics.md) or
-        /// `Bisection` (the paper's halved steps, the paper's path bit for
-        /// bit). Always written to `experiment.ron`; left out of a packing's
+        /// How the search moves: `Adaptive` (the default: a jammed state is
+        /// decompressed by the step its pressure predicts, and the
+        /// compression step grows again where the jamming point has moved
+        /// up; docs/explanation/physics.md), `Extrapolated` (the predicted
+        /// decompressions alone) or `Bisection` (the paper's halved steps,
+        /// the paper's path bit for bit). Always written to `experiment.ron`; left out of a packing's
         /// settings when `Bisection` (`sample::settings`).
         #[serde(default)]
         search: JamSearch,
@@ -447,10 +449,10 @@ pub enum Observable {
         /// (the spectrum's threshold, 10⁻⁵).
         #[serde(default = "default_moduli_omega_zero")]
         omega_zero: f64,
-        /// How `H⁺` is applied: `Dense` (the default, left out when
-        /// written) or `Sparse` (`jamkit_observe::moduli::ModuliSolver`;
-        /// also each strain step of a shear stabilisation).
-        #[serde(default, skip_serializing_if = "ModuliSolver::is_dense")]
+        /// How `H⁺` is applied: `Sparse` (the default) or `Dense`
+        /// (`jamkit_observe::moduli::ModuliSolver`; also each strain step
+        /// of a shear stabilisation).
+        #[serde(default)]
         solver: ModuliSolver,
     },
 }
