@@ -151,6 +151,18 @@ impl Plan {
                     gap_models.family
                 );
             }
+            let n = param(&p.params, "n").and_then(|v| v.parse::<u32>().ok());
+            let delta = key.0.as_deref().and_then(|v| v.parse::<f64>().ok());
+            if gap_models.family == "fourier"
+                && let (Some(n), Some(delta)) = (n, delta)
+                && !crate::pair::convex(n, delta)?
+            {
+                bail!(
+                    "--set-gap-models: params.delta = {delta} at n = {n} makes a non-convex \
+                     outline (Δ(n + 1/n) ≥ 1); the comparison takes the convex exact gap \
+                     (params.gap = Exact) as its reference: use a smaller params.delta"
+                );
+            }
             if keys.contains(&key) {
                 bail!(
                     "--set-gap-models: the comparison groups packings by params.delta and \

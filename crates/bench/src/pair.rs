@@ -119,6 +119,12 @@ pub fn run(o: &Options, print: Print) -> Result<()> {
     Ok(())
 }
 
+/// Whether the outline of `fourier` with mode `n` and amplitude `delta` is
+/// convex (where the exact gap is the reference of the comparisons).
+pub(crate) fn convex(n: u32, delta: f64) -> Result<bool> {
+    Ok(shape(n, delta, GapModel::FirstOrder)?.is_convex())
+}
+
 fn shape(n: u32, delta: f64, gap: GapModel) -> Result<NearDisk> {
     NearDisk::fourier(&FourierParams {
         n,
