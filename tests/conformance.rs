@@ -47,7 +47,6 @@ fn fourier_with_every_gap_model() {
             ("(n: 0, delta: 0.1)", "params.n"),
             ("(n: 2, delta: -0.1)", "params.delta"),
             ("(n: 2, delta: 0.1, inertia: Some(0.0))", "params.inertia"),
-            ("(n: 5, delta: 0.5, gap: \"Exact\")", "params.gap"),
         ],
     );
 }
