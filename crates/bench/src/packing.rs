@@ -37,7 +37,8 @@ pub enum GapArg {
     FirstOrder,
     /// With its O(Δ²) correction.
     SecondOrder,
-    /// The exact gap along the common normal (convex outlines only).
+    /// The exact gap along the common normals (several contacts per pair on
+    /// a non-convex outline).
     Exact,
 }
 
@@ -234,11 +235,11 @@ pub struct Options {
     /// FIRE's largest time step [default: the family's].
     #[arg(long)]
     pub dt_max: Option<f64>,
-    /// How the jamming search decompresses a jammed state
-    /// (`protocol.search`): the step its pressure predicts
-    /// (`extrapolated`) or the paper's halved steps (`bisection`)
+    /// How the jamming search moves between compressions and
+    /// decompressions (`protocol.search`)
     /// [default: `bisection` with `--minimizer paper`, so that it is the
-    /// paper's path bit for bit; `extrapolated` otherwise].
+    /// paper's path bit for bit; `adaptive` otherwise, as in experiment
+    /// files].
     #[arg(long, value_enum)]
     pub search: Option<SearchArg>,
     /// Write every minimisation (φ, FIRE steps, Newton iterations, why it
