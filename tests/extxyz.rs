@@ -10,21 +10,9 @@ mod common;
 use common::jamkit;
 
 fn run(file: &str, out: &Path, sets: &[&str]) -> PathBuf {
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
-    let mut args = vec![
-        "run",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ];
-    for s in sets {
-        args.extend(["--set", s]);
-    }
-    let (code, _, err) = jamkit(&args);
-    assert_eq!(code, 0, "{err}");
+    common::run_cli(file, out, sets);
     let xyz = out.with_extension("xyz");
-    let (code, text, err) = jamkit(&["export", out.to_str().unwrap(), "-o", xyz.to_str().unwrap()]);
+    let (code, text, err) = common::export(out, &xyz);
     assert_eq!(code, 0, "{err}");
     assert!(text.contains("frames in"), "{text}");
     xyz
@@ -273,12 +261,7 @@ fn the_run_writes_each_packing_as_extxyz_when_asked() {
     for json in &jsons {
         let xyz = json.with_extension("xyz");
         let exported = dir.path().join("one.xyz");
-        let (code, _, err) = jamkit(&[
-            "export",
-            json.to_str().unwrap(),
-            "-o",
-            exported.to_str().unwrap(),
-        ]);
+        let (code, _, err) = common::export(json, &exported);
         assert_eq!(code, 0, "{err}");
         assert_eq!(
             std::fs::read_to_string(&xyz).unwrap(),

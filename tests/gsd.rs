@@ -16,39 +16,16 @@ use common::jamkit;
 const F32: f64 = f32::EPSILON as f64;
 
 fn run_and_export(file: &str, out: &Path, sets: &[&str]) -> File {
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
-    let mut args = vec![
-        "run",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ];
-    for s in sets {
-        args.extend(["--set", s]);
-    }
-    let (code, _, err) = jamkit(&args);
-    assert_eq!(code, 0, "{err}");
+    common::run_cli(file, out, sets);
     let target: PathBuf = out.with_extension("gsd");
-    let (code, text, err) = jamkit(&[
-        "export",
-        out.to_str().unwrap(),
-        "-o",
-        target.to_str().unwrap(),
-    ]);
+    let (code, text, err) = common::export(out, &target);
     assert_eq!(code, 0, "{err}");
     assert!(text.contains("frames in"), "{text}");
     gsd::read(&std::fs::read(&target).unwrap()).unwrap()
 }
 
 fn packings(dir: &Path) -> Vec<serde_json::Value> {
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir.join("packings"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .collect();
-    paths.sort();
-    paths
+    common::packing_paths(dir)
         .iter()
         .map(|p| serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap())
         .collect()
@@ -353,12 +330,7 @@ fn a_4d_packing_is_refused() {
     let run = tmp.path().join("d4");
     common::small_quickstart(&run, 1, &["--set", "dim=4", "--set", "particles=64"]);
     let target = tmp.path().join("d4.gsd");
-    let (code, _, err) = jamkit(&[
-        "export",
-        run.to_str().unwrap(),
-        "-o",
-        target.to_str().unwrap(),
-    ]);
+    let (code, _, err) = common::export(&run, &target);
     assert_ne!(code, 0);
     assert!(
         err.contains("sphere_d4_N64_s1.json") && err.contains("dim = 4: GSD holds 2D and 3D"),
@@ -375,12 +347,7 @@ fn an_unwritable_path_is_named() {
     let run = tmp.path().join("run");
     common::small_quickstart(&run, 1, &[]);
     let target = tmp.path().join("nodir/x.gsd");
-    let (code, _, err) = jamkit(&[
-        "export",
-        run.to_str().unwrap(),
-        "-o",
-        target.to_str().unwrap(),
-    ]);
+    let (code, _, err) = common::export(&run, &target);
     assert_ne!(code, 0);
     assert!(err.contains(target.to_str().unwrap()), "{err}");
     assert!(!tmp.path().join("nodir").exists());

@@ -18,12 +18,7 @@ fn a_write_into_a_missing_directory_names_the_file_once() {
     let run = tmp.path().join("run");
     common::small_quickstart(&run, 1, &[]);
     let target = tmp.path().join("nodir/x.xyz");
-    let (code, _, err) = jamkit(&[
-        "export",
-        run.to_str().unwrap(),
-        "-o",
-        target.to_str().unwrap(),
-    ]);
+    let (code, _, err) = common::export(&run, &target);
     assert_ne!(code, 0);
     assert!(err.contains(target.to_str().unwrap()), "{err}");
     assert!(!err.contains("x.tmp"), "{err}");

@@ -9,6 +9,9 @@
 use jamkit_format::PackingFile;
 use std::path::{Path, PathBuf};
 
+mod common;
+use common::packing_paths;
+
 /// The committed run `run` of `experiments/<experiment>/`.
 fn data(experiment: &str, run: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -16,16 +19,6 @@ fn data(experiment: &str, run: &str) -> PathBuf {
         .join(experiment)
         .join("data")
         .join(run)
-}
-
-fn packing_files(dir: &Path) -> Vec<PathBuf> {
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir.join("packings"))
-        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
-        .collect();
-    paths.sort();
-    paths
 }
 
 /// `jamkit report` on `dirs` into a scratch directory, with 50 bootstrap
@@ -70,7 +63,7 @@ fn load_archived(path: &Path, kind: (&str, usize), particles: &[usize]) -> Packi
 /// its contacts, gaps and spectrum measured.
 #[test]
 fn the_archived_packings_are_jammed_packings_of_the_profile() {
-    let files = packing_files(&data("paper", "paper-full"));
+    let files = packing_paths(&data("paper", "paper-full"));
     assert!(files.len() >= 32, "{} files", files.len());
     for path in &files {
         let f = load_archived(path, ("fourier", 2), &[1024]);
@@ -91,7 +84,7 @@ fn the_report_regenerates_from_a_slice_of_the_data() {
     let slice = tempfile::tempdir().unwrap();
     std::fs::create_dir(slice.path().join("packings")).unwrap();
     let mut phis: Vec<(f64, f64)> = Vec::new();
-    for path in packing_files(&data("paper", "paper-full")) {
+    for path in packing_paths(&data("paper", "paper-full")) {
         let f = PackingFile::load_checked(&path).unwrap();
         if f.params["n"] == 2 {
             phis.push((f.params["delta"].as_f64().unwrap(), f.phi));
@@ -142,7 +135,7 @@ fn the_report_regenerates_from_a_slice_of_the_data() {
 #[test]
 fn the_3d_data_regenerates_its_report() {
     let dir = data("paper3d", "paper3d-n512");
-    let files = packing_files(&dir);
+    let files = packing_paths(&dir);
     assert!(files.len() >= 12, "{} files", files.len());
     for path in &files {
         let f = load_archived(path, ("harmonic", 3), &[512]);
@@ -182,7 +175,7 @@ fn the_3d_data_regenerates_its_report() {
 #[test]
 fn the_3d_finite_size_set_collapses_to_one_extra_contact() {
     let dir = data("paper3d", "paper3d-finite-size");
-    let files = packing_files(&dir);
+    let files = packing_paths(&dir);
     assert!(files.len() >= 30, "{} files", files.len());
     for path in &files {
         let f = load_archived(path, ("harmonic", 3), &[64, 128, 256]);
@@ -226,7 +219,7 @@ fn the_fig05_gap_models_stay_apart_from_the_first_order_packings() {
     let gm = data("paper", "paper-full-gap-models");
     let f5 = data("paper", "paper-full-fig05");
     let mut phis: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
-    for path in packing_files(&gm) {
+    for path in packing_paths(&gm) {
         let f = load_archived(&path, ("fourier", 2), &[512]);
         let gap = f.params["gap"].as_str().unwrap().to_string();
         assert!(gap == "SecondOrder" || gap == "Exact", "{}: {gap}", f.id);
@@ -234,7 +227,7 @@ fn the_fig05_gap_models_stay_apart_from_the_first_order_packings() {
             phis.entry(gap).or_default().push(f.phi);
         }
     }
-    for path in packing_files(&f5) {
+    for path in packing_paths(&f5) {
         let f = PackingFile::load_checked(&path).unwrap();
         if f.family == "fourier" && f.params["delta"] == 0.3 {
             assert!(f.params["gap"].is_null(), "{}", f.id);
@@ -278,7 +271,7 @@ fn the_fig05_gap_models_stay_apart_from_the_first_order_packings() {
 #[test]
 fn the_3d_exact_gap_packings_follow_the_spheroids() {
     let mut phi: std::collections::BTreeMap<(String, u64), f64> = Default::default();
-    for path in packing_files(&data("paper3d", "paper3d-exact-n64")) {
+    for path in packing_paths(&data("paper3d", "paper3d-exact-n64")) {
         let f = load_archived(&path, ("harmonic", 3), &[64]);
         if f.params["delta"] == 0.3 {
             let gap = f.params["gap"].as_str().unwrap_or("FirstOrder").to_string();
@@ -286,7 +279,7 @@ fn the_3d_exact_gap_packings_follow_the_spheroids() {
         }
     }
     let mut spheroid = Vec::new();
-    for path in packing_files(&data("paper3d", "paper3d-spheroids-n64")) {
+    for path in packing_paths(&data("paper3d", "paper3d-spheroids-n64")) {
         let f = load_archived(&path, ("ellipsoid", 3), &[64]);
         if f.params["alpha"] == 1.348 {
             spheroid.push(f.phi);
@@ -318,7 +311,7 @@ fn the_3d_exact_gap_packings_follow_the_spheroids() {
 #[test]
 fn the_3d_exact_gap_packing_at_n512_is_jammed_next_to_its_first_order_twin() {
     let mut phi = std::collections::BTreeMap::new();
-    for path in packing_files(&data("paper3d", "paper3d-exact-n512")) {
+    for path in packing_paths(&data("paper3d", "paper3d-exact-n512")) {
         let f = load_archived(&path, ("harmonic", 3), &[512]);
         assert_eq!((f.seed, f.params["delta"].as_f64()), (1, Some(0.1)));
         let gap = f.params["gap"].as_str().unwrap_or("FirstOrder").to_string();

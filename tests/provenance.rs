@@ -6,23 +6,13 @@ use jamkit_format::PackingFile;
 use std::path::Path;
 
 mod common;
-use common::{jamkit, quickstart};
+use common::{jamkit, packing_paths, quickstart};
 
 const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// A quickstart of 16 disks and 2 samples into `out`, `extra` appended.
 fn small_run(out: &Path, extra: &[&str]) {
     common::small_quickstart(out, 2, extra);
-}
-
-fn packing_paths(dir: &Path) -> Vec<std::path::PathBuf> {
-    let mut paths: Vec<_> = std::fs::read_dir(dir.join("packings"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .collect();
-    paths.sort();
-    paths
 }
 
 #[test]

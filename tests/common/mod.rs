@@ -105,6 +105,48 @@ pub fn jamkit(args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// `jamkit run FILE --out OUT --quiet --set S …` of an experiment file
+/// named from the workspace root; it must succeed.
+#[allow(dead_code)]
+pub fn run_cli(file: &str, out: &Path, sets: &[&str]) {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+    let mut args = vec![
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    let (code, _, err) = jamkit(&args);
+    assert_eq!(code, 0, "{err}");
+}
+
+/// `jamkit export RUN -o TARGET`: exit code, stdout, stderr.
+#[allow(dead_code)]
+pub fn export(run: &Path, target: &Path) -> (i32, String, String) {
+    jamkit(&[
+        "export",
+        run.to_str().unwrap(),
+        "-o",
+        target.to_str().unwrap(),
+    ])
+}
+
+/// The packing files (`packings/*.json`) of a run directory, sorted by name.
+#[allow(dead_code)]
+pub fn packing_paths(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut paths: Vec<_> = std::fs::read_dir(dir.join("packings"))
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    paths.sort();
+    paths
+}
+
 /// `experiments/quickstart.ron`, as a path string for `jamkit` arguments.
 #[allow(dead_code)]
 pub fn quickstart() -> String {
