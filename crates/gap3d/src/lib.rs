@@ -186,8 +186,8 @@
 //! by its linearisation after one step of its own search, and `S̃` the
 //! support Hessian's formula read at the current `y` (at converged
 //! supports it is the nested solve's step exactly). One step costs a
-//! radial jet and a 3 × 3 Cholesky factorisation per body (for `A⁺ t`
-//! and `A⁺ Bᵀ`, four right-hand sides) and one of `W`, where the nested
+//! radial jet and a 3 × 3 inverse by cofactors per body (for `A⁺ t`
+//! and `A⁺ Bᵀ`, four right-hand sides) and a Cholesky factorisation of `W`, where the nested
 //! solve runs both searches to convergence (2–3 steps each, with their
 //! line searches) and factorises `A` twice more for the support Hessians.
 //!
@@ -804,6 +804,29 @@ struct Linearised {
     phi: f64,
 }
 
+/// The inverse of a symmetric 3 × 3 matrix (its lower triangle read) by
+/// cofactors, `None` unless it is positive definite (Sylvester: the
+/// leading principal minors positive). The joint iteration's four
+/// right-hand sides per body cost less this way than through a Cholesky
+/// factorisation's triangular solves.
+#[inline(always)]
+fn spd_inverse(m: &Matrix<3>) -> Option<Matrix<3>> {
+    let (a, b, c) = (m[(0, 0)], m[(1, 0)], m[(2, 0)]);
+    let (d, e, f) = (m[(1, 1)], m[(2, 1)], m[(2, 2)]);
+    let c00 = d * f - e * e;
+    let c01 = c * e - b * f;
+    let c02 = b * e - c * d;
+    let minor = a * d - b * b;
+    let det = a * c00 + b * c01 + c * c02;
+    if !(a > 0.0 && minor > 0.0 && det > 0.0) {
+        return None;
+    }
+    let c11 = a * f - c * c;
+    let c12 = b * c - a * e;
+    let inv = 1.0 / det;
+    Some(Matrix::<3>::new(c00, c01, c02, c01, c11, c12, c02, c12, minor) * inv)
+}
+
 /// `None` where `A` is not positive definite (the surface is not convex
 /// there, or `y` is far from the support point).
 #[inline(always)]
@@ -814,14 +837,14 @@ where
     let y = at.y;
     let (t, big) = tangent(ub, at);
     let yy = y * y.transpose();
-    let chol = (big + yy).cholesky()?;
+    let inv = spd_inverse(&(big + yy))?;
     let proj = Matrix::<3>::identity() - yy;
     let g = at.g - y * y.dot(&at.g);
     let b = proj * at.rho + y * g.transpose();
     let rot = Matrix::<3>::from_columns(body.columns);
     Some(Linearised {
-        n: proj * chol.solve(&t),
-        follow: proj * chol.solve(&b.transpose()) * rot.transpose(),
+        n: proj * (inv * t),
+        follow: proj * (inv * b.transpose()) * rot.transpose(),
         b: rot * b,
         x: body.to_world(&(y * at.rho)),
         phi: at.rho * ub.dot(&y),
