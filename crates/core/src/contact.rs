@@ -112,8 +112,9 @@ impl<const D: usize, O: Copy> Pair<D, O> {
 }
 
 /// Numbers a family may keep per listed pair between two evaluations
-/// ([`PairMemo`]).
-pub const MEMO_LEN: usize = 6;
+/// ([`PairMemo`]): nine, three unit vectors' worth (the 3D exact gap keeps
+/// a normal and two support points; the 2D one uses the first six).
+pub const MEMO_LEN: usize = 9;
 
 /// What a family keeps of one listed pair's last solve, to start the next
 /// one there ([`Shape::contacts_warm`](crate::Shape::contacts_warm)):

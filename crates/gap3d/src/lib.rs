@@ -186,8 +186,8 @@
 //! by its linearisation after one step of its own search, and `S̃` the
 //! support Hessian's formula read at the current `y` (at converged
 //! supports it is the nested solve's step exactly). One step costs a
-//! radial jet and a 3 × 3 Cholesky factorisation per body (for `A⁺ t`
-//! and `A⁺ Bᵀ`, four right-hand sides) and one of `W`, where the nested
+//! radial jet and a 3 × 3 inverse by cofactors per body (for `A⁺ t`
+//! and `A⁺ Bᵀ`, four right-hand sides) and a Cholesky factorisation of `W`, where the nested
 //! solve runs both searches to convergence (2–3 steps each, with their
 //! line searches) and factorises `A` twice more for the support Hessians.
 //!
@@ -209,11 +209,29 @@
 //! It is not the nested solve's result bit for bit: the two stop at
 //! different points within ~10⁻¹⁴ of the optimum.
 //!
+//! ## The warm start
+//!
+//! In a minimisation a pair's optimum moves little from one evaluation to
+//! the next. [`exact_joint_warm`] runs the same joint iteration from where
+//! the pair's last solve ended ([`JointStart`], kept as a
+//! `jamkit_core::PairMemo`: the normal relative to the line of centres
+//! and each support unit vector relative to its body's direction, so a
+//! pair that moved or turned as a whole starts at its optimum), skipping
+//! the cold start's two support searches at the line of centres; after a
+//! small move it converges in two or three steps. Same steps, safeguards
+//! and tolerance, so the same guarantee on convergence whatever the start;
+//! a result is accepted only with its normal in the cap `n·r̂ ≥ 1/2`, where
+//! it is the maximum the cold solve reaches (conditions on
+//! [`exact_joint_warm`]), else the caller solves cold. A pair is then
+//! known to be apart only from its converged gap (`h > max_gap`), not from
+//! `g(r̂)`, so a pair with `g(r̂) ≤ max_gap < h` is reported by the cold
+//! solve and skipped by the warm one (both as a family's contacts allow).
+//!
 //! [`QuadraticSupport`] is the support function of an ellipsoid,
 //! `s(x) = √(xᵀ M x)`, the body the `ellipsoid` family is made of and the
 //! one the tests here use.
 
-use jamkit_core::{Contact, GapHessian, MAX_ROT, Matrix, RotVec, Vector};
+use jamkit_core::{Contact, GapHessian, MAX_ROT, MEMO_LEN, Matrix, RotVec, Vector};
 
 /// A support function at one direction `u` (world frame) with its first
 /// two derivatives.
@@ -786,6 +804,29 @@ struct Linearised {
     phi: f64,
 }
 
+/// The inverse of a symmetric 3 × 3 matrix (its lower triangle read) by
+/// cofactors, `None` unless it is positive definite (Sylvester: the
+/// leading principal minors positive). The joint iteration's four
+/// right-hand sides per body cost less this way than through a Cholesky
+/// factorisation's triangular solves.
+#[inline(always)]
+fn spd_inverse(m: &Matrix<3>) -> Option<Matrix<3>> {
+    let (a, b, c) = (m[(0, 0)], m[(1, 0)], m[(2, 0)]);
+    let (d, e, f) = (m[(1, 1)], m[(2, 1)], m[(2, 2)]);
+    let c00 = d * f - e * e;
+    let c01 = c * e - b * f;
+    let c02 = b * e - c * d;
+    let minor = a * d - b * b;
+    let det = a * c00 + b * c01 + c * c02;
+    if !(a > 0.0 && minor > 0.0 && det > 0.0) {
+        return None;
+    }
+    let c11 = a * f - c * c;
+    let c12 = b * c - a * e;
+    let inv = 1.0 / det;
+    Some(Matrix::<3>::new(c00, c01, c02, c01, c11, c12, c02, c12, minor) * inv)
+}
+
 /// `None` where `A` is not positive definite (the surface is not convex
 /// there, or `y` is far from the support point).
 #[inline(always)]
@@ -796,14 +837,14 @@ where
     let y = at.y;
     let (t, big) = tangent(ub, at);
     let yy = y * y.transpose();
-    let chol = (big + yy).cholesky()?;
+    let inv = spd_inverse(&(big + yy))?;
     let proj = Matrix::<3>::identity() - yy;
     let g = at.g - y * y.dot(&at.g);
     let b = proj * at.rho + y * g.transpose();
     let rot = Matrix::<3>::from_columns(body.columns);
     Some(Linearised {
-        n: proj * chol.solve(&t),
-        follow: proj * chol.solve(&b.transpose()) * rot.transpose(),
+        n: proj * (inv * t),
+        follow: proj * (inv * b.transpose()) * rot.transpose(),
         b: rot * b,
         x: body.to_world(&(y * at.rho)),
         phi: at.rho * ub.dot(&y),
@@ -867,7 +908,8 @@ pub enum Joint {
     /// Converged (a Newton step below 10⁻⁷ on the normal and both support
     /// points).
     Found(ExactGap3),
-    /// `g(r̂) > max_gap`: the pair is skipped, as by the nested solve.
+    /// `g(r̂) > max_gap` (cold: the pair is skipped, as by the nested
+    /// solve), or a converged gap above `max_gap` ([`exact_joint_warm`]).
     Apart,
     /// `A` or `W` not positive definite at an iterate, a Newton step that
     /// did not shrink, or the iteration cap: [`exact_joint`] then runs the
@@ -888,7 +930,7 @@ where
     G: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
 {
     let r = r_ij.norm();
-    let mut u = if r > 0.0 { r_ij / r } else { Vector::<3>::x() };
+    let u = if r > 0.0 { r_ij / r } else { Vector::<3>::x() };
     // The nested solve's first evaluation, the same bits: both supports
     // searched to convergence at the line of centres, each from the
     // direction itself.
@@ -898,30 +940,179 @@ where
     if u.dot(r_ij) - fi.value() - fj.value() > max_gap {
         return Joint::Apart;
     }
-    let (mut yi, mut yj) = (fi.at.y, fj.at.y);
-    let (mut at_i, mut at_j) = (fi.at, fj.at);
+    match joint_iterate(r_ij, body_i, body_j, u, fi.at, fj.at, hessians) {
+        Some(e) => Joint::Found(e),
+        None => Joint::Failed,
+    }
+}
+
+/// Where a warm-started joint iteration begins ([`exact_joint_warm`]): the
+/// normal and the two support points' unit vectors (each in its body's
+/// frame), as a pair's last solve left them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointStart {
+    /// The normal (world frame, unit).
+    pub normal: Vector<3>,
+    /// Body `i`'s support unit vector `y_i` (its frame, unit).
+    pub y_i: Vector<3>,
+    /// Body `j`'s support unit vector `y_j` (its frame, unit).
+    pub y_j: Vector<3>,
+}
+
+impl JointStart {
+    /// What a pair keeps of the solve that ended at `e` (a [`PairMemo`]'s
+    /// numbers), for bodies whose rotations have the columns `columns_i`,
+    /// `columns_j`, at the separation `r_ij`: the normal relative to the
+    /// line of centres, `Q_iᵀ(n − r̂)` (body `i`'s frame), and each support unit
+    /// vector relative to its body's direction, `y_i − Q_iᵀ n` and
+    /// `y_j + Q_jᵀ n` (body frames), with `y = Qᵀ p / |p|` from the support
+    /// point (a star-shaped body's support point is `ρ(y) y`). So a pair
+    /// that moved or turned as a whole starts where its optimum moved to.
+    pub fn remember(
+        e: &ExactGap3,
+        r_ij: &Vector<3>,
+        columns_i: &[Vector<3>; 3],
+        columns_j: &[Vector<3>; 3],
+    ) -> [f64; MEMO_LEN] {
+        let r_hat = unit_or_x(r_ij);
+        let n = e.normal;
+        let frame = |c: &[Vector<3>; 3], v: &Vector<3>| {
+            Vector::<3>::new(c[0].dot(v), c[1].dot(v), c[2].dot(v))
+        };
+        let a = frame(columns_i, &(n - r_hat));
+        let di = frame(columns_i, &e.jet_i.point).normalize() - frame(columns_i, &n);
+        let dj = frame(columns_j, &e.jet_j.point).normalize() + frame(columns_j, &n);
+        let mut m = [0.0; MEMO_LEN];
+        for k in 0..3 {
+            m[k] = a[k];
+            m[3 + k] = di[k];
+            m[6 + k] = dj[k];
+        }
+        m
+    }
+
+    /// The start [`JointStart::remember`] encoded, read at the separation
+    /// `r_ij` and orientations `columns_i`, `columns_j`: `n₀ ∝ r̂ + Q_i Q_iᵀ(n − r̂)`,
+    /// `y_i ∝ Q_iᵀ n₀ + (y_i − Q_iᵀ n)`, `y_j ∝ −Q_jᵀ n₀ + (y_j + Q_jᵀ n)`.
+    /// `None` where a vector to normalise vanishes.
+    pub fn recall(
+        memo: &[f64; MEMO_LEN],
+        r_ij: &Vector<3>,
+        columns_i: &[Vector<3>; 3],
+        columns_j: &[Vector<3>; 3],
+    ) -> Option<Self> {
+        let v = |k: usize| Vector::<3>::new(memo[k], memo[k + 1], memo[k + 2]);
+        let unit = |x: Vector<3>| {
+            let n = x.norm();
+            (n > 0.0 && n.is_finite()).then(|| x / n)
+        };
+        let frame = |c: &[Vector<3>; 3], v: &Vector<3>| {
+            Vector::<3>::new(c[0].dot(v), c[1].dot(v), c[2].dot(v))
+        };
+        let [c0, c1, c2] = columns_i;
+        let a = c0 * memo[0] + c1 * memo[1] + c2 * memo[2];
+        let normal = unit(unit_or_x(r_ij) + a)?;
+        Some(Self {
+            normal,
+            y_i: unit(frame(columns_i, &normal) + v(3))?,
+            y_j: unit(v(6) - frame(columns_j, &normal))?,
+        })
+    }
+}
+
+/// `r/|r|`, or `x̂` at `r = 0` (the solvers' start at coincident centres).
+#[inline(always)]
+fn unit_or_x(r: &Vector<3>) -> Vector<3> {
+    let n = r.norm();
+    if n > 0.0 { r / n } else { Vector::<3>::x() }
+}
+
+/// The joint iteration of [`exact_joint`] started at `start` instead of
+/// the line of centres: the warm start of a pair whose last solve ended
+/// near there ([`JointStart`]). The same iteration, safeguards and
+/// tolerance as the cold one, so the same guarantee on convergence (a
+/// last step below 10⁻⁷ on the normal and both support points: ~10⁻¹⁴
+/// left in each, ~10⁻²⁸ in `h`), whatever the start. The result is
+/// accepted only where its normal (and the start's) lies in the cap
+/// `n·r̂ ≥ 1/2` about the line of centres. There it is the maximum the
+/// cold solve's ascent from `r̂` reaches when (a) the two support
+/// functions' spreads over the sphere, `max s − min s`, add up to less
+/// than `r/2` (then `g < g(r̂)` outside the cap, which the ascent never
+/// leaves) and (b) `W` is positive definite on the cap (`g` is concave
+/// along its great circles: one stationary point there). Near-spheres
+/// near contact meet both: spreads `O(Δ R⁰)` against `r ≈ 2R⁰`, and
+/// `W = S_i + S_j + g P` with radii of curvature `≈ R⁰` and `g ≥ −r/2 − O(Δ R⁰)`
+/// on the cap. `Found` with a gap at most `max_gap`; `Apart` for a
+/// converged gap above it (`h` is the maximum, so the pair is certainly
+/// apart); `Failed` where the iteration fails or leaves the cap: the
+/// caller then runs the cold solve.
+pub fn exact_joint_warm<F, G>(
+    r_ij: &Vector<3>,
+    body_i: &RadialBody<'_, F>,
+    body_j: &RadialBody<'_, G>,
+    start: &JointStart,
+    max_gap: f64,
+    hessians: bool,
+) -> Joint
+where
+    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    G: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+{
+    let r = r_ij.norm();
+    let r_hat = unit_or_x(r_ij);
+    let in_cap = |n: &Vector<3>| r > 0.0 && n.dot(&r_hat) >= 0.5;
+    if !in_cap(&start.normal) {
+        return Joint::Failed;
+    }
+    let u = start.normal;
+    let (ub_i, ub_j) = (body_i.to_body(&u), body_j.to_body(&-u));
+    let (at_i, at_j) = (body_i.at(start.y_i, &ub_i), body_j.at(start.y_j, &ub_j));
+    match joint_iterate(r_ij, body_i, body_j, u, at_i, at_j, hessians) {
+        Some(e) if in_cap(&e.normal) => {
+            if e.gap > max_gap {
+                Joint::Apart
+            } else {
+                Joint::Found(e)
+            }
+        }
+        _ => Joint::Failed,
+    }
+}
+
+/// The joint iteration from the normal `u` and the supports' radial jets
+/// `at_i`, `at_j` (read at `u` and `−u`): `None` where it fails (module
+/// documentation).
+#[inline]
+fn joint_iterate<F, G>(
+    r_ij: &Vector<3>,
+    body_i: &RadialBody<'_, F>,
+    body_j: &RadialBody<'_, G>,
+    mut u: Vector<3>,
+    mut at_i: At,
+    mut at_j: At,
+    hessians: bool,
+) -> Option<ExactGap3>
+where
+    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    G: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+{
+    let (mut yi, mut yj) = (at_i.y, at_j.y);
     let mut last = f64::INFINITY;
     let mut iterations = 0;
     loop {
         if iterations == JOINT_CAP {
-            return Joint::Failed;
+            return None;
         }
         iterations += 1;
         let (ub_i, ub_j) = (body_i.to_body(&u), body_j.to_body(&-u));
-        let (Some(li), Some(lj)) = (
-            linearise(body_i, &ub_i, &at_i),
-            linearise(body_j, &ub_j, &at_j),
-        ) else {
-            return Joint::Failed;
-        };
+        let li = linearise(body_i, &ub_i, &at_i)?;
+        let lj = linearise(body_j, &ub_j, &at_j)?;
         let uu = u * u.transpose();
         let p = Matrix::<3>::identity() - uu;
         let g = u.dot(r_ij) - li.phi - lj.phi;
         let w = p * g + p * (li.b * li.follow + lj.b * lj.follow) * p;
         let rhs = p * (r_ij - li.x + lj.x - li.b * li.n + lj.b * lj.n);
-        let Some(c) = (w + uu).cholesky() else {
-            return Joint::Failed;
-        };
+        let c = (w + uu).cholesky()?;
         let du = c.solve(&rhs);
         let du = du - u * u.dot(&du);
         let dyi = li.n + li.follow * du;
@@ -931,7 +1122,7 @@ where
         // No progress: a Newton step that does not shrink (it shrinks
         // quadratically near the optimum).
         if !len.is_finite() || len > last {
-            return Joint::Failed;
+            return None;
         }
         let cut = if len > 0.3 { 0.3 / len } else { 1.0 };
         u = along_sphere(&u, &(du * cut));
@@ -943,7 +1134,7 @@ where
         if len < 1e-7 {
             let jet_i = body_i.jet(&ub_i, at_i, hessians);
             let jet_j = body_j.jet(&ub_j, at_j, hessians);
-            return Joint::Found(ExactGap3 {
+            return Some(ExactGap3 {
                 normal: u,
                 gap: u.dot(r_ij) - jet_i.h - jet_j.h,
                 jet_i,

@@ -52,8 +52,8 @@ use crate::first_order::{Profile, gap_hessian};
 use crate::gap2d::{self, GapModel, Jet3, SupportJet, direction};
 use jamkit_core::math::{Unit, cmul, turn_unit};
 use jamkit_core::{
-    Angle, BodyOrientation, Contact, Error, GapHessian, Look, NoFastPath, Outline, Pair, PairMemo,
-    Policy, RotVec, Rotation2, Shape, Vector,
+    Angle, BodyOrientation, Contact, Error, GapHessian, Look, MEMO_LEN, NoFastPath, Outline, Pair,
+    PairMemo, Policy, RotVec, Rotation2, Shape, Vector,
 };
 use std::f64::consts::PI;
 use std::fmt::Debug;
@@ -627,7 +627,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             // each body's direction (a pair that turned as a whole starts at
             // its optimum).
             let warm = match memo.as_deref() {
-                Some(Some([a0, a1, di0, di1, dj0, dj1])) => {
+                Some(Some([a0, a1, di0, di1, dj0, dj1, ..])) => {
                     let w0 = cmul(u, (*a0, *a1));
                     joint(
                         w0,
@@ -714,14 +714,16 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
 /// point relative to its body's direction, `e^{iδ} = (H, H')/|(H, H')|`
 /// (`H = R cos δ`, `H' = R sin δ`).
 #[inline(always)]
-fn remember(e: &gap2d::ExactGap, u: Unit) -> [f64; 6] {
+fn remember(e: &gap2d::ExactGap, u: Unit) -> [f64; MEMO_LEN] {
     let a = cmul(e.normal, (u.0, -u.1));
     let unit = |j: &SupportJet| {
         let inv = 1.0 / (j.h * j.h + j.d1 * j.d1).sqrt();
         (j.h * inv, j.d1 * inv)
     };
     let (di, dj) = (unit(&e.jet_i), unit(&e.jet_j));
-    [a.0, a.1, di.0, di.1, dj.0, dj.1]
+    let mut m = [0.0; MEMO_LEN];
+    m[..6].copy_from_slice(&[a.0, a.1, di.0, di.1, dj.0, dj.1]);
+    m
 }
 
 impl<P: NearDiskProfile, O: PlanarOrientation> Outline for Profiled<P, O> {

@@ -79,7 +79,12 @@
 //! the nested solve where it fails (counted by
 //! [`jamkit_gap3d::joint_fallbacks`]). Both converge to the same
 //! tolerance; the results agree to ~10⁻¹⁴, not bit for bit, so a packing
-//! made with `"Joint"` is a different (equally valid) packing. When an
+//! made with `"Joint"` is a different (equally valid) packing. With
+//! `"Joint"` the engine's energy pass starts each listed pair's solve
+//! where its last one ended ([`Harmonic::exact_gap_warm`],
+//! [`jamkit_gap3d::exact_joint_warm`]): the same optimum to the same
+//! tolerance, in two or three steps after a small move. `"Nested"` stays
+//! cold. When an
 //! experiment does not give `exact_solver`, it is left out of the packing
 //! file (`ParamSpec::absent_is_omitted`): files made without it are
 //! those of before it existed.
@@ -117,7 +122,7 @@ use jamkit_core::Error;
 use jamkit_core::gap_model::GapModel;
 use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, Look, MAX_ROT, Matrix, NoFastPath, Pair,
-    ParamSpec, Policy, Quaternion, RotVec, Shape, ShapeVisitor, Vector,
+    PairMemo, ParamSpec, Policy, Quaternion, RotVec, Shape, ShapeVisitor, Vector,
 };
 /// How the exact gap is solved (`exact_solver`).
 pub use jamkit_gap3d::ExactSolver;
@@ -902,6 +907,69 @@ impl Harmonic {
         }
     }
 
+    /// The exact gap as the engine's pair loop finds it
+    /// ([`Shape::contacts_warm`]) with the `"Joint"` solver: the joint
+    /// iteration started where the pair's last solve ended
+    /// ([`gap3d::exact_joint_warm`] from the [`gap3d::JointStart`] that
+    /// `memo` holds), else, or where that fails, the cold solve of
+    /// [`Harmonic::exact_gap`]; `memo` gets where this solve ended. The
+    /// support Hessians at the optimum only with `hessians`. The result is
+    /// the cold solve's optimum to the joint iteration's tolerance,
+    /// whatever the memo holds (module documentation of `jamkit_gap3d`,
+    /// [`gap3d::exact_joint_warm`]); with an empty memo it is the cold
+    /// solve's bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn exact_gap_warm(
+        &self,
+        size_i: f64,
+        o_i: &Quaternion,
+        size_j: f64,
+        o_j: &Quaternion,
+        r_ij: &Vector<3>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+        hessians: bool,
+    ) -> Option<ExactGap3> {
+        let r = r_ij.norm();
+        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
+            return None;
+        }
+        let (ci, cj) = (o_i.columns(), o_j.columns());
+        let start = memo
+            .as_ref()
+            .and_then(|m| gap3d::JointStart::recall(m, r_ij, &ci, &cj));
+        if let Some(start) = start {
+            let warm = gap3d::exact_joint_warm(
+                r_ij,
+                &gap3d::RadialBody {
+                    columns: &ci,
+                    radial: |y: &Vector<3>| self.radial_jet(size_i, y),
+                },
+                &gap3d::RadialBody {
+                    columns: &cj,
+                    radial: |y: &Vector<3>| self.radial_jet(size_j, y),
+                },
+                &start,
+                max_gap,
+                hessians,
+            );
+            match warm {
+                gap3d::Joint::Found(e) => {
+                    *memo = Some(gap3d::JointStart::remember(&e, r_ij, &ci, &cj));
+                    return Some(e);
+                }
+                gap3d::Joint::Apart => return None,
+                // Not a start to try again: the cold solve writes its own.
+                gap3d::Joint::Failed => *memo = None,
+            }
+        }
+        let found = self.exact_gap_with(size_i, o_i, size_j, o_j, r_ij, max_gap, hessians);
+        if let Some(e) = &found {
+            *memo = Some(gap3d::JointStart::remember(e, r_ij, &ci, &cj));
+        }
+        found
+    }
+
     /// `∂G̃/∂q_p = g · t_p = g · (x × e_p) = e_p · (g × x)`.
     #[inline(always)]
     fn torques(&self, axes: &[Vector<3>; 3], m: usize, grad: &Vector<3>, x: &Vector<3>) -> RotVec {
@@ -1094,6 +1162,38 @@ impl Shape<3> for Harmonic {
         }
     }
 
+    /// With the exact gap and the `"Joint"` solver, each listed pair's
+    /// solve starts where its last one ended ([`Harmonic::exact_gap_warm`]);
+    /// otherwise [`Shape::contacts`] (the nested solve stays cold, bit for
+    /// bit the packings made with it).
+    #[inline(always)]
+    fn contacts_warm<F: FnMut(Contact<3>)>(
+        &self,
+        pair: &Pair<3, Quaternion>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+        mut visit: F,
+    ) {
+        if self.gap == GapModel::Exact && self.exact_solver == ExactSolver::Joint {
+            let (o_i, o_j) = (&pair.o_i, &pair.o_j);
+            if let Some(e) = self.exact_gap_warm(
+                pair.size_i,
+                o_i,
+                pair.size_j,
+                o_j,
+                &pair.r_ij,
+                max_gap,
+                memo,
+                false,
+            ) {
+                let (c_i, c_j) = (o_i.columns(), o_j.columns());
+                visit(e.contact(&self.axes(&c_i), &self.axes(&c_j), self.rot_dof()));
+            }
+            return;
+        }
+        self.contacts(pair, max_gap, visit)
+    }
+
     /// Body `i`'s term enters with `x = r_ij`, body `j`'s with `x = −r_ij`
     /// (odd derivatives in `r_ij` change sign), each times `−Δ R⁰`; the
     /// sphere's `(1 − r̂ r̂ᵀ)/r` is added; the bodies' rotations do not mix.
@@ -1146,6 +1246,9 @@ impl Shape<3> for Harmonic {
 
 #[cfg(test)]
 mod exact_tests;
+
+#[cfg(test)]
+mod warm_tests;
 
 #[cfg(test)]
 mod tests {
