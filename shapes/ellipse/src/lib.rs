@@ -65,9 +65,18 @@
 //! the convergence cubic), with no square root; `v` is normalised once. It
 //! stops after a step below 10⁻⁵ rad, where what is left is `~K·10⁻¹⁵` rad
 //! (`K = |g'''²/4g''² − g''''/6g''| = O(1)`) and moves `h` by `~10⁻³⁰`, and
-//! the gap and jets are evaluated at the final normal. Every iterate's `g`
-//! is a lower bound on `h`, so a pair leaves as soon as one exceeds
-//! `max_gap`.
+//! the gap and jets are evaluated at the final normal; the contacts, after
+//! a last step below 10⁻⁶ rad, instead move `H` and `H'` there by their
+//! Taylor series from the last iterate (`H'''` included; `≲ 10⁻¹⁶` left),
+//! with no evaluation. Every iterate's `g` is a lower bound on `h`, so a
+//! pair leaves as soon as one exceeds `max_gap`.
+//!
+//! **Warm start.** In the engine's energy pass
+//! ([`Ellipse::exact_gap_warm`], `Shape::contacts_warm`) Halley's iteration
+//! starts at the normal where the pair's last solve ended, kept in the
+//! pair's memo relative to the line of centres: after a minimiser's step
+//! most pairs take one step and no further evaluation. The result is the
+//! same optimum to round-off, from any memo.
 //!
 //! Where a guard fails — `g'' ≥ 0`, Halley's denominator below `1/2`, a
 //! step beyond 1 rad or not shorter than the one before, a step over
