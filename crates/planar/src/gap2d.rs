@@ -107,23 +107,31 @@
 //! convergence), or after 30 steps. The
 //! caller then runs the nested solve.
 //!
-//! **Converged** means: the last Newton step was below
+//! **Converged** means, for the Hessian: the last Newton step was below
 //! [`JOINT_TOLERANCE`] = 10⁻⁸ rad on all three angles. Convergence being
 //! quadratic, the distance left to the stationary point is `~C s²` after a
 //! step `s`, with `C = O(n³Δ)` the ratio of the system's second to first
 //! derivatives: `≲ C·10⁻¹⁶` rad in each angle, round-off, so that
 //! `|g'(ψ)| = |∂L/∂ψ|` at converged supports is `≲ k·C·10⁻¹⁶` and `h` is
-//! exact to round-off (`L` is stationary). The jets are computed at the
-//! final point. The result is therefore that of the stationary point to
-//! round-off **whatever the start**: from the first-order guesses, or from
-//! the point where the same pair's previous solve ended (a *warm start*,
-//! [`crate::profiled::Profiled`]'s contacts in the engine, which then
-//! converge in one or two steps). It is not the nested solve's result bit
-//! for bit: that one stops after a step below 10⁻⁷ rad on ψ (`~C·10⁻¹⁴`
-//! rad left). The contacts need `H` and `H'` alone: they take them from
-//! the last iterate, moved along the last step to first order (`O(step²)`,
-//! round-off), and only the Hessian evaluates the jets, `H''` included, at
-//! the final point.
+//! exact to round-off (`L` is stationary). The jets, `H''` included, are
+//! computed at the final point.
+//!
+//! The contacts need `H` and `H'` alone, and end earlier: after a Newton
+//! step `δ₁` below [`JOINT_FINISH`] = 10⁻⁵ rad, that step is corrected to
+//! second order (Chebyshev: `J δ₂ = −½ F''[δ₁, δ₁]`, with `F` the three
+//! conditions above, `J` their Jacobian, eliminated as for `δ₁`, and
+//! `F''` from `R … R‴` at the same point), which leaves `~C²|δ₁|³ ≲
+//! C²·10⁻¹⁵` rad, and `H`, `H'` are moved along `δ₁ + δ₂` to second order
+//! (`O(|δ|³)` left): no further outline evaluation, and `|g'|`, `|q|`
+//! below 10⁻¹⁴ at the result (tests: `shapes/fourier/tests/warm.rs`).
+//!
+//! Either way the result is that of the stationary point to round-off
+//! **whatever the start**: from the first-order guesses, or from the point
+//! where the same pair's previous solve ended (a *warm start*,
+//! [`crate::profiled::Profiled`]'s contacts in the engine, which then take
+//! one step on most pairs). It is not the nested solve's result bit for
+//! bit: that one stops after a step below 10⁻⁷ rad on ψ (`~C·10⁻¹⁴` rad
+//! left).
 
 use jamkit_core::math::{Matrix, Unit, Vector, cmul, turn_unit, unit_of_angle};
 use jamkit_core::{Contact, GapHessian};
@@ -525,11 +533,35 @@ struct JointBody {
     q_phi: f64,
     /// `m = −∂q/∂β = R cos δ + R' sin δ`.
     m: f64,
+    /// `(R, R', R'', R‴)` at the support-point guess.
+    outline: (f64, f64, f64, f64),
+    /// `e^{iδ} = p e^{−iβ}`.
+    d: Unit,
+}
+
+impl JointBody {
+    /// `(∂²q/∂φ∂β, ∂²q/∂φ², ∂²h_β/∂φ²)`, for [`exact_joint`]'s last step:
+    /// `(R − R'') sin δ − 2R' cos δ`, `(3R'' − R) sin δ + (3R' − R‴) cos δ`
+    /// and `(R'' − R) sin δ + 2R' cos δ` (the other second derivatives are
+    /// `∂²q/∂β² = −q`, `∂²h_β/∂φ∂β = q`, `∂²h_β/∂β² = −h_β`).
+    #[inline(always)]
+    fn second(&self) -> (f64, f64, f64) {
+        let ((r, r1, r2, r3), (c, s)) = (self.outline, self.d);
+        (
+            (r - r2) * s - 2.0 * r1 * c,
+            (3.0 * r2 - r) * s + (3.0 * r1 - r3) * c,
+            (r2 - r) * s + 2.0 * r1 * c,
+        )
+    }
 }
 
 #[inline(always)]
-fn joint_body<F: Fn(Unit) -> (f64, f64, f64)>(e_beta: Unit, p: Unit, outline: &F) -> JointBody {
-    let (r, r1, r2) = outline(p);
+fn joint_body<F: Fn(Unit) -> (f64, f64, f64, f64)>(
+    e_beta: Unit,
+    p: Unit,
+    outline: &F,
+) -> JointBody {
+    let (r, r1, r2, r3) = outline(p);
     let d = cmul(p, (e_beta.0, -e_beta.1));
     JointBody {
         h: r * d.0,
@@ -537,14 +569,16 @@ fn joint_body<F: Fn(Unit) -> (f64, f64, f64)>(e_beta: Unit, p: Unit, outline: &F
         q: r * d.1 - r1 * d.0,
         q_phi: 2.0 * r1 * d.1 + (r - r2) * d.0,
         m: r * d.0 + r1 * d.1,
+        outline: (r, r1, r2, r3),
+        d,
     }
 }
 
 /// The support jet at the support point `p = e^{iφ}` for the direction
 /// `e^{iβ}` ([`polar_support_unit`]'s formulas, without its search).
 #[inline(always)]
-fn jet_at<F: Fn(Unit) -> (f64, f64, f64)>(e_beta: Unit, p: Unit, outline: &F) -> SupportJet {
-    let (r, r1, r2) = outline(p);
+fn jet_at<F: Fn(Unit) -> (f64, f64, f64, f64)>(e_beta: Unit, p: Unit, outline: &F) -> SupportJet {
+    let (r, r1, r2, _) = outline(p);
     let d = cmul(p, (e_beta.0, -e_beta.1));
     let q = r * r + r1 * r1;
     let k = r * r + 2.0 * r1 * r1 - r * r2;
@@ -584,6 +618,11 @@ const JOINT_MAX_STEP: f64 = 0.3;
 /// convergence), is round-off, whatever the start.
 pub const JOINT_TOLERANCE: f64 = 1e-8;
 
+/// Without `second`, [`exact_joint`] ends after a step below this (rad)
+/// with the second-order correction of that step: what is left is
+/// `~C²s³ ≲ C²·10⁻¹⁸` rad (cubic), round-off.
+pub const JOINT_FINISH: f64 = 1e-5;
+
 /// The exact gap of two convex bodies given by their body-frame polar
 /// outlines `outline(e^{iφ}) = (R, R', R'')` (sizes included), by one
 /// Newton iteration on the normal and both support points at once (module
@@ -594,17 +633,18 @@ pub const JOINT_TOLERANCE: f64 = 1e-8;
 /// `None` where the iteration fails (`q_φ ≤ 0` or `k ≤ 0` at an iterate, a
 /// step longer than 0.3 rad or than the one before, or 30 steps): the
 /// caller then runs the nested solve, [`exact_unit`] on
-/// [`polar_support_unit`] supports. Converged after a step below
-/// [`JOINT_TOLERANCE`] on the normal and both support points: what is left
-/// is round-off (`~C·10⁻¹⁶` rad in each angle; module documentation), from
-/// any start. With `second`, the jets are those at the final point;
-/// without, `H` and `H'` are those of the last iterate moved along the last
-/// step to first order (an error O(step²) ≤ 10⁻¹⁶, round-off, and no
-/// outline evaluation) and `H''` is NaN (the contacts need `H` and `H'`
-/// alone).
+/// [`polar_support_unit`] supports. With `second`: converged after a step
+/// below [`JOINT_TOLERANCE`] on the normal and both support points (what
+/// is left is round-off, `~C·10⁻¹⁶` rad in each angle; module
+/// documentation), from any start, and the jets are those at the final
+/// point. Without: ended after a step below [`JOINT_FINISH`] corrected to
+/// second order, with `H` and `H'` moved along it to second order (module
+/// documentation, round-off left, no outline evaluation), and `H''` NaN
+/// (the contacts need `H` and `H'` alone). The outlines give
+/// `(R, R', R'', R‴)` (`R‴` is read only without `second`).
 #[allow(clippy::too_many_arguments)]
 #[inline]
-pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64)>(
+pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64, f64)>(
     r_ij: &Vector<2>,
     w0: Unit,
     z_i: Unit,
@@ -650,6 +690,10 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
         if !len.is_finite() || len > last || len > JOINT_MAX_STEP {
             return None;
         }
+        if !second && len < JOINT_FINISH {
+            let step = [dpsi, dphi_i, dphi_j];
+            return Some(finish(r_ij, w, [&bi, &bj], [ai, aj], k, step, iterations));
+        }
         w = turn_step(w, dpsi);
         pi = turn_step(pi, dphi_i);
         pj = turn_step(pj, dphi_j);
@@ -679,6 +723,68 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64), G: Fn(Unit) -> (f64, f64, f64
             });
         }
         last = len;
+    }
+}
+
+/// The last step of [`exact_joint`] without `second`, from the bodies
+/// `b` at the normal `w`, after its Newton step `δ₁ = (δψ, δφ_i, δφ_j)`
+/// below [`JOINT_FINISH`]: the step corrected to second order (Chebyshev),
+/// `δ = δ₁ + δ₂` with `J δ₂ = −½ F''[δ₁, δ₁]` (`F` the three stationarity
+/// conditions, `J` their Jacobian, eliminated as for `δ₁`: `a_k = m_k/q_φk`,
+/// `k`), which leaves `~C²|δ₁|³` rad; then the normal turned by `δψ`, and
+/// `H = h` and `H' = h_β` of each body moved along `δ` to second order
+/// (their derivatives in `φ` and `β` from `R … R‴`; what is left,
+/// `O(|δ|³)`, is round-off). No outline evaluation; `H''` is NaN.
+#[inline(always)]
+fn finish(
+    r_ij: &Vector<2>,
+    w: Unit,
+    b: [&JointBody; 2],
+    a: [f64; 2],
+    k: f64,
+    [dpsi, dphi_i, dphi_j]: [f64; 3],
+    iterations: u32,
+) -> ExactGap {
+    let dphi = [dphi_i, dphi_j];
+    let rt = -r_ij[0] * w.1 + r_ij[1] * w.0;
+    // ½ F''[δ₁, δ₁]: ψ's condition `r·e'(ψ) − Σ h_β`, each body's `q`.
+    let mut half = [0.0; 3];
+    half[0] = -0.5 * rt * dpsi * dpsi;
+    let mut seconds = [(0.0, 0.0, 0.0); 2];
+    for s in 0..2 {
+        let (q_pb, q_pp, hb_pp) = b[s].second();
+        seconds[s] = (q_pb, q_pp, hb_pp);
+        let (x, y) = (dpsi, dphi[s]);
+        half[0] -= 0.5 * (-b[s].h_beta * x * x + 2.0 * b[s].q * x * y + hb_pp * y * y);
+        half[1 + s] = 0.5 * (-b[s].q * x * x + 2.0 * q_pb * x * y + q_pp * y * y);
+    }
+    let dpsi2 = (half[0] + a[0] * half[1] + a[1] * half[2]) / k;
+    let step = [
+        dpsi + dpsi2,
+        dphi_i + (a[0] * dpsi2 - half[1] / b[0].q_phi),
+        dphi_j + (a[1] * dpsi2 - half[2] / b[1].q_phi),
+    ];
+    let normal = turn_step(w, step[0]);
+    let x = step[0];
+    let moved = |s: usize| {
+        let (bs, y, hb_pp) = (b[s], step[1 + s], seconds[s].2);
+        SupportJet {
+            h: bs.h - bs.q * y
+                + bs.h_beta * x
+                + 0.5 * (-bs.q_phi * y * y + 2.0 * bs.m * x * y - bs.h * x * x),
+            d1: bs.h_beta + bs.m * y - bs.h * x
+                + 0.5 * (hb_pp * y * y + 2.0 * bs.q * x * y - bs.h_beta * x * x),
+            d2: f64::NAN,
+        }
+    };
+    let (jet_i, jet_j) = (moved(0), moved(1));
+    ExactGap {
+        normal,
+        gap: r_ij[0] * normal.0 + r_ij[1] * normal.1 - jet_i.h - jet_j.h,
+        jet_i,
+        jet_j,
+        iterations,
+        converged: true,
     }
 }
 
@@ -886,7 +992,18 @@ mod tests {
                 polar_support_unit(ei, ei, oi).1.p,
                 polar_support_unit(ej, ej, oj).1.p,
             );
-            let Some(joint) = exact_joint(&d, w0, zi, pi, oi, zj, pj, oj, true) else {
+            // R‴ is not read with `second` (the jets at the final point).
+            let (oi4, oj4) = (
+                |p: Unit| {
+                    let (r, r1, r2) = oi(p);
+                    (r, r1, r2, f64::NAN)
+                },
+                |p: Unit| {
+                    let (r, r1, r2) = oj(p);
+                    (r, r1, r2, f64::NAN)
+                },
+            );
+            let Some(joint) = exact_joint(&d, w0, zi, pi, oi4, zj, pj, oj4, true) else {
                 continue;
             };
             joint_steps += 1;

@@ -467,6 +467,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
 
     /// `[P, P', P'', P‴]` at a phase (called only for the gap models that
     /// [`Profiled::with_gap`] admitted, which checked the profile has it).
+    #[inline(always)]
     fn jet3(&self, (cos, sin): (f64, f64)) -> Jet3 {
         self.profile
             .jet3(cos, sin)
@@ -545,7 +546,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     /// [`Profiled::exact_solve`] with [`ExactSolve::Joint`]; `memo` gets
     /// where this solve ended. The far-pair bound and the joint iteration's
     /// reach and safeguards are the cold solve's, and its result is the
-    /// same optimum to round-off ([`gap2d::JOINT_TOLERANCE`]), whatever the
+    /// same optimum to round-off ([`gap2d::JOINT_FINISH`]), whatever the
     /// memo holds. Where the joint iteration converges `H''` is not
     /// computed (NaN): the contacts do not need it.
     pub fn exact_solve_warm(
@@ -602,10 +603,16 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             return None;
         }
         let found = if solve != ExactSolve::Nested && r > self.joint_reach * (size_i + size_j) {
+            // (R, R', R'', R‴) of a body of size `size`.
             let sized = |size: f64| {
                 move |p: Unit| {
-                    let (r, r1, r2) = outline(p);
-                    (size * r, size * r1, size * r2)
+                    let [f, df, ddf, dddf] = self.jet3((p.0, -p.1));
+                    (
+                        size * (1.0 + d * f),
+                        size * (-d * df),
+                        size * (d * ddf),
+                        size * (-d * dddf),
+                    )
                 }
             };
             let joint = |w0: Unit, e_i: Unit, e_j: Unit| {

@@ -65,9 +65,18 @@
 //! the convergence cubic), with no square root; `v` is normalised once. It
 //! stops after a step below 10⁻⁵ rad, where what is left is `~K·10⁻¹⁵` rad
 //! (`K = |g'''²/4g''² − g''''/6g''| = O(1)`) and moves `h` by `~10⁻³⁰`, and
-//! the gap and jets are evaluated at the final normal. Every iterate's `g`
-//! is a lower bound on `h`, so a pair leaves as soon as one exceeds
-//! `max_gap`.
+//! the gap and jets are evaluated at the final normal; the contacts, after
+//! a last step below 10⁻⁶ rad, instead move `H` and `H'` there by their
+//! Taylor series from the last iterate (`H'''` included; `≲ 10⁻¹⁶` left),
+//! with no evaluation. Every iterate's `g` is a lower bound on `h`, so a
+//! pair leaves as soon as one exceeds `max_gap`.
+//!
+//! **Warm start.** In the engine's energy pass
+//! ([`Ellipse::exact_gap_warm`], `Shape::contacts_warm`) Halley's iteration
+//! starts at the normal where the pair's last solve ended, kept in the
+//! pair's memo relative to the line of centres: after a minimiser's step
+//! most pairs take one step and no further evaluation. The result is the
+//! same optimum to round-off, from any memo.
 //!
 //! Where a guard fails — `g'' ≥ 0`, Halley's denominator below `1/2`, a
 //! step beyond 1 rad or not shorter than the one before, a step over
@@ -99,8 +108,8 @@
 //! spectrally accurate for this smooth periodic integrand.
 
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, Look, NoFastPath, Outline, Pair, ParamSpec,
-    Policy, RotVec, Shape, ShapeVisitor, Vector,
+    Contact, Dims, Family, FamilyInfo, GapHessian, Look, NoFastPath, Outline, Pair, PairMemo,
+    ParamSpec, Policy, RotVec, Shape, ShapeVisitor, Vector,
 };
 use jamkit_planar::gap2d::{ExactGap, SupportJet};
 use serde::Deserialize;
@@ -304,6 +313,82 @@ impl Ellipse {
         r_ij: &Vector<2>,
         max_gap: f64,
     ) -> Option<Solution> {
+        let (fi, fj, r) = self.screen(size_i, o_i, size_j, o_j, r_ij, max_gap)?;
+        self.cold(&fi, &fj, (size_i, o_i, size_j, o_j), r_ij, r, max_gap, true)
+    }
+
+    /// [`Ellipse::exact_gap`] as the engine's pair loop finds it
+    /// ([`Shape::contacts_warm`]): Halley's iteration started at the normal
+    /// where this pair's last solve ended (`memo`: that normal relative to
+    /// the line of centres, `n ū` as a complex number in its first two
+    /// entries, times the distance `r` of that solve), else, or where a guard fails, the cold solve of
+    /// [`Ellipse::exact_gap`]; `memo` gets the normal of this solve. The
+    /// screens are the cold solve's, and the result is the same optimum to
+    /// round-off (Halley stops after a step below 10⁻⁵ rad, `~K·10⁻¹⁵` rad
+    /// from it, whatever the start). A pair that turned as a whole starts
+    /// at its optimum, and one that moved a little converges in one step.
+    #[inline(always)]
+    pub fn exact_gap_warm(
+        &self,
+        pair: &Pair<2, Axis>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+    ) -> Option<Solution> {
+        let (size_i, o_i, size_j, o_j, r_ij) =
+            (pair.size_i, &pair.o_i, pair.size_j, &pair.o_j, &pair.r_ij);
+        let (fi, fj, r) = self.screen(size_i, o_i, size_j, o_j, r_ij, max_gap)?;
+        let (x, y) = (r_ij[0], r_ij[1]);
+        let warm = match memo {
+            // The line of centres `r_ij` turned by the memo's `n ū` (both
+            // of any length).
+            Some([a0, a1, ..]) => match halley(
+                &fi,
+                &fj,
+                (x, y),
+                (x * *a0 - y * *a1, y * *a0 + x * *a1),
+                max_gap,
+                false,
+            ) {
+                Fast::Done(s) => Some(Some(s)),
+                Fast::Apart => Some(None),
+                Fast::Failed => None,
+            },
+            None => None,
+        };
+        let found = match warm {
+            Some(found) => found,
+            None => self.cold(
+                &fi,
+                &fj,
+                (size_i, o_i, size_j, o_j),
+                r_ij,
+                r,
+                max_gap,
+                false,
+            ),
+        };
+        if let Some(s) = &found {
+            // n r̄_ij: the normal relative to the line of centres, times r
+            // (any length will do, and no division).
+            let n = (s.normal[0], s.normal[1]);
+            *memo = Some([n.0 * x + n.1 * y, n.1 * x - n.0 * y, 0.0, 0.0, 0.0, 0.0]);
+        }
+        found
+    }
+
+    /// The two screens of [`Ellipse::exact_gap`]: `None` for a pair whose
+    /// gap certainly exceeds `max_gap`, else both bodies' quadratic forms
+    /// and `r = |r_ij|`.
+    #[inline(always)]
+    fn screen(
+        &self,
+        size_i: f64,
+        o_i: &Axis,
+        size_j: f64,
+        o_j: &Axis,
+        r_ij: &Vector<2>,
+        max_gap: f64,
+    ) -> Option<(Form, Form, f64)> {
         let r = r_ij.norm();
         // h ≥ |r| − a_i − a_j: skip pairs that are certainly apart.
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
@@ -324,8 +409,28 @@ impl Ellipse {
                 return None;
             }
         }
+        Some((fi, fj, r))
+    }
+
+    /// Halley's iteration from the line of centres, and the safeguarded
+    /// iteration where its guards fail (the solve of
+    /// [`Ellipse::exact_gap`] after its screens); Halley's jets at its
+    /// final normal with `second`, else moved to it ([`halley`]).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn cold(
+        &self,
+        fi: &Form,
+        fj: &Form,
+        (size_i, o_i, size_j, o_j): (f64, &Axis, f64, &Axis),
+        r_ij: &Vector<2>,
+        r: f64,
+        max_gap: f64,
+        second: bool,
+    ) -> Option<Solution> {
+        let (x, y) = (r_ij[0], r_ij[1]);
         let v0 = if r > 0.0 { (x, y) } else { (1.0, 0.0) };
-        match halley(&fi, &fj, x, y, v0, max_gap) {
+        match halley(fi, fj, (x, y), v0, max_gap, second) {
             Fast::Done(s) => Some(s),
             Fast::Apart => None,
             Fast::Failed => {
@@ -488,6 +593,11 @@ impl Form {
 /// convergence), which moves `h` by `~10⁻³⁰` (`g` is stationary).
 const HALLEY_TOL: f64 = 1e-5;
 
+/// Without `second`, [`halley`] moves the jets of its last iterate to the
+/// final normal by their Taylor series after a last step below this (rad),
+/// rather than evaluate them there.
+const TAYLOR_FINISH: f64 = 1e-6;
+
 /// The longest step of Halley's iteration (rad) before it hands over to
 /// the safeguarded iteration.
 const HALLEY_MAX_STEP: f64 = 1.0;
@@ -514,10 +624,22 @@ enum Fast {
 /// `g`, `H` and their derivatives in `ψ` are homogeneous of degree one in
 /// `v`, so the step (a ratio of them) is the same, and a turn by the step
 /// `s` is `v + s v⊥` (the angle `atan s = s − s³/3 + …`, which leaves the
-/// convergence cubic). `v` is normalised once, for the final evaluation.
+/// convergence cubic). `v` is normalised once, at the end, where the gap
+/// and the jets are evaluated; without `second`, after a last step below
+/// [`TAYLOR_FINISH`], `H` and `H'` are instead those of the last iterate
+/// moved along that step by their Taylor series (`H''` is NaN: the
+/// contacts need `H` and `H'` alone), which saves an evaluation.
 #[inline(always)]
-fn halley(fi: &Form, fj: &Form, x: f64, y: f64, v0: (f64, f64), max_gap: f64) -> Fast {
-    // g, g', g'' with both jets, and g''' at the direction v (scaled by |v|).
+fn halley(
+    fi: &Form,
+    fj: &Form,
+    (x, y): (f64, f64),
+    v0: (f64, f64),
+    max_gap: f64,
+    second: bool,
+) -> Fast {
+    // g, g', g'' with both jets, and g''' at the direction v (scaled by |v|),
+    // with each body's H''' (for the finish without `second`).
     let eval = |v: (f64, f64), l2: f64| {
         let w = (v.0 * v.0 - v.1 * v.1, 2.0 * v.0 * v.1);
         let ((ji, ti), (jj, tj)) = (fi.jet3(w, l2), fj.jet3(w, l2));
@@ -532,11 +654,12 @@ fn halley(fi: &Form, fj: &Form, x: f64, y: f64, v0: (f64, f64), max_gap: f64) ->
                 jj,
             },
             -rt - ti - tj,
+            (ti, tj),
         )
     };
     let square = |v: (f64, f64)| v.0 * v.0 + v.1 * v.1;
     let mut v = v0;
-    let (mut cur, mut g3) = eval(v, square(v));
+    let (mut cur, mut g3, mut thirds) = eval(v, square(v));
     let mut len_v = square(v).sqrt();
     let mut last = f64::INFINITY;
     for iterations in 1..=HALLEY_CAP {
@@ -562,7 +685,34 @@ fn halley(fi: &Form, fj: &Form, x: f64, y: f64, v0: (f64, f64), max_gap: f64) ->
         if len < HALLEY_TOL {
             let inv = 1.0 / square(v).sqrt();
             let n = (v.0 * inv, v.1 * inv);
-            let (end, _) = eval(n, 1.0);
+            if !second && len < TAYLOR_FINISH {
+                // H and H' moved by the turn `a = atan(step)` along their
+                // Taylor series (to a³ and a²; what is left, ≲ |H''''|a³/6
+                // ≲ 10⁻¹⁶ for |H''''| ≲ 100, is round-off), from the jets
+                // at the last iterate (scaled by `|v|` there): no
+                // evaluation.
+                let a = step * (1.0 - step * step * (1.0 / 3.0));
+                let inv_l = 1.0 / len_v;
+                let moved = |j: &SupportJet, t: f64| SupportJet {
+                    h: (j.h + a * (j.d1 + a * (0.5 * j.d2 + a * (1.0 / 6.0) * t))) * inv_l,
+                    d1: (j.d1 + a * (j.d2 + a * 0.5 * t)) * inv_l,
+                    d2: f64::NAN,
+                };
+                let (ji, jj) = (moved(&cur.ji, thirds.0), moved(&cur.jj, thirds.1));
+                let gap = x * n.0 + y * n.1 - ji.h - jj.h;
+                if gap > max_gap {
+                    return Fast::Apart;
+                }
+                return Fast::Done(Solution {
+                    normal: Vector::<2>::new(n.0, n.1),
+                    gap,
+                    jet_i: ji,
+                    jet_j: jj,
+                    iterations,
+                    converged: true,
+                });
+            }
+            let (end, ..) = eval(n, 1.0);
             if end.g > max_gap {
                 return Fast::Apart;
             }
@@ -577,7 +727,7 @@ fn halley(fi: &Form, fj: &Form, x: f64, y: f64, v0: (f64, f64), max_gap: f64) ->
         }
         let next;
         let l2 = square(v);
-        (next, g3) = eval(v, l2);
+        (next, g3, thirds) = eval(v, l2);
         let len_next = l2.sqrt();
         // A large step must climb: else it ran past the maximum the
         // safeguarded ascent reaches.
@@ -745,7 +895,32 @@ impl Shape<2> for Ellipse {
         let size_j = pair.size_j;
         let o_j = &pair.o_j;
         let r_ij = &pair.r_ij;
-        if let Some(s) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
+        if let Some((fi, fj, r)) = self.screen(size_i, o_i, size_j, o_j, r_ij, max_gap)
+            && let Some(s) = self.cold(
+                &fi,
+                &fj,
+                (size_i, o_i, size_j, o_j),
+                r_ij,
+                r,
+                max_gap,
+                false,
+            )
+        {
+            visit(s.contact());
+        }
+    }
+
+    /// [`Ellipse::exact_gap_warm`]: the exact gap started where the
+    /// pair's last solve ended.
+    #[inline]
+    fn contacts_warm<F: FnMut(Contact<2>)>(
+        &self,
+        pair: &Pair<2, Axis>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+        mut visit: F,
+    ) {
+        if let Some(s) = self.exact_gap_warm(pair, max_gap, memo) {
             visit(s.contact());
         }
     }
@@ -980,10 +1155,10 @@ mod tests {
                 let fast = match halley(
                     &s.form(ri, &oi),
                     &s.form(rj, &oj),
-                    d[0],
-                    d[1],
+                    (d[0], d[1]),
                     (d[0], d[1]),
                     f64::INFINITY,
+                    true,
                 ) {
                     Fast::Done(m) => m,
                     Fast::Apart => unreachable!("max_gap = ∞"),
@@ -1013,6 +1188,83 @@ mod tests {
             // centres even near contact, beyond the reach of the first
             // steps on about a third of these pairs.
             assert!(handed_over < 2000 / 100 * 35, "α = {aspect}: {handed_over}");
+        }
+    }
+
+    /// The warm start (`contacts_warm`, whose `H` and `H'` are moved to
+    /// the final normal by their Taylor series) finds the optimum of the
+    /// cold solve with the jets evaluated there (`exact_gap`) to round-off:
+    /// the gap to 2·10⁻¹⁵, the normal and `H'` to 10⁻¹⁴ (Halley stops
+    /// `~K·10⁻¹⁵` rad from the optimum, from either start; the Taylor
+    /// series leave `≲ 10⁻¹⁵`), with no memo, for pairs near contact moved
+    /// by 10⁻⁶ … 10⁻² after the solve that left the memo, and from a memo
+    /// of another pair; after a move of 10⁻⁶ the warm solve takes one step
+    /// where the cold one takes two or more.
+    #[test]
+    fn warm_start_finds_the_cold_optimum() {
+        let mut rnd = uniform(5);
+        for aspect in [1.1, 1.5, 3.0] {
+            let s = ellipse(aspect);
+            let (mut one_step, mut tiny, mut stranger_ok) = (0, 0, 0);
+            let mut stranger: PairMemo = None;
+            for _ in 0..500 {
+                let (ri, rj) = (0.5 + 0.2 * rnd(), 0.5 + 0.2 * rnd());
+                let (ti, tj) = (6.3 * rnd(), 6.3 * rnd());
+                let phi = 6.3 * rnd();
+                let u = Vector::<2>::new(phi.cos(), phi.sin());
+                let mut d = u * (ri + rj);
+                for _ in 0..2 {
+                    let h = s
+                        .exact_gap_safeguarded(ri, &Axis::new(ti), rj, &Axis::new(tj), &d, 1.0)
+                        .unwrap()
+                        .gap;
+                    d -= u * (h - 1e-3 * (2.0 * rnd() - 1.0));
+                }
+                let pair = Pair::new(ri, Axis::new(ti), rj, Axis::new(tj), d);
+                let mut memo: PairMemo = None;
+                let first = s.exact_gap_warm(&pair, 1.0, &mut memo).unwrap();
+                let cold = s.exact_gap(ri, &pair.o_i, rj, &pair.o_j, &d, 1.0).unwrap();
+                assert_eq!(first.iterations, cold.iterations);
+                assert_relative_eq!(first.gap, cold.gap, epsilon = 2e-15);
+                assert_relative_eq!(first.jet_i.d1, cold.jet_i.d1, epsilon = 1e-14);
+                assert_relative_eq!(first.jet_j.d1, cold.jet_j.d1, epsilon = 1e-14);
+                assert!(memo.is_some());
+                let moves = [1e-6, 1e-4, 1e-2];
+                let step = moves[(3.0 * rnd()) as usize % 3];
+                let mut kick = |x: f64| x + step * (2.0 * rnd() - 1.0);
+                let moved = Pair::new(
+                    ri,
+                    Axis::new(kick(ti)),
+                    rj,
+                    Axis::new(kick(tj)),
+                    Vector::<2>::new(kick(d[0]), kick(d[1])),
+                );
+                let cold = s
+                    .exact_gap(ri, &moved.o_i, rj, &moved.o_j, &moved.r_ij, 1.0)
+                    .unwrap();
+                for (mut m, from_stranger) in [(memo, false), (stranger, true)] {
+                    let Some(warm) = s.exact_gap_warm(&moved, 1.0, &mut m) else {
+                        panic!("{moved:?}")
+                    };
+                    assert_relative_eq!(warm.gap, cold.gap, epsilon = 2e-15);
+                    assert_relative_eq!(warm.normal, cold.normal, epsilon = 1e-14);
+                    assert_relative_eq!(warm.jet_i.d1, cold.jet_i.d1, epsilon = 1e-14);
+                    assert_relative_eq!(warm.jet_j.d1, cold.jet_j.d1, epsilon = 1e-14);
+                    if from_stranger {
+                        stranger_ok += 1;
+                    } else if step == 1e-6 && cold.iterations >= 2 {
+                        tiny += 1;
+                        one_step += usize::from(warm.iterations == 1);
+                    }
+                }
+                stranger = memo;
+            }
+            assert!(stranger_ok == 500);
+            assert!(tiny > 100, "α = {aspect}: {tiny} pairs moved by 1e-6");
+            assert!(
+                one_step * 10 >= tiny * 9,
+                "α = {aspect}: {one_step} of {tiny}"
+            );
         }
     }
 
@@ -1138,7 +1390,10 @@ mod tests {
                     skipped += 1;
                     assert!(full > 0.0);
                 }
-                Some(m) => assert_eq!(m.gap, full),
+                // The contacts' jets are moved to the optimum by their
+                // Taylor series where `exact_gap` evaluates them: the same
+                // gap to round-off.
+                Some(m) => assert_relative_eq!(m.gap, full, epsilon = 1e-15),
             }
         }
         assert!(skipped > 50);
