@@ -108,8 +108,8 @@
 //! spectrally accurate for this smooth periodic integrand.
 
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, Look, NoFastPath, Outline, Pair, PairMemo,
-    ParamSpec, Policy, RotVec, Shape, ShapeVisitor, Vector,
+    Contact, Dims, Family, FamilyInfo, GapHessian, Look, MEMO_LEN, NoFastPath, Outline, Pair,
+    PairMemo, ParamSpec, Policy, RotVec, Shape, ShapeVisitor, Vector,
 };
 use jamkit_planar::gap2d::{ExactGap, SupportJet};
 use serde::Deserialize;
@@ -371,7 +371,9 @@ impl Ellipse {
             // n r̄_ij: the normal relative to the line of centres, times r
             // (any length will do, and no division).
             let n = (s.normal[0], s.normal[1]);
-            *memo = Some([n.0 * x + n.1 * y, n.1 * x - n.0 * y, 0.0, 0.0, 0.0, 0.0]);
+            let mut m = [0.0; MEMO_LEN];
+            m[..2].copy_from_slice(&[n.0 * x + n.1 * y, n.1 * x - n.0 * y]);
+            *memo = Some(m);
         }
         found
     }
