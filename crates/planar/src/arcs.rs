@@ -52,11 +52,16 @@
 //! uniform in `u` with `ψ = lo + (hi − lo)(3u² − 2u³)`, in which it moves
 //! smoothly (at least 4 cells, and one per 0.1 rad). Every sign change is
 //! refined by Newton's method safeguarded by bisection, stopped after a
-//! step below 10⁻⁹ rad. Two stationary points within one cell (near a fold,
-//! `k ≈ 0`) can be missed.
+//! step below 10⁻⁹ rad. A cell where `g_AB'` keeps its sign while `g_AB''`
+//! turns it towards zero (a tip touching both flanks of a valley puts two
+//! stationary points in one cell) is searched for the extremum of `g_AB'`;
+//! where `g_AB'` changes sign there, both stationary points are refined.
+//! Three stationary points within one cell (`g_AB''` changing sign twice)
+//! can lose two. Each support point starts from the arc's table
+//! ([`OutlineArc::table`], computed once per shape).
 
 use crate::gap2d::{ExactGap, SupportJet};
-use jamkit_core::math::{Unit, Vector, unit_of_angle};
+use jamkit_core::math::{Unit, Vector, cmul, turn_unit, unit_of_angle};
 use std::f64::consts::{PI, TAU};
 
 /// A polar outline `φ ↦ (R, R', R'')` (body frame, unit size) at
@@ -78,7 +83,15 @@ pub struct OutlineArc {
     pub centre: (f64, f64),
     /// Its radius.
     pub radius: f64,
+    /// The polar angles `φ_k` (with `e^{iφ_k}`) where the normal angle is
+    /// `ν₀ + (ν₁ − ν₀) k/K`, `k = 0 … K` ([`TABLE_CELLS`] = K): each
+    /// normal's support point lies between two of them, where
+    /// [`arc_support`] starts.
+    pub table: Vec<(f64, Unit)>,
 }
+
+/// The cells of an arc's table of support points ([`OutlineArc::table`]).
+pub const TABLE_CELLS: usize = 64;
 
 impl OutlineArc {
     /// The normal angles the arc reaches, `(lowest, highest)`.
@@ -177,12 +190,37 @@ pub fn split_arcs<F: PolarOutline>(outline: &F, samples: usize) -> Vec<OutlineAr
                 .map(|p| (p.0 - centre.0).hypot(p.1 - centre.1))
                 .fold(0.0, f64::max);
             let radius = far + (b - a) / m as f64 * speed + 1e-12;
+            // ν is monotonic on the arc: each table entry by bisection.
+            let sign = if convex { 1.0 } else { -1.0 };
+            let table = (0..=TABLE_CELLS)
+                .map(|k| {
+                    let phi = if k == 0 {
+                        a
+                    } else if k == TABLE_CELLS {
+                        b
+                    } else {
+                        let nu = nu_a + (nu_b - nu_a) * k as f64 / TABLE_CELLS as f64;
+                        let (mut lo, mut hi) = (a, b);
+                        for _ in 0..80 {
+                            let mid = 0.5 * (lo + hi);
+                            if sign * (normal_angle(mid, at(mid)) - nu) > 0.0 {
+                                hi = mid;
+                            } else {
+                                lo = mid;
+                            }
+                        }
+                        0.5 * (lo + hi)
+                    };
+                    (phi, unit_of_angle(phi))
+                })
+                .collect();
             OutlineArc {
                 phi: (a, b),
                 nu: (nu_a, nu_b),
                 convex,
                 centre,
                 radius,
+                table,
             }
         })
         .collect()
@@ -191,46 +229,84 @@ pub fn split_arcs<F: PolarOutline>(outline: &F, samples: usize) -> Vec<OutlineAr
 /// The point of `arc` whose outward normal has the angle `beta` (body
 /// frame, within the arc's normal range; outside it, the nearer end): its
 /// polar angle `φ` and the arc's support jet `(H, H', H'')` there (unit
-/// size). Newton's method on `ν(φ) = β` safeguarded by bisection on the
-/// arc, stopped after a Newton step below 10⁻⁹ rad (what is left is
-/// ~C·10⁻¹⁸) or a bracket below 10⁻¹⁴ rad.
+/// size). [`arc_support_unit`] with `e^{iβ}` from `beta`.
 pub fn arc_support<F: PolarOutline>(arc: &OutlineArc, beta: f64, outline: &F) -> (f64, SupportJet) {
-    let (a, b) = arc.phi;
+    arc_support_unit(arc, beta, unit_of_angle(beta), outline)
+}
+
+/// [`arc_support`] given `e_beta = e^{iβ}` too. The root of
+/// `q(φ) = R sin δ − R' cos δ = |p| sin(ν(φ) − β)` (`δ = φ − β`,
+/// `q' = N cos δ / R`) between the two entries of the arc's table whose
+/// normals enclose `β`, by Newton's method safeguarded by bisection, from
+/// the linear interpolation of the table (from the square root's in the
+/// end cells, where `ν − ν₀` grows as `(φ − φ₀)²` at an inflection point),
+/// stopped after a Newton step below 10⁻⁹ rad (what is left is ~C·10⁻¹⁸)
+/// or a bracket below 10⁻¹⁴ rad. `e^{iφ}` follows the steps by
+/// [`turn_unit`]: no trigonometric call.
+pub fn arc_support_unit<F: PolarOutline>(
+    arc: &OutlineArc,
+    beta: f64,
+    e_beta: Unit,
+    outline: &F,
+) -> (f64, SupportJet) {
     let sign = if arc.convex { 1.0 } else { -1.0 };
-    let (lo_nu, hi_nu) = (arc.nu.0, arc.nu.1);
-    let t = ((beta - lo_nu) / (hi_nu - lo_nu)).clamp(0.0, 1.0);
-    let (mut lo, mut hi) = (a, b);
-    let mut phi = a + (b - a) * t;
-    let mut o = outline(unit_of_angle(phi));
-    for _ in 0..100 {
-        let f = sign * (normal_angle(phi, o) - beta);
-        if f > 0.0 {
-            hi = phi;
+    let m = arc.table.len() - 1;
+    let t = ((beta - arc.nu.0) / (arc.nu.1 - arc.nu.0)).clamp(0.0, 1.0) * m as f64;
+    let k = (t as usize).min(m - 1);
+    let (lo0, hi0) = (arc.table[k].0, arc.table[k + 1].0);
+    let frac = t - k as f64;
+    let (mut phi, mut e) = if frac <= 0.0 {
+        arc.table[k]
+    } else if frac >= 1.0 {
+        arc.table[k + 1]
+    } else {
+        let w = if k == 0 {
+            frac.sqrt()
+        } else if k + 1 == m {
+            1.0 - (1.0 - frac).sqrt()
         } else {
-            lo = phi;
-        }
-        let df = sign * curvature_numerator(o) / (o.0 * o.0 + o.1 * o.1);
-        let newton = phi - f / df;
-        let is_newton = df > 0.0 && newton > lo && newton < hi;
-        let next = if is_newton { newton } else { 0.5 * (lo + hi) };
-        let step = (next - phi).abs();
-        phi = next;
-        o = outline(unit_of_angle(phi));
-        // After a Newton step below 1e-9 what is left is ~C·1e-18.
-        if (is_newton && step < 1e-9) || hi - lo < 1e-14 {
-            break;
+            frac
+        };
+        let phi = lo0 + (hi0 - lo0) * w;
+        (phi, turn_unit(arc.table[k].1, phi - lo0))
+    };
+    let (mut lo, mut hi) = (lo0, hi0);
+    let back = (e_beta.0, -e_beta.1);
+    let mut o = outline(e);
+    let mut d = cmul(e, back);
+    if frac > 0.0 && frac < 1.0 {
+        for _ in 0..100 {
+            let (r, r1, r2) = o;
+            let q = sign * (r * d.1 - r1 * d.0);
+            if q > 0.0 {
+                hi = phi;
+            } else {
+                lo = phi;
+            }
+            let dq = sign * (2.0 * r1 * d.1 + (r - r2) * d.0);
+            let newton = phi - q / dq;
+            let is_newton = dq > 0.0 && newton > lo && newton < hi;
+            let next = if is_newton { newton } else { 0.5 * (lo + hi) };
+            let step = next - phi;
+            phi = next;
+            e = turn_unit(e, step);
+            o = outline(e);
+            d = cmul(e, back);
+            // After a Newton step below 1e-9 what is left is ~C·1e-18.
+            if (is_newton && step.abs() < 1e-9) || hi - lo < 1e-14 {
+                break;
+            }
         }
     }
     let (r, r1, _) = o;
-    let (sd, cd) = (phi - beta).sin_cos();
     let q = r * r + r1 * r1;
     let rho = q * q.sqrt() / curvature_numerator(o);
-    let h = r * cd;
+    let h = r * d.0;
     (
         phi,
         SupportJet {
             h,
-            d1: r * sd,
+            d1: r * d.1,
             d2: rho - h,
         },
     )
@@ -363,10 +439,14 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
     max_gap: f64,
     visit: &mut V,
 ) {
+    let (zi, zj) = (unit_of_angle(i.theta), unit_of_angle(j.theta));
     let eval = |psi: f64| {
-        let (pa, ja) = arc_support(arc_a, psi - i.theta, i.outline);
-        let (pb, jb) = arc_support(arc_b, psi - shift + PI - j.theta, j.outline);
         let (s, c) = psi.sin_cos();
+        // e^{i(ψ − θ_i)} and e^{i(ψ + π − θ_j)}.
+        let e_a = cmul((c, s), (zi.0, -zi.1));
+        let e_b = cmul((-c, -s), (zj.0, -zj.1));
+        let (pa, ja) = arc_support_unit(arc_a, psi - i.theta, e_a, i.outline);
+        let (pb, jb) = arc_support_unit(arc_b, psi - shift + PI - j.theta, e_b, j.outline);
         let along = r_ij[0] * c + r_ij[1] * s;
         let scale = |jet: SupportJet, size: f64| SupportJet {
             h: size * jet.h,
@@ -396,13 +476,9 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
             lo + (hi - lo) * u * u * (3.0 - 2.0 * u)
         }
     };
-    let mut left = eval(lo);
-    for k in 1..=cells {
-        let x1 = at(k);
-        let right = eval(x1);
-        let inside = |phi: f64, arc: &OutlineArc| phi >= arc.phi.0 && phi < arc.phi.1;
-        if (left.g1 > 0.0) != (right.g1 > 0.0)
-            && let Some((psi, steps, e)) = refine(&eval, (at(k - 1), left.g1), (x1, right.g1))
+    let inside = |phi: f64, arc: &OutlineArc| phi >= arc.phi.0 && phi < arc.phi.1;
+    let mut root = |x0: f64, f0: f64, x1: f64, f1: f64| {
+        if let Some((psi, steps, e)) = refine(&eval, (x0, f0), (x1, f1))
             && e.g <= max_gap
             && -e.g2 * e.rho_sign > 0.0
             && inside(e.phis.0, arc_a)
@@ -418,8 +494,68 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
                 converged: true,
             });
         }
+    };
+    let mut left = eval(lo);
+    let mut x0 = lo;
+    for k in 1..=cells {
+        let x1 = at(k);
+        let right = eval(x1);
+        if (left.g1 > 0.0) != (right.g1 > 0.0) {
+            root(x0, left.g1, x1, right.g1);
+        } else if (left.g2 > 0.0) != (right.g2 > 0.0) && (left.g2 > 0.0) != (left.g1 > 0.0) {
+            // `g'` has the same sign at both ends and an extremum inside
+            // that turns it towards the other sign: where it crosses, two
+            // stationary points share the cell.
+            if let Some((xm, fm)) = crossing(&eval, (x0, left.g2), (x1, right.g2), left.g1 > 0.0) {
+                root(x0, left.g1, xm, fm);
+                root(xm, fm, x1, right.g1);
+            }
+        }
         left = right;
+        x0 = x1;
     }
+}
+
+/// In a cell where `g'` has the sign `positive` at both ends and `g''`
+/// changes sign from the opposite one to it (`g'` goes towards zero, then
+/// back): a point where `g'` has the other sign, if the extremum of `g'`
+/// between reaches it. The extremum is bracketed by the sign of `g''`
+/// (regula falsi, Illinois), stopped when `g'` crosses or the bracket is
+/// below 10⁻¹³ rad (a double root at most: a fold).
+fn crossing<E: Fn(f64) -> Eval>(
+    eval: &E,
+    (mut a, mut fa): (f64, f64),
+    (mut b, mut fb): (f64, f64),
+    positive: bool,
+) -> Option<(f64, f64)> {
+    let mut side = 0;
+    for _ in 0..100 {
+        if b - a < 1e-13 {
+            return None;
+        }
+        let x = (a * fb - b * fa) / (fb - fa);
+        let x = if x > a && x < b { x } else { 0.5 * (a + b) };
+        let e = eval(x);
+        if (e.g1 > 0.0) != positive {
+            return Some((x, e.g1));
+        }
+        if (e.g2 > 0.0) == (fa > 0.0) {
+            a = x;
+            fa = e.g2;
+            if side == -1 {
+                fb *= 0.5;
+            }
+            side = -1;
+        } else {
+            b = x;
+            fb = e.g2;
+            if side == 1 {
+                fa *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    None
 }
 
 /// The root of `g'` in `[x0, x1]`, given `g'` at both ends (of opposite
