@@ -702,10 +702,9 @@ impl Fire {
         let mut positive_steps: u32 = 0;
         let mut energy = obj.energy_gradient(g);
         let mut forecast = match self.unjam_window {
-            Some((low, high)) if p.unjam_forecast => Some(Forecast::new(
-                low * bodies,
-                FORECAST_NEAR * high * bodies,
-            )),
+            Some((low, high)) if p.unjam_forecast => {
+                Some(Forecast::new(low * bodies, FORECAST_NEAR * high * bodies))
+            }
             _ => None,
         };
         let mut steps: u64 = 0;
