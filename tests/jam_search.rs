@@ -205,7 +205,9 @@ fn adaptive_is_the_default_and_bisection_is_left_out_of_settings() {
 /// A run directory of bisection packings (as every run made before the
 /// extrapolated searches existed) is refused under the default, with
 /// the search named and the fix said, and resumed under an explicit
-/// `search: Bisection`.
+/// `search: Bisection`. (The default search also brings the unjamming
+/// forecast, which such packings lack; it is off on both sides here: the
+/// search is the one difference, and the forecast has its own test.)
 #[test]
 fn bisection_packings_are_refused_under_the_default_and_resume_as_bisection() {
     let experiment = |protocol: &str| {
@@ -216,7 +218,7 @@ fn bisection_packings_are_refused_under_the_default_and_resume_as_bisection() {
     };
     common::refused_then_resumed(
         &experiment(", protocol: Jam(search: Bisection)"),
-        &experiment(""),
+        &experiment(", minimizer: (unjam_forecast: false)"),
         &[
             "protocol.Jam.search",
             "\"Adaptive\"",
@@ -247,5 +249,72 @@ fn extrapolated_packings_are_refused_under_the_default_and_resume_as_extrapolate
             "\"Extrapolated\" (the default before \"Adaptive\"",
             "--set protocol.search=Extrapolated",
         ],
+    );
+}
+
+/// A run directory of `AboveJam` packings made under `rejams: 0` (jamkit's
+/// default before 2; they record no `rejams`) is refused under the
+/// default, with the field named and the fix said, and resumed under an
+/// explicit `rejams: 0`.
+#[test]
+fn above_jam_packings_without_rejams_are_refused_under_the_default_and_resume_as_zero() {
+    let experiment = |rejams: &str| {
+        let text = format!(
+            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 1, seed: 3,
+            protocol: AboveJam(delta_phi: 1e-2{rejams}))"#
+        );
+        Experiment::from_ron(&text, "inline").unwrap()
+    };
+    common::refused_then_resumed(
+        &experiment(", rejams: 0"),
+        &experiment(""),
+        &[
+            "protocol.AboveJam.rejams",
+            "2",
+            "0 (not written; the default before 2",
+            "--set protocol.rejams=0",
+        ],
+    );
+}
+
+/// A run directory of jamming packings made without the unjamming
+/// forecast (jamkit's default before it; they record no `unjam_forecast`)
+/// is refused under the default, with the field named and the fix said,
+/// and resumed under an explicit `unjam_forecast: false`. Where the
+/// forecast does not act (the paper's bisection, `Phi`), the settings are
+/// the same with it on and off, so such packings resume under the default.
+#[test]
+fn packings_without_the_unjamming_forecast_are_refused_where_it_acts_and_resume_as_off() {
+    let experiment = |protocol: &str, minimizer: &str| {
+        let text = format!(
+            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3,
+            protocol: {protocol}, minimizer: ({minimizer}))"#
+        );
+        Experiment::from_ron(&text, "inline").unwrap()
+    };
+    common::refused_then_resumed(
+        &experiment("Jam()", "unjam_forecast: false"),
+        &experiment("Jam()", ""),
+        &[
+            "minimizer.unjam_forecast",
+            "true",
+            "false (not written; the default before true",
+            "--set minimizer.unjam_forecast=false",
+        ],
+    );
+    let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
+    for protocol in ["Jam(search: Bisection)", "Phi(phi: 0.5)"] {
+        assert_eq!(
+            settings(&experiment(protocol, "unjam_forecast: false")),
+            settings(&experiment(protocol, "")),
+            "{protocol}"
+        );
+    }
+    assert_ne!(
+        settings(&experiment(
+            "AboveJam(delta_phi: 1e-2)",
+            "unjam_forecast: false"
+        )),
+        settings(&experiment("AboveJam(delta_phi: 1e-2)", ""))
     );
 }

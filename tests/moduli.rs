@@ -961,13 +961,14 @@ fn above_jam_protocol_compresses_from_each_packings_own_jamming_point() {
 /// that jams above φ_J + δφ (N = 64 disks, seed 1, δφ = 3·10⁻³: V/N fell
 /// to 7·10⁻¹⁷ with no contact left). `AboveJam` then fails that sample,
 /// naming what happened, instead of recording an unjammed packing as one
-/// δφ above jamming; δφ = 10⁻³ on the same seed succeeds.
+/// δφ above jamming, under `rejams: 0`; δφ = 10⁻³ on the same seed
+/// succeeds.
 #[test]
 fn above_jam_refuses_a_packing_that_unjammed() {
     let text = |dphi: &str| {
         format!(
             r#"(name: "a", family: "sphere", particles: 64, samples: 1, seed: 1,
-            protocol: AboveJam(delta_phi: {dphi}), observables: [Contacts])"#
+            protocol: AboveJam(delta_phi: {dphi}, rejams: 0), observables: [Contacts])"#
         )
     };
     let parse = |t: &str| jamkit_experiment::Experiment::from_ron(t, "inline").unwrap();
@@ -985,8 +986,8 @@ fn above_jam_refuses_a_packing_that_unjammed() {
     assert!(report.packings[0].measures.energy_per_particle > 1e-10);
 }
 
-/// With `rejams`, the packing of `above_jam_refuses_a_packing_that_unjammed`
-/// is jammed again from where it unjammed and compressed by δφ from its new
+/// With `rejams` (2 by default), the packing of
+/// `above_jam_refuses_a_packing_that_unjammed` is jammed again from where it unjammed and compressed by δφ from its new
 /// jamming point: the sample succeeds, its first φ_J (recorded in
 /// `jam_point.left`) is bit for bit that of `Jam` on the same seed, the new
 /// φ_J lies at least δφ above it (the state at φ_J + δφ had V/N below the
@@ -994,9 +995,10 @@ fn above_jam_refuses_a_packing_that_unjammed() {
 /// φ from the box), the packing sits δφ above the new one (to 1e-12, as in
 /// `protocol_targets_given_as_lists_scan`) with V/N above the window, and
 /// `results.csv` counts the re-jams. A packing that goes up at the first
-/// try is the same with and without `rejams` (φ and V/N bit for bit, the
-/// same FIRE steps) and, without it, writes no `left` and no `rejams`
-/// setting, so files of earlier runs are unchanged.
+/// try is the same under the default and under `rejams: 0` (φ and V/N bit
+/// for bit, the same FIRE steps) and, under `rejams: 0`, writes no `left`
+/// and no `rejams` setting, so files of runs made before the field existed
+/// are unchanged.
 #[test]
 fn above_jam_jams_again_a_packing_that_unjammed() {
     let parse = |t: &str| jamkit_experiment::Experiment::from_ron(t, "inline").unwrap();
@@ -1014,7 +1016,7 @@ fn above_jam_jams_again_a_packing_that_unjammed() {
     let phi_j = common::run_ok(&jam, dir.path(), 1).packings[0].measures.phi;
 
     let dir = tempfile::tempdir().unwrap();
-    let report = common::run_ok(&above("3e-3", ", rejams: 2"), dir.path(), 1);
+    let report = common::run_ok(&above("3e-3", ""), dir.path(), 1);
     let m = &report.packings[0].measures;
     let point = m.jam_point.as_ref().unwrap();
     assert!(
@@ -1044,13 +1046,13 @@ fn above_jam_jams_again_a_packing_that_unjammed() {
 
     // Went up at the first try: nothing new in the file or the table.
     let dir = tempfile::tempdir().unwrap();
-    let with = common::run_ok(&above("1e-3", ", rejams: 2"), dir.path(), 1);
+    let with = common::run_ok(&above("1e-3", ""), dir.path(), 1);
     let with = &with.packings[0].measures;
     assert!(with.jam_point.as_ref().unwrap().left.is_empty());
     let results = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
     assert!(!results.lines().next().unwrap().contains("jam_rejams"));
     let dir = tempfile::tempdir().unwrap();
-    let without = common::run_ok(&above("1e-3", ""), dir.path(), 1);
+    let without = common::run_ok(&above("1e-3", ", rejams: 0"), dir.path(), 1);
     let without = &without.packings[0].measures;
     assert_eq!(with.phi.to_bits(), without.phi.to_bits());
     assert_eq!(

@@ -23,6 +23,27 @@
 //! per body as `N` grows; the paper's is the sum `Σ_a (∂V/∂q_a)²`
 //! ([`FireParams::paper`]); with `force_tol_per_body` the sum is divided by
 //! `N` first, as in the paper author's public code.
+//!
+//! **The unjamming forecast** (`unjam_forecast`, on by default; the paper's
+//! bisection never asks for it). A jamming search judges a relaxed state by its `V/N`
+//! alone: at or below the window's low edge `energy_low` it is unjammed.
+//! Just below φ_J a state can creep down to that edge for hundreds of
+//! thousands of steps, at a rate that tells where it goes. When the search
+//! asks for it ([`Fire::forecast_unjamming`]), `V` is sampled every
+//! [`FORECAST_EVERY`] FIRE steps from the [`FORECAST_AFTER`]-th on. Four
+//! samples in a row that fall, the last within ten times the window's
+//! upper edge, forecast when `V/N` reaches `energy_low`: at the last
+//! fall's rate if the falls do not shrink, else along the geometric decay
+//! through the last three samples, if its limit (Aitken's `Δ²`,
+//! `V₃ − ΔV₃ r/(1 − r)`, `r = ΔV₃/ΔV₂`) lies below the edge. When the last
+//! two such forecasts both see the edge reached, the last within as many
+//! steps as the minimisation has taken, it ends with
+//! [`StopReason::Forecast`] and the search takes the state as unjammed.
+//! A state that jams settles at its own `V/N` above the edge: its falls
+//! shrink towards that limit, or fade into round-off too slow to reach the
+//! edge in time, and it runs on to the force test. The verdict can differ
+//! only where a state above φ_J falls to within ten times the window and
+//! keeps falling, at a jamming point found to that precision.
 
 use crate::lbfgs::{LbfgsChoice, LbfgsEnd, LbfgsWork};
 use crate::newton::{NewtonEnd, NewtonParams, NewtonWork};
@@ -151,6 +172,92 @@ pub struct FireParams {
     /// that packings made before it existed still resume.
     #[serde(skip_serializing_if = "LbfgsChoice::is_family")]
     pub lbfgs: LbfgsChoice,
+    /// In a jamming search other than the paper's bisection, end a
+    /// minimisation whose `V` decay forecasts `V/N` at the search's
+    /// `energy_low` as a state short of the window (module documentation).
+    /// On by default; off in [`FireParams::paper`]. A packing's recorded
+    /// settings leave it out when off, and where it does not act, so that
+    /// packings made before it existed resume.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub unjam_forecast: bool,
+}
+
+/// FIRE steps between two samples of `V` of the unjamming forecast.
+pub const FORECAST_EVERY: u64 = 2000;
+
+/// FIRE steps of a minimisation before the unjamming forecast takes its
+/// first sample.
+pub const FORECAST_AFTER: u64 = 10_000;
+
+/// The unjamming forecast looks at states with `V/N` within this factor
+/// of the window's upper edge.
+pub const FORECAST_NEAR: f64 = 10.0;
+
+/// The unjamming forecast of one minimisation (module documentation).
+#[derive(Clone, Copy, Debug)]
+struct Forecast {
+    /// `energy_low · N`: the energy at or below which the search calls a
+    /// state unjammed.
+    level: f64,
+    /// `FORECAST_NEAR · energy_high · N`: forecasts start below it.
+    near: f64,
+    /// The last five samples of `V`, oldest first.
+    samples: [f64; 5],
+    /// Samples taken.
+    taken: u64,
+    /// The FIRE step of the next sample.
+    next: u64,
+}
+
+impl Forecast {
+    fn new(level: f64, near: f64) -> Self {
+        Self {
+            level,
+            near,
+            samples: [0.0; 5],
+            taken: 0,
+            next: FORECAST_AFTER,
+        }
+    }
+
+    /// Samples from the four samples `x`, `x[3]` the last, until `V`
+    /// reaches the level, or `None` where they forecast no such end.
+    fn samples_to_level(&self, x: &[f64]) -> Option<f64> {
+        let (d2, d3) = (x[1] - x[2], x[2] - x[3]);
+        if !(x[0] > x[1] && d2 > 0.0 && d3 > 0.0 && x[3] <= self.near) {
+            return None;
+        }
+        let above = x[3] - self.level;
+        if above <= 0.0 {
+            return Some(0.0);
+        }
+        if d3 >= d2 {
+            // Falling at least as fast as before: at the last rate.
+            return Some(above / d3);
+        }
+        // A geometric decay, ratio r, towards its Aitken limit.
+        let r = d3 / d2;
+        let limit = x[3] - d3 * r / (1.0 - r);
+        (limit < self.level).then(|| ((self.level - limit) / (x[3] - limit)).ln() / r.ln())
+    }
+
+    /// Take the sample `energy` at `steps` (a sample is due); `true` when
+    /// the last two forecasts see `V` reach the level, the last within
+    /// `steps` more steps.
+    #[cold]
+    #[inline(never)]
+    fn sample(&mut self, steps: u64, energy: f64) -> bool {
+        self.next = steps.saturating_add(FORECAST_EVERY);
+        self.samples.rotate_left(1);
+        self.samples[4] = energy;
+        self.taken += 1;
+        if self.taken < 5 {
+            return false;
+        }
+        let earlier = self.samples_to_level(&self.samples[..4]);
+        let last = self.samples_to_level(&self.samples[1..]);
+        matches!((earlier, last), (Some(_), Some(n)) if n * FORECAST_EVERY as f64 <= steps as f64)
+    }
 }
 
 /// Which masses FIRE integrates with.
@@ -197,6 +304,7 @@ impl Default for FireParams {
             newton: Some(NewtonParams::default()),
             masses: Masses::Family,
             lbfgs: LbfgsChoice::Family,
+            unjam_forecast: true,
         }
     }
 }
@@ -211,8 +319,8 @@ impl FireParams {
     }
 
     /// The paper's FIRE: FIRE (Bitzek et al.) all the way, no Newton
-    /// finish, `Σ (∂V/∂q)² < 10⁻²⁵`. Bit for bit the packings recorded
-    /// without the Newton finish.
+    /// finish, `Σ (∂V/∂q)² < 10⁻²⁵`, no unjamming forecast. Bit for bit
+    /// the packings recorded without the Newton finish.
     pub fn paper() -> Self {
         Self {
             variant: FireVariant::Fire,
@@ -221,16 +329,19 @@ impl FireParams {
             newton: None,
             masses: Masses::Plain,
             lbfgs: LbfgsChoice::Off,
+            unjam_forecast: false,
             ..Self::default()
         }
     }
 
-    /// FIRE with the Newton finish at its default settings and the default
-    /// force criterion, with plain masses and no L-BFGS.
+    /// FIRE with the Newton finish at its default settings, the default
+    /// force criterion and the unjamming forecast, with plain masses and no
+    /// L-BFGS.
     pub fn fire_newton() -> Self {
         Self {
             newton: Some(NewtonParams::default()),
             force_criterion: ForceCriterion::default(),
+            unjam_forecast: true,
             ..Self::paper()
         }
     }
@@ -432,6 +543,9 @@ pub struct Fire {
     /// The next minimisation starts from a decompressed jammed state (set
     /// by the jamming search; read by `masses: Blocks((jammed_only: true))`).
     from_jammed: bool,
+    /// The jamming search's window `(energy_low, energy_high)` while it
+    /// asks for the unjamming forecast ([`Fire::forecast_unjamming`]).
+    unjam_window: Option<(f64, f64)>,
 }
 
 /// Where a minimiser stands, written after every minimisation and read by
@@ -492,6 +606,14 @@ impl Fire {
     /// state (the jamming search does; see [`PreconParams::jammed_only`]).
     pub fn set_from_jammed(&mut self, from_jammed: bool) {
         self.from_jammed = from_jammed;
+    }
+
+    /// Let the next minimisations end on the unjamming forecast against
+    /// this window `(energy_low, energy_high)` of `V/N`, where
+    /// `unjam_forecast` is on; `None`: they run to a stopping criterion
+    /// (set by the jamming search).
+    pub fn forecast_unjamming(&mut self, window: Option<(f64, f64)>) {
+        self.unjam_window = window;
     }
 
     /// Keep `(φ, outcome)` of every minimisation from now on (a step trace:
@@ -579,6 +701,12 @@ impl Fire {
         let mut alpha = alpha_start;
         let mut positive_steps: u32 = 0;
         let mut energy = obj.energy_gradient(g);
+        let mut forecast = match self.unjam_window {
+            Some((low, high)) if p.unjam_forecast => {
+                Some(Forecast::new(low * bodies, FORECAST_NEAR * high * bodies))
+            }
+            _ => None,
+        };
         let mut steps: u64 = 0;
         let mut newton_iterations: u64 = 0;
         let mut newton_interval = p.newton.as_ref().map_or(u64::MAX, |nw| nw.after);
@@ -631,6 +759,12 @@ impl Fire {
             }
             if let Some(reason) = p.stop(energy, force_sq, g, bodies) {
                 finish!(energy, force_sq, reason);
+            }
+            if let Some(f) = forecast.as_mut()
+                && steps >= f.next
+                && f.sample(steps, energy)
+            {
+                finish!(energy, force_sq, StopReason::Forecast);
             }
             if steps + lbfgs_evaluations >= p.max_steps {
                 let stride = n / obj.bodies().max(1);
@@ -903,6 +1037,43 @@ fn step_sums_portable<const UNIT: bool>(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    /// The step at which the forecast of window `(1, 2)` (`V`, one body)
+    /// ends a minimisation whose `V` after `s` steps is `v(s)`, if it does
+    /// within `limit` steps.
+    fn forecast_end(v: impl Fn(f64) -> f64, limit: u64) -> Option<u64> {
+        let mut f = Forecast::new(1.0, FORECAST_NEAR * 2.0);
+        (0..limit).find(|&s| s >= f.next && f.sample(s, v(s as f64)))
+    }
+
+    /// The forecast's cases, on `V` in units of `energy_low`: a geometric
+    /// decay to 0 from within ten times the window is ended at the first
+    /// sample (from the fifth on) where it has as many steps to go to the
+    /// edge as it has taken (Aitken's limit is exact for it), well above the
+    /// edge, and so is a fall that does not slow;
+    /// a decay to 1.5 (in the window: a jammed state) is not, nor one to
+    /// 0.5 that starts 100 times above the window, until it has come within
+    /// ten times it, nor a plateau that falls by round-off, nor a state that
+    /// rises.
+    #[test]
+    fn the_unjamming_forecast_ends_decays_below_the_window_only() {
+        let tau = 20_000.0;
+        let geometric = |limit: f64, a: f64| move |s: f64| limit + a * (-s / tau).exp();
+        let v = geometric(0.0, 19.0 * 2f64.powf(0.5));
+        let end = forecast_end(v, 1_000_000).unwrap();
+        let expected = (4..)
+            .map(|k| FORECAST_AFTER + k * FORECAST_EVERY)
+            .find(|&s| tau * v(s as f64).ln() <= s as f64 + 1e-6)
+            .unwrap();
+        assert_eq!(end, expected);
+        assert!(v(end as f64) > 4.0, "{}", v(end as f64));
+        assert!(forecast_end(|s| 19.0 - s * 1e-4, 1_000_000).is_some());
+        assert_eq!(forecast_end(geometric(1.5, 18.0), 1_000_000), None);
+        let from_far = forecast_end(geometric(0.5, 2000.0), 1_000_000).unwrap();
+        assert!(geometric(0.5, 2000.0)(from_far as f64) <= 20.0);
+        assert_eq!(forecast_end(|s| 5.0 - s * 1e-15, 1_000_000), None);
+        assert_eq!(forecast_end(|s| 5.0 + s * 1e-6, 1_000_000), None);
+    }
 
     /// V = Σ k_a x_a² / 2 with very different stiffnesses and masses.
     struct Quadratic {

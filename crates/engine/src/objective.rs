@@ -54,6 +54,9 @@ pub enum StopReason {
     Energy,
     /// The force criterion held.
     Force,
+    /// The unjamming forecast: `V/N` decays towards a limit at or below
+    /// the jamming search's `energy_low` ([`crate::fire`]).
+    Forecast,
 }
 
 /// `Ok` when `value` is positive and finite, else an error naming

@@ -8,6 +8,9 @@
 //! That is [`JamSearch::Bisection`]; the default, [`JamSearch::Adaptive`],
 //! decompresses a jammed state by the step its pressure predicts and lets
 //! the compression step grow again where the jamming point has moved up.
+//! Off the bisection, a minimisation whose `V/N` decay forecasts the low
+//! edge may end there as a state short of the window (the unjamming
+//! forecast, [`crate::fire`]).
 //!
 //! **To a packing fraction.** Step `φ` by `ε` towards the target (the last
 //! step lands on it exactly), minimising after each step.
@@ -22,7 +25,7 @@
 //! times.
 
 use crate::fire::Fire;
-use crate::objective::Objective;
+use crate::objective::{Objective, StopReason};
 use crate::scene::Scene;
 use jamkit_core::{Error, Potential, Result, Shape};
 use serde::{Deserialize, Serialize};
@@ -194,6 +197,8 @@ struct Tally {
     minimizations: u64,
     newton_iterations: u64,
     lbfgs_evaluations: u64,
+    /// The last minimisation ended on the unjamming forecast.
+    forecast: bool,
 }
 
 impl Tally {
@@ -208,6 +213,7 @@ impl Tally {
         self.minimizations += 1;
         self.newton_iterations += out.newton_iterations;
         self.lbfgs_evaluations += out.lbfgs_evaluations;
+        self.forecast = out.reason == StopReason::Forecast;
         Ok(out.energy / scene.bodies() as f64)
     }
 
@@ -282,7 +288,11 @@ fn bisect<const D: usize, S: Shape<D>>(
     fire.set_from_jammed(false);
     loop {
         let e = tally.relax(scene, fire)?;
-        let (verdict, state) = judge(scene, e);
+        let (mut verdict, state) = judge(scene, e);
+        if tally.forecast {
+            // Its decay says where it ends: short of the target.
+            verdict = Verdict::Under;
+        }
         let over = match verdict {
             Verdict::Done => {
                 fire.set_from_jammed(false);
@@ -334,7 +344,13 @@ pub fn jam<const D: usize, S: Shape<D>>(
     params: &JamParams,
 ) -> Result<ProtocolOutcome> {
     let target = (params.energy_low * params.energy_high).sqrt();
-    bisect(
+    // Its minimisations may end on the unjamming forecast (`crate::fire`),
+    // which the search takes as a state short of the window; not on the
+    // paper's bisection, which stays the paper's path bit for bit.
+    if params.search != JamSearch::Bisection {
+        fire.forecast_unjamming(Some((params.energy_low, params.energy_high)));
+    }
+    let out = bisect(
         scene,
         fire,
         params.eps,
@@ -356,7 +372,9 @@ pub fn jam<const D: usize, S: Shape<D>>(
                 extrapolated_step(scene, e, target.max(e * LEAP))
             }
         },
-    )
+    );
+    fire.forecast_unjamming(None);
+    out
 }
 
 /// Parameters of [`above_jam`].

@@ -15,7 +15,7 @@
 use crate::error::ExperimentError;
 use crate::schema::{Experiment, Protocol, ScanSetting, scan_value_text};
 use jamkit_core::FamilyInfo;
-use jamkit_engine::FireParams;
+use jamkit_engine::{FireParams, JamSearch};
 use jamkit_registry::{self as registry, ParamMap};
 
 /// One parameter point of the grid.
@@ -320,7 +320,7 @@ pub fn settings(experiment: &Experiment, point: &Point, seed: u64) -> serde_json
         "seed": seed,
         "sizes": e.sizes,
         "protocol": protocol_settings(&point.protocol),
-        "minimizer": minimizer_settings(minimizer),
+        "minimizer": minimizer_settings(minimizer, &point.protocol),
         "potential": e.potential,
         "rattlers": e.rattlers,
         "engine": e.engine,
@@ -348,13 +348,26 @@ fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
 /// Packings made before the field existed ran without L-BFGS and record
 /// none, so they still resume under an explicit `lbfgs: None`; where the
 /// family's default is L-BFGS it is always written, so no packing of one
-/// minimiser is ever taken for the other's.
-fn minimizer_settings(minimizer: &FireParams) -> serde_json::Value {
+/// minimiser is ever taken for the other's. `unjam_forecast` is recorded
+/// only where it acts (`Jam` and `AboveJam` with a search other than
+/// `Bisection`: `jamkit_engine::jam`) and is on (it is not written when
+/// off), so that packings made before it existed resume wherever it
+/// changes nothing, and under an explicit `unjam_forecast: false` where
+/// it would.
+fn minimizer_settings(minimizer: &FireParams, protocol: &Protocol) -> serde_json::Value {
     let mut value = serde_json::to_value(minimizer).expect("minimizer serialises");
-    if let Some(m) = value.as_object_mut()
-        && m.get("lbfgs") == Some(&serde_json::Value::Null)
-    {
-        m.remove("lbfgs");
+    let forecast_acts = matches!(
+        protocol,
+        Protocol::Jam { search, .. } | Protocol::AboveJam { search, .. }
+            if *search != JamSearch::Bisection
+    );
+    if let Some(m) = value.as_object_mut() {
+        if m.get("lbfgs") == Some(&serde_json::Value::Null) {
+            m.remove("lbfgs");
+        }
+        if !forecast_acts {
+            m.remove("unjam_forecast");
+        }
     }
     value
 }

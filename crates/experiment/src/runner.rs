@@ -330,6 +330,19 @@ fn unwritten_setting(key: &str) -> Option<&'static str> {
             "\"Plain\" (not written; the default before the family's: \
              add `masses: Plain` to the minimizer to resume them)",
         ),
+        // Packings of `rejams: 0`, the default before 2, record none
+        // (`schema::Protocol::AboveJam`).
+        "protocol.AboveJam.rejams" => Some(
+            "0 (not written; the default before 2: add `rejams: 0` to the \
+             protocol, or `--set protocol.rejams=0`, to resume them)",
+        ),
+        // Packings made without the unjamming forecast record none
+        // (`FireParams::unjam_forecast`).
+        "minimizer.unjam_forecast" => Some(
+            "false (not written; the default before true: add \
+             `unjam_forecast: false` to the minimizer, or \
+             `--set minimizer.unjam_forecast=false`, to resume them)",
+        ),
         // Packings without L-BFGS record none (`sample::minimizer_settings`).
         "minimizer.lbfgs" => Some(
             "None (not written; the default before the family's: \

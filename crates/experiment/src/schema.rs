@@ -250,9 +250,10 @@ pub enum Protocol {
         /// How often a packing that unjams on its way up (a rearrangement
         /// into a state that jams above φ_J + δφ) is jammed again from
         /// where it stopped and compressed by δφ from its new φ_J, before
-        /// the sample fails. `0` (the default, and not written out, so
-        /// that settings of earlier runs are unchanged): it fails at once.
-        #[serde(default, skip_serializing_if = "is_zero")]
+        /// the sample fails ([`DEFAULT_REJAMS`] by default). `0`: it fails
+        /// at once; not written out, as in packings made before the field
+        /// existed, so that those resume under `rejams: 0`.
+        #[serde(default = "default_rejams", skip_serializing_if = "is_zero")]
         rejams: u32,
         /// After the protocol, shear-stabilise the packing (Dagois-Bohy et
         /// al. 2012): relax the cell's shape and volume (every strain) with
@@ -276,6 +277,14 @@ pub enum Protocol {
     },
 }
 
+/// `AboveJam`'s `rejams` when the file leaves it out: a packing that
+/// unjams on its way up is jammed again up to twice (an unjamming is rare,
+/// and two in a row rarer still: docs/reports/elasticity.md).
+pub const DEFAULT_REJAMS: u32 = 2;
+
+fn default_rejams() -> u32 {
+    DEFAULT_REJAMS
+}
 fn is_zero(n: &u32) -> bool {
     *n == 0
 }
