@@ -11,7 +11,6 @@ use jamkit_format::gsd::{self, File};
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::jamkit;
 
 const F32: f64 = f32::EPSILON as f64;
 
