@@ -160,7 +160,6 @@ pub struct FireParams {
     /// matrix (`Blocks`, [`crate::precon`]; FIRE only). Left out of the
     /// recorded settings when `Plain`, so that packings made before it
     /// existed still resume.
-    #[serde(skip_serializing_if = "Masses::is_plain")]
     pub masses: Masses,
     /// L-BFGS ([`crate::lbfgs`]): after `after` FIRE steps without
     /// convergence (`0`: from the start), L-BFGS iterations until a
@@ -178,7 +177,6 @@ pub struct FireParams {
     /// On by default; off in [`FireParams::paper`]. A packing's recorded
     /// settings leave it out when off, and where it does not act, so that
     /// packings made before it existed resume.
-    #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub unjam_forecast: bool,
 }
 
@@ -275,13 +273,6 @@ pub enum Masses {
     /// Block preconditioning: each body's own block of the stiffness
     /// matrix as its mass ([`crate::precon`]).
     Blocks(PreconParams),
-}
-
-impl Masses {
-    /// `Plain` (left out of recorded settings).
-    pub fn is_plain(&self) -> bool {
-        *self == Masses::Plain
-    }
 }
 
 impl Default for FireParams {

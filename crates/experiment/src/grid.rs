@@ -328,9 +328,10 @@ pub fn settings(experiment: &Experiment, point: &Point, seed: u64) -> serde_json
 }
 
 /// The protocol as a packing records it: as written to `experiment.ron`,
-/// except that `search: Bisection` is left out. Packings made before the
-/// field existed were bisection packings and record no `search`, so they
-/// still resume under an explicit `search: Bisection`; the others
+/// except that `search: Bisection` and `AboveJam`'s `rejams: 0` are left
+/// out. Packings made before these fields existed were bisection packings
+/// without re-jams and record neither, so they still resume under an
+/// explicit `search: Bisection` or `rejams: 0`; the others
 /// (`Adaptive`, the default, and `Extrapolated`) are always written, so no
 /// packing of one search is ever taken for another's.
 fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
@@ -340,20 +341,22 @@ fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
     {
         jam.remove("search");
     }
+    if let Some(above) = value.get_mut("AboveJam").and_then(|j| j.as_object_mut())
+        && above.get("rejams") == Some(&serde_json::json!(0))
+    {
+        above.remove("rejams");
+    }
     value
 }
 
 /// The minimiser as a packing records it: as resolved for the family
-/// (`FireParams::for_family`), except that `lbfgs: None` is left out.
-/// Packings made before the field existed ran without L-BFGS and record
-/// none, so they still resume under an explicit `lbfgs: None`; where the
-/// family's default is L-BFGS it is always written, so no packing of one
-/// minimiser is ever taken for the other's. `unjam_forecast` is recorded
-/// only where it acts (`Jam` and `AboveJam` with a search other than
-/// `Bisection`: `jamkit_engine::jam`) and is on (it is not written when
-/// off), so that packings made before it existed resume wherever it
-/// changes nothing, and under an explicit `unjam_forecast: false` where
-/// it would.
+/// (`FireParams::for_family`), with three fields left out where packings
+/// made before they existed hold them, so that those still resume under
+/// an explicit setting: `lbfgs: None` (they ran without L-BFGS),
+/// `masses: Plain`, and `unjam_forecast` where it is off or does not act
+/// (it acts in `Jam` and `AboveJam` with a search other than `Bisection`:
+/// `jamkit_engine::jam`). Where the family's default is L-BFGS it is always
+/// written, so no packing of one minimiser is ever taken for the other's.
 fn minimizer_settings(minimizer: &FireParams, protocol: &Protocol) -> serde_json::Value {
     let mut value = serde_json::to_value(minimizer).expect("minimizer serialises");
     let forecast_acts = matches!(
@@ -365,8 +368,11 @@ fn minimizer_settings(minimizer: &FireParams, protocol: &Protocol) -> serde_json
         if m.get("lbfgs") == Some(&serde_json::Value::Null) {
             m.remove("lbfgs");
         }
-        if !forecast_acts {
+        if !forecast_acts || m.get("unjam_forecast") == Some(&serde_json::Value::Bool(false)) {
             m.remove("unjam_forecast");
+        }
+        if m.get("masses") == Some(&serde_json::json!("Plain")) {
+            m.remove("masses");
         }
     }
     value

@@ -325,19 +325,19 @@ fn unwritten_setting(key: &str) -> Option<&'static str> {
             "\"Bisection\" (not written; the default before \"Extrapolated\": \
              add `search: Bisection` to the protocol to resume them)",
         ),
-        // Plain-mass packings record no masses (`Masses::is_plain`).
+        // Plain-mass packings record no masses (`grid::minimizer_settings`).
         "minimizer.masses" => Some(
             "\"Plain\" (not written; the default before the family's: \
              add `masses: Plain` to the minimizer to resume them)",
         ),
         // Packings of `rejams: 0`, the default before 2, record none
-        // (`schema::Protocol::AboveJam`).
+        // (`grid::protocol_settings`).
         "protocol.AboveJam.rejams" => Some(
             "0 (not written; the default before 2: add `rejams: 0` to the \
              protocol, or `--set protocol.rejams=0`, to resume them)",
         ),
         // Packings made without the unjamming forecast record none
-        // (`FireParams::unjam_forecast`).
+        // (`grid::minimizer_settings`).
         "minimizer.unjam_forecast" => Some(
             "false (not written; the default before true: add \
              `unjam_forecast: false` to the minimizer, or \

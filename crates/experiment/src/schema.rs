@@ -251,9 +251,10 @@ pub enum Protocol {
         /// into a state that jams above φ_J + δφ) is jammed again from
         /// where it stopped and compressed by δφ from its new φ_J, before
         /// the sample fails ([`DEFAULT_REJAMS`] by default). `0`: it fails
-        /// at once; not written out, as in packings made before the field
-        /// existed, so that those resume under `rejams: 0`.
-        #[serde(default = "default_rejams", skip_serializing_if = "is_zero")]
+        /// at once; a packing's recorded settings leave it out at 0, as
+        /// in packings made before the field existed, so that those resume
+        /// under `rejams: 0`.
+        #[serde(default = "default_rejams")]
         rejams: u32,
         /// After the protocol, shear-stabilise the packing (Dagois-Bohy et
         /// al. 2012): relax the cell's shape and volume (every strain) with
@@ -284,9 +285,6 @@ pub const DEFAULT_REJAMS: u32 = 2;
 
 fn default_rejams() -> u32 {
     DEFAULT_REJAMS
-}
-fn is_zero(n: &u32) -> bool {
-    *n == 0
 }
 fn default_phi_start() -> f64 {
     0.1

@@ -90,3 +90,35 @@ fn unknown_key_is_named() {
         .to_string();
     assert!(err.contains("not a valid experiment"), "{err}");
 }
+
+/// An override edits one field and keeps every other as the file set it,
+/// including settings that differ from their defaults and that a packing's
+/// record leaves out (`unjam_forecast: false`, `masses: Plain`,
+/// `rejams: 0`): the experiment goes through its serialised form and back.
+#[test]
+fn an_override_keeps_the_other_fields_that_differ_from_their_defaults() {
+    let jam = Experiment::from_ron(
+        r#"(name: "t", family: "sphere", particles: 16,
+            minimizer: (unjam_forecast: false, masses: Plain, force_criterion: Sum))"#,
+        "t",
+    )
+    .unwrap();
+    let edited = apply(&jam, &["seed=2".into()]).unwrap();
+    assert_eq!(edited.seed, 2);
+    assert_eq!(edited.minimizer, jam.minimizer);
+    assert!(!edited.minimizer.unjam_forecast);
+    assert_eq!(edited.minimizer.masses, jamkit_engine::Masses::Plain);
+
+    let above = Experiment::from_ron(
+        r#"(name: "t", family: "sphere", particles: 16,
+            protocol: AboveJam(delta_phi: 1e-3, rejams: 0))"#,
+        "t",
+    )
+    .unwrap();
+    let edited = apply(&above, &["samples=2".into()]).unwrap();
+    assert_eq!(edited.protocol, above.protocol);
+    match edited.protocol {
+        schema::Protocol::AboveJam { rejams, .. } => assert_eq!(rejams, 0),
+        other => panic!("expected AboveJam, got {other:?}"),
+    }
+}
