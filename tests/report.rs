@@ -66,6 +66,36 @@ fn report_writes_figures_fits_and_summary() {
     assert!(md.contains("ω₁ ∝ Δ"));
 }
 
+/// Runs of the exact gap alone (as `experiments/rough/large_n.ron`) get
+/// the paper's figures of that gap model, and the summary says which.
+#[test]
+fn report_of_exact_gap_runs_draws_their_figures() {
+    let runs = tempfile::tempdir().unwrap();
+    let out = tempfile::tempdir().unwrap();
+    for (n, delta) in [(2, "[0.01, 0.3]"), (16, "[0.01, 0.05]")] {
+        let text = format!(
+            r#"(name: "exact", family: "fourier",
+            params: {{"n": {n}, "delta": {delta}, "gap": "Exact"}}, particles: 16, samples: 1,
+            observables: [Contacts])"#
+        );
+        let e = Experiment::from_ron(&text, "inline").unwrap();
+        common::run_ok(&e, runs.path(), 2);
+    }
+    let r = jamkit_report::report(
+        &[runs.path().to_path_buf()],
+        out.path(),
+        &jamkit_report::Options::default(),
+    )
+    .unwrap();
+    assert!(
+        r.markdown
+            .contains("the figures are those of the `Exact` gap model"),
+        "{}",
+        r.markdown
+    );
+    assert!(out.path().join("fig07_phi_j.png").exists());
+}
+
 #[test]
 fn report_refuses_directories_without_near_disks() {
     let empty = tempfile::tempdir().unwrap();

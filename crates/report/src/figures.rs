@@ -122,9 +122,22 @@ pub struct Report {
 pub fn report(dirs: &[PathBuf], out: &Path, options: &Options) -> Result<Report, ReportError> {
     let (all, skipped) = load(dirs)?;
     // The paper's figures are those of its first-order gap; packings with
-    // another gap model enter Fig. 5 only (as more near-disk series).
-    let (points, other_gaps): (Vec<Point>, Vec<Point>) =
+    // another gap model enter Fig. 5 only (as more near-disk series). Runs
+    // of one other gap model alone (e.g. the exact gap throughout) give
+    // the figures of that model.
+    let (mut points, mut other_gaps): (Vec<Point>, Vec<Point>) =
         all.into_iter().partition(|p| p.gap == GapModel::FirstOrder);
+    let mut gap_note = None;
+    if points.is_empty()
+        && let Some(first) = other_gaps.first().map(|p| p.gap)
+        && other_gaps.iter().all(|p| p.gap == first)
+    {
+        gap_note = Some(format!(
+            "The runs hold no packings of the paper's first-order gap: the figures are \
+             those of the `{first:?}` gap model."
+        ));
+        points = std::mem::take(&mut other_gaps);
+    }
     if points.is_empty() {
         let list: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
         return Err(ReportError::NoData(list.join(", ")));
@@ -149,7 +162,7 @@ pub fn report(dirs: &[PathBuf], out: &Path, options: &Options) -> Result<Report,
         figures: Vec::new(),
         fits: Vec::new(),
         claims: Vec::new(),
-        notes: Vec::new(),
+        notes: gap_note.into_iter().collect(),
     };
     // Fig. 5 (ellipses) is drawn only when the runs hold ellipse packings;
     // those are not near-disk packings, but are not "left out" either.
@@ -318,6 +331,11 @@ impl Builder {
                 line: false,
             });
         }
+        let guides = if sym == "n" {
+            convex_limits(&ns, &phi)
+        } else {
+            Vec::new()
+        };
         self.save(
             "fig07_phi_j",
             Figure {
@@ -327,7 +345,7 @@ impl Builder {
                 log_x: true,
                 log_y: false,
                 series: phi,
-                guides: Vec::new(),
+                guides,
                 legend: SeriesLabelPosition::LowerRight,
             },
         )?;
@@ -984,6 +1002,33 @@ fn mean(v: &[&f64]) -> Option<f64> {
     Some(v.iter().copied().sum::<f64>() / v.len() as f64)
 }
 
+/// A dashed vertical line at each near-disk mode's convex limit
+/// `Δ = 1/(n + 1/n)` that falls within the Δ of the series (one series per
+/// mode, in the order of `ns`), in the colour of its mode's series; the
+/// first drawn carries the legend.
+fn convex_limits(ns: &[u32], series: &[Series]) -> Vec<Guide> {
+    let (lo, hi) = x_span(series);
+    let mut guides: Vec<Guide> = Vec::new();
+    for (k, &n) in ns.iter().enumerate() {
+        let limit = jamkit_fourier::NearDisk::convex_limit(n);
+        if !(lo..=hi).contains(&limit) {
+            continue;
+        }
+        let label = if guides.is_empty() {
+            "convex limit Δ = 1/(n + 1/n)".to_string()
+        } else {
+            String::new()
+        };
+        guides.push(Guide {
+            label,
+            // Clipped to the figure's box, so it spans the whole height.
+            points: vec![(limit, -1e3), (limit, 1e3)],
+            series: Some(k),
+        });
+    }
+    guides
+}
+
 /// Smallest and largest positive `x` of the series.
 fn x_span(series: &[Series]) -> (f64, f64) {
     series
@@ -1186,7 +1231,28 @@ fn phi_order(by_delta: &[(u32, PhiSeries)], sym: &str) -> (String, &'static str)
 
 #[cfg(test)]
 mod tests {
-    use super::phi_order;
+    use super::{Series, convex_limits, phi_order};
+
+    /// n = 2, 4, 5 at Δ from 0.01 to 0.3: the limits of n = 4 (0.235) and
+    /// 5 (0.192) are drawn in their series' colours, the first with the
+    /// legend; n = 2's (0.4) lies beyond the data and is left out.
+    #[test]
+    fn convex_limits_inside_the_data_are_drawn_in_their_modes_colours() {
+        let series: Vec<Series> = (0..3)
+            .map(|_| Series {
+                label: String::new(),
+                points: vec![(0.01, 0.84, 0.001), (0.3, 0.88, 0.001)],
+                line: false,
+            })
+            .collect();
+        let guides = convex_limits(&[2, 4, 5], &series);
+        assert_eq!(guides.len(), 2);
+        assert_eq!(guides[0].series, Some(1));
+        assert_eq!(guides[1].series, Some(2));
+        assert!((guides[0].points[0].0 - 4.0 / 17.0).abs() < 1e-15);
+        assert!((guides[1].points[0].0 - 5.0 / 26.0).abs() < 1e-15);
+        assert!(!guides[0].label.is_empty() && guides[1].label.is_empty());
+    }
 
     /// Three n at two Δ, φ_J with s.e.m. 0.001: told apart by 0.01 (10
     /// s.e.), tied by 0.001 (0.7 s.e.), inverted by 0.01.

@@ -17,7 +17,7 @@ use std::path::Path;
 /// line there.
 #[derive(Clone, Debug)]
 pub struct Series {
-    /// Legend text.
+    /// Legend text (empty: not in the legend).
     pub label: String,
     /// Points.
     pub points: Vec<(f64, f64, f64)>,
@@ -29,7 +29,7 @@ pub struct Series {
 /// given by points, drawn dashed.
 #[derive(Clone, Debug)]
 pub struct Guide {
-    /// Legend text.
+    /// Legend text (empty: not in the legend).
     pub label: String,
     /// Points of the curve (two suffice for a power law).
     pub points: Vec<(f64, f64)>,
@@ -277,15 +277,18 @@ impl Figure {
             if pts.len() < 2 {
                 continue;
             }
-            chart
-                .draw_series(std::iter::once(DashedPathElement::new(
-                    pts,
-                    8,
-                    6,
-                    color.stroke_width(2),
-                )))?
-                .label(g.label.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 12, y)], color));
+            let drawn = chart.draw_series(std::iter::once(DashedPathElement::new(
+                pts,
+                8,
+                6,
+                color.stroke_width(2),
+            )))?;
+            // A guide without a label stays out of the legend.
+            if !g.label.is_empty() {
+                drawn
+                    .label(g.label.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 12, y)], color));
+            }
         }
         chart
             .configure_series_labels()

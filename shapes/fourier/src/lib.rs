@@ -520,6 +520,15 @@ impl NearDisk {
         self.shape.is_convex()
     }
 
+    /// The convex limit of the one-mode outline `R⁰[1 + Δ sin(nθ)/n]`:
+    /// convex for `Δ < 1/(n + 1/n)`. The curvature numerator
+    /// `r² + 2r'² − r r''` first vanishes at the troughs (`sin nθ = −1`,
+    /// `r' = 0`), where it is `r (r − Δ n)` with `r = 1 − Δ/n`.
+    pub fn convex_limit(n: u32) -> f64 {
+        let n = f64::from(n);
+        1.0 / (n + 1.0 / n)
+    }
+
     /// Area in units of `(R⁰)²`: `π [1 + Δ² ⟨F²⟩]` with
     /// `⟨F²⟩ = (1/2π)∫F² = ½ Σ_{k,l: n_k = n_l} a_k a_l cos(b_k − b_l)`.
     pub fn relative_area(&self) -> f64 {
@@ -893,6 +902,24 @@ mod tests {
         );
         assert!(fourier(2, 0.1).is_convex());
         assert!(!fourier(5, 0.5).is_convex());
+    }
+
+    /// `convex_limit` against the sampled curvature of `is_convex`: convex
+    /// 0.1 % below the limit, not 0.1 % above it (8192 angles resolve the
+    /// troughs' curvature far finer than that).
+    #[test]
+    fn the_convex_limit_separates_convex_and_non_convex_outlines() {
+        for n in [2, 3, 4, 5, 8, 16, 32] {
+            let limit = NearDisk::convex_limit(n);
+            assert!(
+                fourier(n, 0.999 * limit).is_convex(),
+                "n = {n} below {limit}"
+            );
+            assert!(
+                !fourier(n, 1.001 * limit).is_convex(),
+                "n = {n} above {limit}"
+            );
+        }
     }
 
     /// The lane kernel (`contacts_lanes`) gives the contacts of `contacts`
