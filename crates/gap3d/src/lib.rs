@@ -203,13 +203,8 @@
 //! ([`joint_fallbacks`]). Converged after a step below 10⁻⁷ on all three
 //! unit vectors, the same tolerance as the nested solve's: the error left
 //! is `~10⁻¹⁴` in the normal and the support points and `~10⁻²⁸` in `h`
-//! (`L` is stationary). After a Newton step of length `L` below 10⁻⁵ one
-//! chord step follows instead of another linearisation: the residuals at
-//! the point reached, solved with the same `A⁺`, `B` and factor of `W`,
-//! which leaves `O(L³)` ≈ 10⁻¹⁵; it ends the iteration when it is below
-//! 10⁻⁹ (`O(L²)`, the linearisation holding), else the Newton steps go
-//! on. The result carries the supports at the final point (the support
-//! Hessian `R B A⁺ Bᵀ Rᵀ` there with `hessians`), so
+//! (`L` is stationary). The result carries the supports at the final
+//! point (the support Hessian `R B A⁺ Bᵀ Rᵀ` there with `hessians`), so
 //! [`ExactGap3::contact`] and [`ExactGap3::hessian`] serve both solvers.
 //! It is not the nested solve's result bit for bit: the two stop at
 //! different points within ~10⁻¹⁴ of the optimum.
@@ -907,8 +902,6 @@ where
 struct Linearised {
     /// The support search's own Newton step `A⁺ t` (body frame).
     n: Vector<3>,
-    /// `A⁺` (body frame, `P (A + y yᵀ)⁻¹`), kept for the chord step.
-    inv: Matrix<3>,
     /// `A⁺ Bᵀ Rᵀ`: how the support's `y` follows a turn of the direction
     /// (world tangent vector to body tangent vector).
     follow: Matrix<3>,
@@ -958,11 +951,9 @@ where
     let g = at.g - y * y.dot(&at.g);
     let b = proj * at.rho + y * g.transpose();
     let rot = Matrix::<3>::from_columns(body.columns);
-    let inv = proj * inv;
     Some(Linearised {
-        n: inv * t,
-        inv,
-        follow: inv * b.transpose() * rot.transpose(),
+        n: proj * (inv * t),
+        follow: proj * (inv * b.transpose()) * rot.transpose(),
         b: rot * b,
         x: body.to_world(&(y * at.rho)),
         phi: at.rho * ub.dot(&y),
@@ -1260,80 +1251,18 @@ where
         at_i = body_i.at(yi, &ub_i);
         at_j = body_j.at(yj, &ub_j);
         if len < 1e-7 {
-            return Some(joint_result(
-                r_ij, body_i, body_j, u, at_i, at_j, iterations, hessians,
-            ));
-        }
-        if len < CHORD_BELOW {
-            // One chord step: the residuals at the point reached, through
-            // this step's linearisation (its A⁺, B, follow and factor of W).
-            let (ti, tj) = (tangent(&ub_i, &at_i).0, tangent(&ub_j, &at_j).0);
-            let (ni, nj) = (li.inv * ti, lj.inv * tj);
-            let x_i = body_i.to_world(&(at_i.y * at_i.rho));
-            let x_j = body_j.to_world(&(at_j.y * at_j.rho));
-            let p = Matrix::<3>::identity() - u * u.transpose();
-            let du = c.solve(&(p * (r_ij - x_i + x_j - li.b * ni + lj.b * nj)));
-            let du = du - u * u.dot(&du);
-            let dyi = ni + li.follow * du;
-            let dyj = nj - lj.follow * du;
-            let (dyi, dyj) = (dyi - yi * yi.dot(&dyi), dyj - yj * yj.dot(&dyj));
-            let chord = du.norm().max(dyi.norm()).max(dyj.norm());
-            if chord < CHORD_ACCEPT {
-                iterations += 1;
-                let u = along_sphere(&u, &du);
-                let (yi, yj) = (along_sphere(&yi, &dyi), along_sphere(&yj, &dyj));
-                let (ub_i, ub_j) = (body_i.to_body(&u), body_j.to_body(&-u));
-                let (at_i, at_j) = (body_i.at(yi, &ub_i), body_j.at(yj, &ub_j));
-                return Some(joint_result(
-                    r_ij, body_i, body_j, u, at_i, at_j, iterations, hessians,
-                ));
-            }
+            let jet_i = body_i.jet(&ub_i, at_i, hessians);
+            let jet_j = body_j.jet(&ub_j, at_j, hessians);
+            return Some(ExactGap3 {
+                normal: u,
+                gap: u.dot(r_ij) - jet_i.h - jet_j.h,
+                jet_i,
+                jet_j,
+                iterations,
+                converged: true,
+            });
         }
         last = len;
-    }
-}
-
-/// A Newton step of [`joint_iterate`] below this length is followed by one
-/// chord step (the residuals at the point reached, solved with the step's
-/// own linearisation) instead of another linearisation: the error after a Newton
-/// step of length `L` is `O(L²)`, after the chord step `O(L³)`, so below
-/// 10⁻⁵ it is `~10⁻¹⁵`, under the Newton finish's `~10⁻¹⁴` (a last step
-/// below 10⁻⁷).
-const CHORD_BELOW: f64 = 1e-5;
-
-/// The chord step is taken, and the iteration stops, when it is below this
-/// length (it is `O(L²)` ≤ `~10⁻¹⁰` when the linearisation holds);
-/// otherwise the Newton iteration goes on from there.
-const CHORD_ACCEPT: f64 = 1e-9;
-
-/// The result of [`joint_iterate`] at the normal `u` and the supports'
-/// radial jets `at_i`, `at_j` (read at `u` and `−u`).
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn joint_result<F, G>(
-    r_ij: &Vector<3>,
-    body_i: &RadialBody<'_, F>,
-    body_j: &RadialBody<'_, G>,
-    u: Vector<3>,
-    at_i: At,
-    at_j: At,
-    iterations: u32,
-    hessians: bool,
-) -> ExactGap3
-where
-    F: Radial,
-    G: Radial,
-{
-    let (ub_i, ub_j) = (body_i.to_body(&u), body_j.to_body(&-u));
-    let jet_i = body_i.jet(&ub_i, at_i, hessians);
-    let jet_j = body_j.jet(&ub_j, at_j, hessians);
-    ExactGap3 {
-        normal: u,
-        gap: u.dot(r_ij) - jet_i.h - jet_j.h,
-        jet_i,
-        jet_j,
-        iterations,
-        converged: true,
     }
 }
 

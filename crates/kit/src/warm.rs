@@ -151,3 +151,55 @@ pub fn assert_memo_ignored<S: Shape<3, Orientation = Quaternion>>(
     assert_eq!(got, s.pair_contacts(pair, 0.0));
     assert_eq!(memo, Some([0.3; MEMO_LEN]));
 }
+
+/// [`assert_empty_memo_is_cold`] on 30 pairs `random_pair` draws for each
+/// of `shapes`, and [`assert_memo_ignored`] on each shape turned into one
+/// that ignores the memo by `memo_off`.
+pub fn check_empty_memos<S, R, P, M>(shapes: &[S], rng: &mut R, random_pair: P, memo_off: M)
+where
+    S: Shape<3, Orientation = Quaternion>,
+    R: Rng,
+    P: Fn(&S, &mut R) -> Pair<3, Quaternion>,
+    M: Fn(&S) -> S,
+{
+    for s in shapes {
+        let off = memo_off(s);
+        for _ in 0..30 {
+            let pair = random_pair(s, rng);
+            assert_empty_memo_is_cold(s, &pair);
+            assert_memo_ignored(&off, &pair);
+        }
+    }
+}
+
+/// The largest difference of warm and cold contacts ([`distance`]) over
+/// [`memo_scenarios`] from 25 pairs `random_pair` draws for each of
+/// `shapes`; with `same_pairs`, the warm and cold lists must also have the
+/// same length (no pair skipped by one and reported by the other).
+pub fn worst_against_cold<S, R, P>(
+    shapes: &[S],
+    rng: &mut R,
+    random_pair: P,
+    same_pairs: bool,
+) -> f64
+where
+    S: Shape<3, Orientation = Quaternion>,
+    R: Rng,
+    P: Fn(&S, &mut R) -> Pair<3, Quaternion>,
+{
+    let mut worst: f64 = 0.0;
+    for s in shapes {
+        for _ in 0..25 {
+            let (pair, other) = (random_pair(s, rng), random_pair(s, rng));
+            memo_scenarios(s, &pair, &other, rng, |p, max_gap, mut memo| {
+                let got = warm(s, p, max_gap, &mut memo);
+                let cold = s.pair_contacts(p, max_gap);
+                if same_pairs {
+                    assert_eq!(got.len(), cold.len(), "{got:?} vs {cold:?}");
+                }
+                worst = worst.max(distance(&got, &cold));
+            });
+        }
+    }
+    worst
+}

@@ -371,7 +371,8 @@ impl Ellipsoid {
         r_ij: &Vector<3>,
         max_gap: f64,
     ) -> Option<ExactGap3> {
-        let (_, si, sj) = self.supports(size_i, o_i, size_j, o_j, r_ij, max_gap)?;
+        let pair = Pair::new(size_i, *o_i, size_j, *o_j, *r_ij);
+        let (_, si, sj) = self.supports(&pair, max_gap)?;
         gap3d::exact(r_ij, |u| si.jet(u), |u| sj.jet(u), max_gap)
     }
 
@@ -393,14 +394,7 @@ impl Ellipsoid {
         memo: &mut PairMemo,
     ) -> Option<ExactGap3> {
         let r_ij = &pair.r_ij;
-        let (ci, si, sj) = self.supports(
-            pair.size_i,
-            &pair.o_i,
-            pair.size_j,
-            &pair.o_j,
-            r_ij,
-            max_gap,
-        )?;
+        let (ci, si, sj) = self.supports(pair, max_gap)?;
         let start = memo.as_ref().and_then(|m| {
             gap3d::normal_from_offset(&Vector::<3>::new(m[0], m[1], m[2]), r_ij, &ci)
         });
@@ -428,19 +422,16 @@ impl Ellipsoid {
     #[inline(always)]
     fn supports(
         &self,
-        size_i: f64,
-        o_i: &Quaternion,
-        size_j: f64,
-        o_j: &Quaternion,
-        r_ij: &Vector<3>,
+        pair: &Pair<3, Quaternion>,
         max_gap: f64,
     ) -> Option<([Vector<3>; 3], QuadraticSupport, QuadraticSupport)> {
+        let (size_i, size_j, r_ij) = (pair.size_i, pair.size_j, &pair.r_ij);
         // h ≥ r − (longest semi-axes): skip pairs certainly apart.
         let r = r_ij.norm();
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return None;
         }
-        let (ci, cj) = (o_i.columns(), o_j.columns());
+        let (ci, cj) = (pair.o_i.columns(), pair.o_j.columns());
         // h ≥ g(r̂) = r − s_i(r̂) − s_j(−r̂), with s(u) = |diag(a, b, c) Qᵀ u|:
         // skip before building the quadratic forms (`gap3d::exact` makes
         // the same test again, on the forms, for pairs that get there).

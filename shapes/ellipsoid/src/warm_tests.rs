@@ -6,11 +6,7 @@
 //! empty memo, and fewer steps after a small move.
 
 use super::*;
-use jamkit_core::ShapeExt;
-use jamkit_kit::warm::{
-    assert_empty_memo_is_cold, assert_memo_ignored, direction, distance, memo_scenarios, nudged,
-    warm,
-};
+use jamkit_kit::warm::{check_empty_memos, direction, nudged, worst_against_cold};
 use rand::{RngExt, SeedableRng};
 
 type Rng8 = rand_chacha::ChaCha8Rng;
@@ -57,13 +53,9 @@ const AGREE: f64 = 1e-13;
 #[test]
 fn an_empty_memo_gives_the_cold_contacts_bit_for_bit() {
     let mut rng = Rng8::seed_from_u64(21);
-    for s in shapes() {
-        for _ in 0..30 {
-            let pair = random_pair(&s, &mut rng);
-            assert_empty_memo_is_cold(&s, &pair);
-            assert_memo_ignored(&s.clone().with_warm_start(false), &pair);
-        }
-    }
+    check_empty_memos(&shapes(), &mut rng, random_pair, |s| {
+        s.clone().with_warm_start(false)
+    });
 }
 
 /// Whatever the memo holds, the warm contacts are the cold ones to
@@ -73,18 +65,7 @@ fn an_empty_memo_gives_the_cold_contacts_bit_for_bit() {
 #[test]
 fn warm_contacts_agree_with_cold_ones_whatever_the_memo() {
     let mut rng = Rng8::seed_from_u64(22);
-    let mut worst: f64 = 0.0;
-    for s in shapes() {
-        for _ in 0..25 {
-            let (pair, other) = (random_pair(&s, &mut rng), random_pair(&s, &mut rng));
-            memo_scenarios(&s, &pair, &other, &mut rng, |p, max_gap, mut memo| {
-                let got = warm(&s, p, max_gap, &mut memo);
-                let cold = s.pair_contacts(p, max_gap);
-                assert_eq!(got.len(), cold.len(), "{got:?} vs {cold:?}");
-                worst = worst.max(distance(&got, &cold));
-            });
-        }
-    }
+    let worst = worst_against_cold(&shapes(), &mut rng, random_pair, true);
     assert!(worst <= AGREE, "warm against cold: {worst:e}");
 }
 

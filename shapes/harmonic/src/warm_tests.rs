@@ -7,11 +7,7 @@
 
 use super::tests::{mixed, single};
 use super::*;
-use jamkit_core::ShapeExt;
-use jamkit_kit::warm::{
-    assert_empty_memo_is_cold, assert_memo_ignored, direction, distance, memo_scenarios, nudged,
-    warm,
-};
+use jamkit_kit::warm::{check_empty_memos, direction, nudged, worst_against_cold};
 use rand::{RngExt, SeedableRng};
 
 /// Convex exact-gap bodies with the joint solver: zonal `l = 2` at
@@ -80,13 +76,9 @@ const AGREE: f64 = 1e-13;
 #[test]
 fn an_empty_memo_gives_the_cold_contacts_bit_for_bit() {
     let mut rng = Rng8::seed_from_u64(11);
-    for s in shapes() {
-        for _ in 0..30 {
-            let pair = random_pair(&s, &mut rng);
-            assert_empty_memo_is_cold(&s, &pair);
-            assert_memo_ignored(&s.clone().with_exact_solver(ExactSolver::Nested), &pair);
-        }
-    }
+    check_empty_memos(&shapes(), &mut rng, random_pair, |s| {
+        s.clone().with_exact_solver(ExactSolver::Nested)
+    });
 }
 
 /// Whatever the memo holds, the warm contacts are the cold ones to
@@ -95,16 +87,7 @@ fn an_empty_memo_gives_the_cold_contacts_bit_for_bit() {
 #[test]
 fn warm_contacts_agree_with_cold_ones_whatever_the_memo() {
     let mut rng = Rng8::seed_from_u64(12);
-    let mut worst: f64 = 0.0;
-    for s in shapes() {
-        for _ in 0..25 {
-            let (pair, other) = (random_pair(&s, &mut rng), random_pair(&s, &mut rng));
-            memo_scenarios(&s, &pair, &other, &mut rng, |p, max_gap, mut memo| {
-                let got = warm(&s, p, max_gap, &mut memo);
-                worst = worst.max(distance(&got, &s.pair_contacts(p, max_gap)));
-            });
-        }
-    }
+    let worst = worst_against_cold(&shapes(), &mut rng, random_pair, false);
     assert!(worst <= AGREE, "warm against cold: {worst:e}");
 }
 
