@@ -429,24 +429,40 @@ where
     I: SupportAt,
     J: SupportAt,
 {
-    let eval = |u: &Vector<3>| {
-        let ji = sup_i(u);
-        let jj = sup_j(&-u);
-        let g = u.dot(r_ij) - ji.value() - jj.value();
-        let t = r_ij - ji.point() + jj.point() - u * g;
-        Eval { g, t, ji, jj }
-    };
+    exact_warm(r_ij, sup_i, sup_j, None, max_gap, hessians)
+}
+
+/// `g(u)` and its tangent gradient `t` with the two supports read at `u`
+/// and `−u`.
+#[inline(always)]
+fn evaluate<A, B, I, J>(r_ij: &Vector<3>, sup_i: &A, sup_j: &B, u: &Vector<3>) -> Eval<I, J>
+where
+    A: Fn(&Vector<3>) -> I,
+    B: Fn(&Vector<3>) -> J,
+    I: SupportAt,
+    J: SupportAt,
+{
+    let ji = sup_i(u);
+    let jj = sup_j(&-u);
+    let g = u.dot(r_ij) - ji.value() - jj.value();
+    let t = r_ij - ji.point() + jj.point() - u * g;
+    Eval { g, t, ji, jj }
+}
+
+/// The safeguarded Newton ascent of [`exact_with`] from the unit vector
+/// `u`, where `eval` gave `cur`.
+#[inline(always)]
+fn ascend<E, I, J>(eval: &E, mut u: Vector<3>, mut cur: Eval<I, J>, hessians: bool) -> ExactGap3
+where
+    E: Fn(&Vector<3>) -> Eval<I, J>,
+    I: SupportAt,
+    J: SupportAt,
+{
     // W = S_i + S_j + g P at the point a Newton step starts from.
     let w = |e: &Eval<I, J>, u: &Vector<3>| {
         let p = Matrix::<3>::identity() - u * u.transpose();
         e.ji.hess() + e.jj.hess() + p * e.g
     };
-    let r = r_ij.norm();
-    let mut u = if r > 0.0 { r_ij / r } else { Vector::<3>::x() };
-    let mut cur = eval(&u);
-    if cur.g > max_gap {
-        return None;
-    }
     let mut converged = false;
     let mut iterations = 0;
     while iterations < 60 {
@@ -491,14 +507,100 @@ where
         u = next_u;
         cur = next;
     }
-    Some(ExactGap3 {
+    ExactGap3 {
         normal: u,
         gap: cur.g,
         jet_i: jet_of(&cur.ji, hessians),
         jet_j: jet_of(&cur.jj, hessians),
         iterations,
         converged,
-    })
+    }
+}
+
+/// [`exact_with`] started at the unit vector `start` (where given)
+/// instead of the line of centres: the warm start of a pair whose last
+/// solve ended near there (its normal kept by [`normal_offset`], read back
+/// by [`normal_from_offset`]). The result is the cold solve's optimum to
+/// the iteration's tolerance, or the cold solve's result bit for bit:
+///
+/// * `None` exactly where [`exact_with`] gives `None` (`g(r̂) > max_gap`,
+///   read first);
+/// * the ascent from `start` is accepted when `start` and its end lie in
+///   the cap `n·r̂ ≥ 1/2` about the line of centres, `g(start) ≥ g(r̂)`
+///   and it converged. The ascent never lowers `g`, so it ends at a local
+///   maximum above `g(r̂)`. Where `h > 0` that is the maximum: `G` is
+///   concave and homogeneous of degree 1, so at a local maximum `u` on the
+///   sphere with `g(u) > 0` no point of the unit ball does better near it
+///   (`G(t v) = t G(v)`), and a local maximum of a concave function on a
+///   convex set is the global one. For the shallow overlaps of a jamming
+///   run (`|h|` far below the radii of curvature) `g` has one maximum on
+///   the cap (module documentation, NOTE);
+/// * otherwise (and with no `start`) the cold ascent from `r̂`, bit for
+///   bit [`exact_with`].
+#[inline]
+pub fn exact_warm<A: Fn(&Vector<3>) -> I, B: Fn(&Vector<3>) -> J, I: SupportAt, J: SupportAt>(
+    r_ij: &Vector<3>,
+    sup_i: A,
+    sup_j: B,
+    start: Option<&Vector<3>>,
+    max_gap: f64,
+    hessians: bool,
+) -> Option<ExactGap3> {
+    let eval = |u: &Vector<3>| evaluate(r_ij, &sup_i, &sup_j, u);
+    let cap = Cap::new(r_ij);
+    let cold = eval(&cap.r_hat);
+    if cold.g > max_gap {
+        return None;
+    }
+    if let Some(start) = start.filter(|s| cap.contains(s)) {
+        let warm = eval(start);
+        if warm.g >= cold.g {
+            let e = ascend(&eval, *start, warm, hessians);
+            if e.converged && cap.contains(&e.normal) && e.gap >= cold.g {
+                return Some(e);
+            }
+        }
+    }
+    Some(ascend(&eval, cap.r_hat, cold, hessians))
+}
+
+/// What a pair keeps of its last normal `n` for a warm start
+/// ([`exact_warm`], [`JointStart`]): `Q_iᵀ(n − r̂)`, the normal relative to
+/// the line of centres in body `i`'s frame (`columns_i` the columns of
+/// `Q_i`), so that a pair that moved or turned as a whole starts where its
+/// optimum moved to.
+#[inline]
+pub fn normal_offset(
+    normal: &Vector<3>,
+    r_ij: &Vector<3>,
+    columns_i: &[Vector<3>; 3],
+) -> Vector<3> {
+    in_frame(columns_i, &(normal - unit_or_x(r_ij)))
+}
+
+/// The start [`normal_offset`] encoded, read at the separation `r_ij` and
+/// orientation `columns_i`: `n₀ ∝ r̂ + Q_i a`; `None` where that vanishes.
+#[inline]
+pub fn normal_from_offset(
+    a: &Vector<3>,
+    r_ij: &Vector<3>,
+    columns_i: &[Vector<3>; 3],
+) -> Option<Vector<3>> {
+    let [c0, c1, c2] = columns_i;
+    unit(unit_or_x(r_ij) + (c0 * a[0] + c1 * a[1] + c2 * a[2]))
+}
+
+/// `Qᵀ v` for the rotation with the columns `c`.
+#[inline(always)]
+fn in_frame(c: &[Vector<3>; 3], v: &Vector<3>) -> Vector<3> {
+    Vector::<3>::new(c[0].dot(v), c[1].dot(v), c[2].dot(v))
+}
+
+/// `x/|x|`, `None` where `|x|` is zero or not finite.
+#[inline(always)]
+fn unit(x: Vector<3>) -> Option<Vector<3>> {
+    let n = x.norm();
+    (n > 0.0 && n.is_finite()).then(|| x / n)
 }
 
 /// Where a [`radial_support`] search ended.
@@ -613,7 +715,7 @@ impl RadialFound {
 #[inline]
 pub fn radial_support<F>(u: &Vector<3>, start: &Vector<3>, radial: F) -> RadialSupport
 where
-    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    F: Radial,
 {
     radial_search(u, start, radial).support()
 }
@@ -623,7 +725,7 @@ where
 #[inline]
 pub fn radial_search<F>(u: &Vector<3>, start: &Vector<3>, radial: F) -> RadialFound
 where
-    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    F: Radial,
 {
     let at = |y: Vector<3>| {
         let (rho, g, h) = radial(&y);
@@ -718,6 +820,13 @@ impl std::str::FromStr for ExactSolver {
     }
 }
 
+/// A radial function in a body's frame: `ρ`, `∇ρ̃` and `∇∇ρ̃` at a unit
+/// vector `y`, with `ρ̃(x) = ρ(x/|x|)` constant along rays (what
+/// [`radial_support`] and [`RadialBody`] read).
+pub trait Radial: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>) {}
+
+impl<T: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>)> Radial for T {}
+
 /// A star-shaped body `x(y) = ρ(y) y` placed in the world, as
 /// [`exact_joint`] reads it: the columns of its rotation (body to world)
 /// and its radial function in the body frame (`ρ`, `∇ρ̃`, `∇∇ρ̃` at a unit
@@ -732,7 +841,7 @@ pub struct RadialBody<'a, F> {
 
 impl<F> RadialBody<'_, F>
 where
-    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    F: Radial,
 {
     /// `Rᵀ v`.
     #[inline(always)]
@@ -832,7 +941,7 @@ fn spd_inverse(m: &Matrix<3>) -> Option<Matrix<3>> {
 #[inline(always)]
 fn linearise<F>(body: &RadialBody<'_, F>, ub: &Vector<3>, at: &At) -> Option<Linearised>
 where
-    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    F: Radial,
 {
     let y = at.y;
     let (t, big) = tangent(ub, at);
@@ -884,8 +993,8 @@ pub fn exact_joint<F, G, N>(
     nested: N,
 ) -> Option<ExactGap3>
 where
-    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
-    G: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    F: Radial,
+    G: Radial,
     N: FnOnce() -> Option<ExactGap3>,
 {
     match exact_joint_alone(r_ij, body_i, body_j, max_gap, hessians) {
@@ -926,11 +1035,10 @@ pub fn exact_joint_alone<F, G>(
     hessians: bool,
 ) -> Joint
 where
-    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
-    G: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    F: Radial,
+    G: Radial,
 {
-    let r = r_ij.norm();
-    let u = if r > 0.0 { r_ij / r } else { Vector::<3>::x() };
+    let u = unit_or_x(r_ij);
     // The nested solve's first evaluation, the same bits: both supports
     // searched to convergence at the line of centres, each from the
     // direction itself.
@@ -974,14 +1082,10 @@ impl JointStart {
         columns_i: &[Vector<3>; 3],
         columns_j: &[Vector<3>; 3],
     ) -> [f64; MEMO_LEN] {
-        let r_hat = unit_or_x(r_ij);
         let n = e.normal;
-        let frame = |c: &[Vector<3>; 3], v: &Vector<3>| {
-            Vector::<3>::new(c[0].dot(v), c[1].dot(v), c[2].dot(v))
-        };
-        let a = frame(columns_i, &(n - r_hat));
-        let di = frame(columns_i, &e.jet_i.point).normalize() - frame(columns_i, &n);
-        let dj = frame(columns_j, &e.jet_j.point).normalize() + frame(columns_j, &n);
+        let a = normal_offset(&n, r_ij, columns_i);
+        let di = in_frame(columns_i, &e.jet_i.point).normalize() - in_frame(columns_i, &n);
+        let dj = in_frame(columns_j, &e.jet_j.point).normalize() + in_frame(columns_j, &n);
         let mut m = [0.0; MEMO_LEN];
         for k in 0..3 {
             m[k] = a[k];
@@ -1002,21 +1106,38 @@ impl JointStart {
         columns_j: &[Vector<3>; 3],
     ) -> Option<Self> {
         let v = |k: usize| Vector::<3>::new(memo[k], memo[k + 1], memo[k + 2]);
-        let unit = |x: Vector<3>| {
-            let n = x.norm();
-            (n > 0.0 && n.is_finite()).then(|| x / n)
-        };
-        let frame = |c: &[Vector<3>; 3], v: &Vector<3>| {
-            Vector::<3>::new(c[0].dot(v), c[1].dot(v), c[2].dot(v))
-        };
-        let [c0, c1, c2] = columns_i;
-        let a = c0 * memo[0] + c1 * memo[1] + c2 * memo[2];
-        let normal = unit(unit_or_x(r_ij) + a)?;
+        let normal = normal_from_offset(&v(0), r_ij, columns_i)?;
         Some(Self {
             normal,
-            y_i: unit(frame(columns_i, &normal) + v(3))?,
-            y_j: unit(v(6) - frame(columns_j, &normal))?,
+            y_i: unit(in_frame(columns_i, &normal) + v(3))?,
+            y_j: unit(v(6) - in_frame(columns_j, &normal))?,
         })
+    }
+}
+
+/// The cap `n·r̂ ≥ 1/2` about the line of centres, in which a warm
+/// start's result is accepted ([`exact_warm`], [`exact_joint_warm`]);
+/// empty at coincident centres.
+#[derive(Clone, Copy)]
+struct Cap {
+    /// `r̂` ([`unit_or_x`]).
+    r_hat: Vector<3>,
+    /// `r > 0`.
+    some: bool,
+}
+
+impl Cap {
+    #[inline(always)]
+    fn new(r_ij: &Vector<3>) -> Self {
+        Self {
+            r_hat: unit_or_x(r_ij),
+            some: r_ij.norm() > 0.0,
+        }
+    }
+
+    #[inline(always)]
+    fn contains(&self, n: &Vector<3>) -> bool {
+        self.some && n.dot(&self.r_hat) >= 0.5
     }
 }
 
@@ -1055,20 +1176,18 @@ pub fn exact_joint_warm<F, G>(
     hessians: bool,
 ) -> Joint
 where
-    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
-    G: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    F: Radial,
+    G: Radial,
 {
-    let r = r_ij.norm();
-    let r_hat = unit_or_x(r_ij);
-    let in_cap = |n: &Vector<3>| r > 0.0 && n.dot(&r_hat) >= 0.5;
-    if !in_cap(&start.normal) {
+    let cap = Cap::new(r_ij);
+    if !cap.contains(&start.normal) {
         return Joint::Failed;
     }
     let u = start.normal;
     let (ub_i, ub_j) = (body_i.to_body(&u), body_j.to_body(&-u));
     let (at_i, at_j) = (body_i.at(start.y_i, &ub_i), body_j.at(start.y_j, &ub_j));
     match joint_iterate(r_ij, body_i, body_j, u, at_i, at_j, hessians) {
-        Some(e) if in_cap(&e.normal) => {
+        Some(e) if cap.contains(&e.normal) => {
             if e.gap > max_gap {
                 Joint::Apart
             } else {
@@ -1093,8 +1212,8 @@ fn joint_iterate<F, G>(
     hessians: bool,
 ) -> Option<ExactGap3>
 where
-    F: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
-    G: Fn(&Vector<3>) -> (f64, Vector<3>, Matrix<3>),
+    F: Radial,
+    G: Radial,
 {
     let (mut yi, mut yj) = (at_i.y, at_j.y);
     let mut last = f64::INFINITY;

@@ -33,6 +33,8 @@
 //! special to it (its gap against a formula written out, its area against
 //! quadrature).
 
+pub mod warm;
+
 use jamkit_core::{
     BodyOrientation, Contact, Kernel, Packing, Potential, Shape, SizeDistribution, Vector,
 };

@@ -49,6 +49,17 @@
 //! centres, a pair with `g(r̂) > max_gap` is skipped after one evaluation
 //! (and one with `r` beyond the sum of the long semi-axes before any).
 //!
+//! ## Warm start
+//!
+//! With `warm_start: true` the engine's energy pass starts each listed
+//! pair's solve at the normal where its last one ended
+//! ([`Ellipsoid::exact_gap_warm`], [`jamkit_gap3d::exact_warm`]), kept
+//! relative to the line of centres in body `i`'s frame. The result is the
+//! cold solve's optimum to the solver's tolerance (normal ~10⁻¹⁴, gap
+//! ~10⁻²⁸), not its bits; pairs are skipped exactly where the cold solve
+//! skips them. Absent or false, every solve starts at the line of
+//! centres: the packings made without the parameter, bit for bit.
+//!
 //! ## Rotational coordinates, inertia
 //!
 //! Three rotational coordinates for a triaxial body (`ω` in the world
@@ -78,8 +89,8 @@
 
 use jamkit_core::Error;
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, Look, MAX_ROT, NoFastPath, Pair, ParamSpec,
-    Policy, Quaternion, RotVec, Shape, ShapeVisitor, Vector,
+    Contact, Dims, Family, FamilyInfo, GapHessian, Look, MAX_ROT, MEMO_LEN, NoFastPath, Pair,
+    PairMemo, ParamSpec, Policy, Quaternion, RotVec, Shape, ShapeVisitor, Vector,
 };
 use jamkit_gap3d::{self as gap3d, ExactGap3, QuadraticSupport, WORLD_AXES};
 use serde::Deserialize;
@@ -116,6 +127,13 @@ pub const INFO: FamilyInfo = FamilyInfo {
             default: Some("None"),
             absent_is_omitted: false,
         },
+        ParamSpec {
+            name: "warm_start",
+            about: "true: the engine's energy pass starts each listed pair's gap solve at the normal where its last one ended (the same optimum to 1e-14, not the same bits); None or false: every solve starts at the line of centres",
+            is_list: false,
+            default: Some("None"),
+            absent_is_omitted: true,
+        },
     ],
 };
 
@@ -133,6 +151,11 @@ pub struct EllipsoidParams {
     /// Moment of inertia (`None`: a uniform solid ellipsoid of unit mass).
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
+    /// Start each listed pair's solve where its last one ended (`None`:
+    /// no, the path of packings recorded without this parameter, bit for
+    /// bit).
+    #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
+    pub warm_start: Option<bool>,
 }
 
 /// The `ellipsoid` family's registration.
@@ -171,6 +194,8 @@ pub struct Ellipsoid {
     /// All three equal: the ball.
     ball: bool,
     inertia: Option<f64>,
+    /// Warm starts in the energy pass ([`Ellipsoid::exact_gap_warm`]).
+    warm_start: bool,
 }
 
 impl Ellipsoid {
@@ -263,6 +288,7 @@ impl Ellipsoid {
             ratios,
             ball,
             inertia: p.inertia,
+            warm_start: p.warm_start.unwrap_or(false),
         })
     }
 
@@ -272,6 +298,7 @@ impl Ellipsoid {
             alpha: Some(alpha),
             axes: None,
             inertia: None,
+            warm_start: None,
         })
     }
 
@@ -282,6 +309,7 @@ impl Ellipsoid {
             alpha: None,
             axes: Some(axes),
             inertia: None,
+            warm_start: None,
         })
     }
 
@@ -324,6 +352,13 @@ impl Ellipsoid {
         if self.axial { o.columns() } else { WORLD_AXES }
     }
 
+    /// The same shape with warm starts in the engine's energy pass on or
+    /// off (the `warm_start` parameter).
+    pub fn with_warm_start(mut self, warm_start: bool) -> Self {
+        self.warm_start = warm_start;
+        self
+    }
+
     /// The exact gap of two bodies (crate documentation), or `None` when it
     /// certainly exceeds `max_gap`.
     #[inline]
@@ -336,12 +371,67 @@ impl Ellipsoid {
         r_ij: &Vector<3>,
         max_gap: f64,
     ) -> Option<ExactGap3> {
+        let pair = Pair::new(size_i, *o_i, size_j, *o_j, *r_ij);
+        let (_, si, sj) = self.supports(&pair, max_gap)?;
+        gap3d::exact(r_ij, |u| si.jet(u), |u| sj.jet(u), max_gap)
+    }
+
+    /// The exact gap as the engine's pair loop finds it with `warm_start`
+    /// ([`Shape::contacts_warm`]): the ascent started at the normal where
+    /// the pair's last solve ended, kept in `memo` relative to the line of
+    /// centres in body `i`'s frame ([`gap3d::normal_offset`]), so that a
+    /// pair that moved or turned as a whole starts at its optimum;
+    /// [`gap3d::exact_warm`] accepts it or solves cold. `memo` gets where
+    /// this solve ended. The result is [`Ellipsoid::exact_gap`]'s optimum
+    /// to the solver's tolerance (normal ~10⁻¹⁴, gap ~10⁻²⁸), whatever the
+    /// memo holds, and `None` exactly where that is; with an empty memo it
+    /// is [`Ellipsoid::exact_gap`]'s result bit for bit.
+    #[inline]
+    pub fn exact_gap_warm(
+        &self,
+        pair: &Pair<3, Quaternion>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+    ) -> Option<ExactGap3> {
+        let r_ij = &pair.r_ij;
+        let (ci, si, sj) = self.supports(pair, max_gap)?;
+        let start = memo.as_ref().and_then(|m| {
+            gap3d::normal_from_offset(&Vector::<3>::new(m[0], m[1], m[2]), r_ij, &ci)
+        });
+        let found = gap3d::exact_warm(
+            r_ij,
+            |u| si.jet(u),
+            |u| sj.jet(u),
+            start.as_ref(),
+            max_gap,
+            true,
+        );
+        if let Some(e) = &found {
+            let a = gap3d::normal_offset(&e.normal, r_ij, &ci);
+            let mut m = [0.0; MEMO_LEN];
+            m[..3].copy_from_slice(a.as_slice());
+            *memo = Some(m);
+        }
+        found
+    }
+
+    /// Body `i`'s rotation columns and the two bodies' support functions,
+    /// or `None` when a bound shows the gap exceeds `max_gap`:
+    /// `h ≥ r − (longest semi-axes)` before any work, and `h ≥ g(r̂)`
+    /// before the quadratic forms are built.
+    #[inline(always)]
+    fn supports(
+        &self,
+        pair: &Pair<3, Quaternion>,
+        max_gap: f64,
+    ) -> Option<([Vector<3>; 3], QuadraticSupport, QuadraticSupport)> {
+        let (size_i, size_j, r_ij) = (pair.size_i, pair.size_j, &pair.r_ij);
         // h ≥ r − (longest semi-axes): skip pairs certainly apart.
         let r = r_ij.norm();
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
             return None;
         }
-        let (ci, cj) = (o_i.columns(), o_j.columns());
+        let (ci, cj) = (pair.o_i.columns(), pair.o_j.columns());
         // h ≥ g(r̂) = r − s_i(r̂) − s_j(−r̂), with s(u) = |diag(a, b, c) Qᵀ u|:
         // skip before building the quadratic forms (`gap3d::exact` makes
         // the same test again, on the forms, for pairs that get there).
@@ -357,9 +447,11 @@ impl Ellipsoid {
                 return None;
             }
         }
-        let si = QuadraticSupport::new(&ci, self.semi_axes(size_i));
-        let sj = QuadraticSupport::new(&cj, self.semi_axes(size_j));
-        gap3d::exact(r_ij, |u| si.jet(u), |u| sj.jet(u), max_gap)
+        Some((
+            ci,
+            QuadraticSupport::new(&ci, self.semi_axes(size_i)),
+            QuadraticSupport::new(&cj, self.semi_axes(size_j)),
+        ))
     }
 
     /// The asphericity `A = S³/(36π V²)` (1 for a ball), with the surface
@@ -496,6 +588,26 @@ impl Shape<3> for Ellipsoid {
         }
     }
 
+    /// With `warm_start`, each listed pair's solve starts where its last
+    /// one ended ([`Ellipsoid::exact_gap_warm`]); otherwise
+    /// [`Shape::contacts`] (cold, bit for bit the packings made without
+    /// the parameter).
+    #[inline]
+    fn contacts_warm<F: FnMut(Contact<3>)>(
+        &self,
+        pair: &Pair<3, Quaternion>,
+        max_gap: f64,
+        memo: &mut PairMemo,
+        mut visit: F,
+    ) {
+        if !self.warm_start {
+            return self.contacts(pair, max_gap, visit);
+        }
+        if let Some(e) = self.exact_gap_warm(pair, max_gap, memo) {
+            visit(e.contact(&self.axes(&pair.o_i), &self.axes(&pair.o_j), self.rot_dof()));
+        }
+    }
+
     fn gap_hessians<V: FnMut(GapHessian<3>)>(
         &self,
         pair: &Pair<3, Quaternion>,
@@ -516,3 +628,6 @@ impl Shape<3> for Ellipsoid {
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod warm_tests;

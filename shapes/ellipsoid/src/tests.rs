@@ -559,6 +559,7 @@ fn default_inertia_is_the_solid_ellipsoids() {
         alpha: Some(2.0),
         axes: None,
         inertia: Some(0.3),
+        warm_start: None,
     })
     .unwrap();
     assert_eq!(fixed.rot_inertia(0.6), [0.3; 3]);
@@ -570,6 +571,7 @@ fn bad_parameters_are_refused_with_the_field_named() {
         alpha,
         axes,
         inertia,
+        warm_start: None,
     };
     let cases = [
         (p(Some(0.0), None, None), "params.alpha", "> 0"),

@@ -763,6 +763,20 @@ impl Harmonic {
         (size + a * value, grad * a, hess * a)
     }
 
+    /// A body of size `size` whose rotation has the columns `columns`, as
+    /// the joint iteration reads it ([`gap3d::exact_joint`]).
+    #[inline(always)]
+    fn radial_body<'a>(
+        &'a self,
+        size: f64,
+        columns: &'a [Vector<3>; 3],
+    ) -> gap3d::RadialBody<'a, impl gap3d::Radial + 'a> {
+        gap3d::RadialBody {
+            columns,
+            radial: move |y: &Vector<3>| self.radial_jet(size, y),
+        }
+    }
+
     /// The support function of a body of size `size` whose rotation has
     /// the columns `columns`, in the world direction `u` (unit), with its
     /// gradient (the support point) and Hessian, world frame: the search
@@ -892,14 +906,8 @@ impl Harmonic {
             ExactSolver::Nested => nested(),
             ExactSolver::Joint => gap3d::exact_joint(
                 r_ij,
-                &gap3d::RadialBody {
-                    columns: &ci,
-                    radial: |y: &Vector<3>| self.radial_jet(size_i, y),
-                },
-                &gap3d::RadialBody {
-                    columns: &cj,
-                    radial: |y: &Vector<3>| self.radial_jet(size_j, y),
-                },
+                &self.radial_body(size_i, &ci),
+                &self.radial_body(size_j, &cj),
                 max_gap,
                 hessians,
                 nested,
@@ -941,14 +949,8 @@ impl Harmonic {
         if let Some(start) = start {
             let warm = gap3d::exact_joint_warm(
                 r_ij,
-                &gap3d::RadialBody {
-                    columns: &ci,
-                    radial: |y: &Vector<3>| self.radial_jet(size_i, y),
-                },
-                &gap3d::RadialBody {
-                    columns: &cj,
-                    radial: |y: &Vector<3>| self.radial_jet(size_j, y),
-                },
+                &self.radial_body(size_i, &ci),
+                &self.radial_body(size_j, &cj),
                 &start,
                 max_gap,
                 hessians,

@@ -7,7 +7,7 @@
 
 use super::tests::{mixed, single};
 use super::*;
-use jamkit_core::{MEMO_LEN, ShapeExt};
+use jamkit_kit::warm::{check_empty_memos, direction, nudged, worst_against_cold};
 use rand::{RngExt, SeedableRng};
 
 /// Convex exact-gap bodies with the joint solver: zonal `l = 2` at
@@ -32,11 +32,6 @@ fn shapes() -> Vec<Harmonic> {
 
 type Rng8 = rand_chacha::ChaCha8Rng;
 
-/// A random unit vector.
-fn direction(rng: &mut Rng8) -> Vector<3> {
-    Quaternion::random(rng).columns()[0]
-}
-
 /// A random pair near contact: sizes in [0.5, 0.7], random orientations
 /// and direction, the centres from 5 % of the sizes' sum overlapping to
 /// 3 % apart (measured from `g` at the line of centres).
@@ -52,62 +47,20 @@ fn random_pair(s: &Harmonic, rng: &mut Rng8) -> Pair<3, Quaternion> {
     Pair::new(si, qi, sj, qj, d * r)
 }
 
-/// The pair moved a little: the separation by up to `dr` along each axis,
-/// each body turned by up to `dt` rad about a random axis.
-fn nudged(p: &Pair<3, Quaternion>, rng: &mut Rng8, dr: f64, dt: f64) -> Pair<3, Quaternion> {
-    let mut q = *p;
-    let mut shift = || dr * (2.0 * rng.random::<f64>() - 1.0);
-    q.r_ij += Vector::<3>::new(shift(), shift(), shift());
-    let ti = direction(rng) * (dt * rng.random::<f64>());
-    let tj = direction(rng) * (dt * rng.random::<f64>());
-    q.o_i = Quaternion::exp(&ti).mul(&q.o_i);
-    q.o_j = Quaternion::exp(&tj).mul(&q.o_j);
-    q
-}
-
-fn warm(
-    s: &Harmonic,
-    pair: &Pair<3, Quaternion>,
-    max_gap: f64,
-    memo: &mut PairMemo,
-) -> Vec<Contact<3>> {
-    let mut out = Vec::new();
-    s.contacts_warm(pair, max_gap, memo, |c| out.push(c));
-    out
-}
-
-fn numbers(c: &Contact<3>) -> [f64; 10] {
-    [
-        c.gap,
-        c.grad_r[0],
-        c.grad_r[1],
-        c.grad_r[2],
-        c.grad_rot_i[0],
-        c.grad_rot_i[1],
-        c.grad_rot_i[2],
-        c.grad_rot_j[0],
-        c.grad_rot_j[1],
-        c.grad_rot_j[2],
-    ]
-}
-
-/// The largest difference of two lists of contacts with gap ≤ 0 (those
-/// that carry energy), which must be the same pairs: with `max_gap = 0`
-/// the cold solve may also report a gap just above 0 (when `g(r̂) ≤ 0 < h`)
-/// that the warm one skips, both as [`Shape::contacts`] allows.
-fn distance(a: &[Contact<3>], b: &[Contact<3>]) -> f64 {
-    let touching = |v: &[Contact<3>]| {
-        v.iter()
-            .filter(|c| c.gap <= 0.0)
-            .map(numbers)
-            .collect::<Vec<_>>()
-    };
-    let (a, b) = (touching(a), touching(b));
-    assert_eq!(a.len(), b.len(), "{a:?} vs {b:?}");
-    a.iter()
-        .zip(&b)
-        .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).abs()))
-        .fold(0.0, f64::max)
+/// The exact gap of `pair` as the energy pass finds it from `memo`
+/// (with no cut), `memo` updated.
+fn solved(s: &Harmonic, pair: &Pair<3, Quaternion>, memo: &mut PairMemo) -> ExactGap3 {
+    s.exact_gap_warm(
+        pair.size_i,
+        &pair.o_i,
+        pair.size_j,
+        &pair.o_j,
+        &pair.r_ij,
+        f64::INFINITY,
+        memo,
+        false,
+    )
+    .unwrap()
 }
 
 /// How far warm and cold contacts may differ: both stop within ~10⁻¹⁴ of
@@ -123,70 +76,18 @@ const AGREE: f64 = 1e-13;
 #[test]
 fn an_empty_memo_gives_the_cold_contacts_bit_for_bit() {
     let mut rng = Rng8::seed_from_u64(11);
-    for s in shapes() {
-        for _ in 0..30 {
-            let pair = random_pair(&s, &mut rng);
-            for max_gap in [0.0, f64::INFINITY] {
-                let mut memo = None;
-                let got = warm(&s, &pair, max_gap, &mut memo);
-                assert_eq!(got, s.pair_contacts(&pair, max_gap));
-                assert_eq!(memo.is_some(), !got.is_empty());
-            }
-            let nested = s.clone().with_exact_solver(ExactSolver::Nested);
-            let mut memo = Some([0.3; MEMO_LEN]);
-            let got = warm(&nested, &pair, 0.0, &mut memo);
-            assert_eq!(got, nested.pair_contacts(&pair, 0.0));
-            assert_eq!(memo, Some([0.3; MEMO_LEN]));
-        }
-    }
+    check_empty_memos(&shapes(), &mut rng, random_pair, |s| {
+        s.clone().with_exact_solver(ExactSolver::Nested)
+    });
 }
 
 /// Whatever the memo holds, the warm contacts are the cold ones to
-/// [`AGREE`]: along a run of small moves (the separation by up to 10⁻³,
-/// the bodies turned by up to 10⁻² rad, each call from the memo the one
-/// before left), from the memo of an unrelated pair (other sizes,
-/// orientations and direction: the bodies turned far), and from memos
-/// that are no start at all (zeros, NaN, a normal opposite the line of
-/// centres).
+/// [`AGREE`] ([`memo_scenarios`]: small moves, bodies turned far, an
+/// unrelated pair's memo, memos that are no start).
 #[test]
 fn warm_contacts_agree_with_cold_ones_whatever_the_memo() {
     let mut rng = Rng8::seed_from_u64(12);
-    let mut worst: f64 = 0.0;
-    for s in shapes() {
-        for _ in 0..25 {
-            let mut pair = random_pair(&s, &mut rng);
-            let mut memo = None;
-            warm(&s, &pair, f64::INFINITY, &mut memo);
-            for _ in 0..5 {
-                pair = nudged(&pair, &mut rng, 1e-3, 1e-2);
-                for max_gap in [0.0, f64::INFINITY] {
-                    let got = warm(&s, &pair, max_gap, &mut memo.clone());
-                    worst = worst.max(distance(&got, &s.pair_contacts(&pair, max_gap)));
-                }
-                warm(&s, &pair, f64::INFINITY, &mut memo);
-            }
-            let other = random_pair(&s, &mut rng);
-            let mut unrelated = None;
-            warm(&s, &other, f64::INFINITY, &mut unrelated);
-            // The normal −r̂: `n − r̂ = −2r̂`, in body i's frame.
-            let back = pair
-                .o_i
-                .apply_inverse(&(pair.r_ij * (-2.0 / pair.r_ij.norm())));
-            let mut opposite = [0.0; MEMO_LEN];
-            opposite[..3].copy_from_slice(back.as_slice());
-            for start in [
-                unrelated,
-                Some([0.0; MEMO_LEN]),
-                Some([f64::NAN; MEMO_LEN]),
-                Some(opposite),
-            ] {
-                for max_gap in [0.0, f64::INFINITY] {
-                    let got = warm(&s, &pair, max_gap, &mut start.clone());
-                    worst = worst.max(distance(&got, &s.pair_contacts(&pair, max_gap)));
-                }
-            }
-        }
-    }
+    let worst = worst_against_cold(&shapes(), &mut rng, random_pair, false);
     assert!(worst <= AGREE, "warm against cold: {worst:e}");
 }
 
@@ -208,30 +109,14 @@ fn warm_results_are_converged() {
         for _ in 0..25 {
             let pair = random_pair(&s, &mut rng);
             let mut memo = None;
-            s.exact_gap_warm(
-                pair.size_i,
-                &pair.o_i,
-                pair.size_j,
-                &pair.o_j,
-                &pair.r_ij,
-                f64::INFINITY,
-                &mut memo,
-                false,
-            )
-            .unwrap();
+            solved(&s, &pair, &mut memo);
             let next = nudged(&pair, &mut rng, 1e-3, 1e-2);
             let (ci, cj) = (next.o_i.columns(), next.o_j.columns());
             let start = gap3d::JointStart::recall(&memo.unwrap(), &next.r_ij, &ci, &cj).unwrap();
             let gap3d::Joint::Found(e) = gap3d::exact_joint_warm(
                 &next.r_ij,
-                &gap3d::RadialBody {
-                    columns: &ci,
-                    radial: |y: &Vector<3>| s.radial_jet(next.size_i, y),
-                },
-                &gap3d::RadialBody {
-                    columns: &cj,
-                    radial: |y: &Vector<3>| s.radial_jet(next.size_j, y),
-                },
+                &s.radial_body(next.size_i, &ci),
+                &s.radial_body(next.size_j, &cj),
                 &start,
                 f64::INFINITY,
                 false,
@@ -268,16 +153,7 @@ fn a_memo_follows_a_pair_turned_as_a_whole() {
     let s = &shapes()[4];
     for _ in 0..10 {
         let pair = random_pair(s, &mut rng);
-        let e = s
-            .exact_gap(
-                pair.size_i,
-                &pair.o_i,
-                pair.size_j,
-                &pair.o_j,
-                &pair.r_ij,
-                f64::INFINITY,
-            )
-            .unwrap();
+        let e = solved(s, &pair, &mut None);
         let (ci, cj) = (pair.o_i.columns(), pair.o_j.columns());
         let memo = gap3d::JointStart::remember(&e, &pair.r_ij, &ci, &cj);
         let t = Quaternion::random(&mut rng);
