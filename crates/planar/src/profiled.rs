@@ -257,7 +257,8 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     /// The same shape with the gap model `gap`. The second-order and the
     /// exact gap need the profile's [`NearDiskProfile::jet3`]; errors name
     /// `params.gap`. On a non-convex outline the exact gap is the arcs'
-    /// ([`crate::arcs`]: several contacts per pair), on a convex one the
+    /// ([`crate::arcs`]: several contacts per pair) with the inscribed
+    /// disks' core ([`Profiled::core_contact`]), on a convex one the
     /// convex exact gap.
     pub fn with_gap(mut self, gap: GapModel) -> jamkit_core::Result<Self> {
         if gap != GapModel::FirstOrder && self.profile.jet3(1.0, 0.0).is_none() {
