@@ -257,7 +257,8 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     /// The same shape with the gap model `gap`. The second-order and the
     /// exact gap need the profile's [`NearDiskProfile::jet3`]; errors name
     /// `params.gap`. On a non-convex outline the exact gap is the arcs'
-    /// ([`crate::arcs`]: several contacts per pair), on a convex one the
+    /// ([`crate::arcs`]: several contacts per pair) with the inscribed
+    /// disks' core ([`Profiled::core_contact`]), on a convex one the
     /// convex exact gap.
     pub fn with_gap(mut self, gap: GapModel) -> jamkit_core::Result<Self> {
         if gap != GapModel::FirstOrder && self.profile.jet3(1.0, 0.0).is_none() {
@@ -371,13 +372,50 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         );
     }
 
+    /// The contact of the two bodies' inscribed disks (radii
+    /// `R⁰ (1 + Δ min P)`) while they overlap, as an [`gap2d::ExactGap`]
+    /// along the line of centres (`h = r − a − b`, support jets `(a, 0, 0)`
+    /// and `(b, 0, 0)`, so `k = r`): the exact gap's core for a non-convex
+    /// outline (`docs/explanation/non-convex-gap.md#core`). `None` when the
+    /// disks do not overlap.
+    pub fn core_contact(&self, pair: &Pair<2, O>) -> Option<gap2d::ExactGap> {
+        let m = self.min_relative_radius();
+        let (a, b) = (pair.size_i * m, pair.size_j * m);
+        let r = pair.r_ij.norm();
+        let gap = r - a - b;
+        if !(gap < 0.0) {
+            return None;
+        }
+        let normal = if r > 0.0 {
+            (pair.r_ij[0] / r, pair.r_ij[1] / r)
+        } else {
+            (1.0, 0.0)
+        };
+        let jet = |h: f64| SupportJet {
+            h,
+            d1: 0.0,
+            d2: 0.0,
+        };
+        Some(gap2d::ExactGap {
+            normal,
+            gap,
+            jet_i: jet(a),
+            jet_j: jet(b),
+            iterations: 0,
+            converged: true,
+        })
+    }
+
     /// [`Shape::contacts`] beyond the bounding test for a non-convex exact
-    /// gap: out of line, so that the other models' pair loop keeps one call
-    /// site of `visit`.
+    /// gap (the arcs' contacts and the core's): out of line, so that the
+    /// other models' pair loop keeps one call site of `visit`.
     #[cold]
     #[inline(never)]
     fn several_contacts(&self, pair: &Pair<2, O>, max_gap: f64, visit: &mut dyn FnMut(Contact<2>)) {
         self.arc_contacts(pair, max_gap, None, &mut |e| visit(e.contact()));
+        if let Some(e) = self.core_contact(pair) {
+            visit(e.contact());
+        }
     }
 
     /// The profile.
@@ -864,6 +902,9 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
             }
             GapModel::Exact if self.arcs.is_some() => {
                 self.arc_contacts(pair, max_gap, None, &mut |e| visit(e.hessian_signed()));
+                if let Some(e) = self.core_contact(pair) {
+                    visit(e.hessian_signed());
+                }
                 return Ok(());
             }
             GapModel::Exact => {

@@ -1,0 +1,327 @@
+//! Is the energy FIRE minimises smooth along its path? Load a packing file
+//! (typically a `packings/<id>.failed.json`) and continue FIRE from it,
+//! checking every step:
+//!
+//! * `ΔV` against the trapezoid `−½ (F_k + F_{k+1})·Δq` of the reported
+//!   forces (a force that is the energy's gradient leaves `O(|Δq|³)`);
+//! * the contacts of every pair, by count and gap: a pair whose number of
+//!   overlapping contacts changes, or whose deepest gap jumps, between two
+//!   evaluations.
+//!
+//! ```sh
+//! cargo run --release --example trace_fire -- out/x/packings/ID.failed.json [STEPS]
+//! ```
+//!
+//! Or jam `fourier` near-disks with the exact gap from a random start
+//! (sizes 0.5 and 0.7 alternating, φ from 0.6 in steps of 10⁻³, the window
+//! 10⁻¹⁶ … 2·10⁻¹⁶ of V/N, a plain bisection), one line per minimisation:
+//!
+//! ```sh
+//! cargo run --release --example trace_fire -- jam N_MODE DELTA PARTICLES SEED MAX_STEPS SECONDS
+//! ```
+
+use jamkit_core::Shape;
+use jamkit_engine::{Fire, FireParams, Objective, Scene};
+use jamkit_experiment::reload::{PackingVisitor, reload};
+use jamkit_format::PackingFile;
+use std::collections::BTreeMap;
+
+type Gaps = BTreeMap<(usize, usize), Vec<f64>>;
+
+struct Traced<'a, const D: usize, S: Shape<D>> {
+    scene: &'a mut Scene<D, S>,
+    last: Option<(f64, Vec<f64>, Gaps)>,
+    dq: Vec<f64>,
+    calls: u64,
+    worst: Vec<(f64, u64, String)>,
+    events: u64,
+    verbose: bool,
+}
+
+fn list(v: &[f64]) -> String {
+    let items: Vec<String> = v.iter().map(|x| format!("{x:.3e}")).collect();
+    format!("[{}]", items.join(" "))
+}
+
+fn gaps_of<const D: usize, S: Shape<D>>(scene: &mut Scene<D, S>) -> Gaps {
+    let mut gaps: Gaps = BTreeMap::new();
+    scene.for_each_contact(0.0, |i, j, _, c| {
+        if c.gap < 0.0 {
+            gaps.entry((i, j)).or_default().push(c.gap);
+        }
+    });
+    for v in gaps.values_mut() {
+        v.sort_by(f64::total_cmp);
+    }
+    gaps
+}
+
+impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
+    fn dof(&self) -> usize {
+        Objective::dof(&*self.scene)
+    }
+    fn bodies(&self) -> usize {
+        Objective::bodies(&*self.scene)
+    }
+    fn inverse_masses(&self) -> &[f64] {
+        Objective::inverse_masses(&*self.scene)
+    }
+    fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
+        let e = self.scene.energy_gradient(grad);
+        let gaps = gaps_of(self.scene);
+        self.calls += 1;
+        if let Some((e0, g0, gaps0)) = &self.last {
+            let step: f64 = self.dq.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if step > 0.0 {
+                let pred: f64 = 0.5
+                    * g0.iter()
+                        .zip(grad.iter())
+                        .zip(&self.dq)
+                        .map(|((a, b), d)| (a + b) * d)
+                        .sum::<f64>();
+                let err = (e - e0) - pred;
+                let mut note = String::new();
+                for (k, v) in gaps.iter() {
+                    match gaps0.get(k) {
+                        Some(v0) if v0.len() == v.len() => {
+                            let jump = v0
+                                .iter()
+                                .zip(v)
+                                .map(|(a, b)| (a - b).abs())
+                                .fold(0.0, f64::max);
+                            if jump > 100.0 * step {
+                                note += &format!(" {k:?} {}->{}", list(v0), list(v));
+                            }
+                        }
+                        other => {
+                            note += &format!(
+                                " {k:?} {}->{}",
+                                list(&other.cloned().unwrap_or_default()),
+                                list(v)
+                            );
+                        }
+                    }
+                }
+                for (k, v0) in gaps0.iter() {
+                    if !gaps.contains_key(k) {
+                        note += &format!(" {k:?} {}->[]", list(v0));
+                    }
+                }
+                if !note.is_empty() {
+                    self.events += 1;
+                    if self.verbose && self.events <= 40 {
+                        println!(
+                            "eval {}: |dq| {step:.2e} dV {:.3e} err {err:.3e}:{note}",
+                            self.calls,
+                            e - e0
+                        );
+                    }
+                }
+                self.worst.push((
+                    err.abs(),
+                    self.calls,
+                    format!("|dq| {step:.2e} dV {:.3e} V {e:.6e}", e - e0),
+                ));
+            }
+        }
+        self.last = Some((e, grad.to_vec(), gaps));
+        self.dq.iter_mut().for_each(|x| *x = 0.0);
+        e
+    }
+    fn displace(&mut self, dq: &[f64]) {
+        for (a, b) in self.dq.iter_mut().zip(dq) {
+            *a += b;
+        }
+        Objective::displace(self.scene, dq);
+    }
+    fn phi(&self) -> f64 {
+        Objective::phi(&*self.scene)
+    }
+    fn translations_per_body(&self) -> usize {
+        D
+    }
+    fn hessian_entries(&mut self, entries: &mut Vec<(u32, u32, f64)>) -> jamkit_core::Result<bool> {
+        Objective::hessian_entries(self.scene, entries)
+    }
+    fn save(&mut self) {
+        Objective::save(self.scene);
+        self.last = None;
+    }
+    fn restore(&mut self) {
+        Objective::restore(self.scene);
+        self.last = None;
+    }
+    fn stiffness_blocks(&mut self, blocks: &mut Vec<f64>) -> bool {
+        Objective::stiffness_blocks(self.scene, blocks)
+    }
+}
+
+struct Trace {
+    steps: u64,
+    settings: FireParams,
+}
+
+impl PackingVisitor for Trace {
+    type Output = ();
+    fn visit<const D: usize, S: Shape<D>>(self, mut scene: Scene<D, S>) {
+        let n = scene.packing().len();
+        let dof = Objective::dof(&scene);
+        let mut g = vec![0.0; dof];
+        let e = scene.energy_gradient(&mut g);
+        let gaps = gaps_of(&mut scene);
+        let contacts: usize = gaps.values().map(Vec::len).sum();
+        let multi = gaps.values().filter(|v| v.len() > 1).count();
+        println!(
+            "N = {n}, φ = {:.12}, V/N = {:.4e}, Σg² = {:.3e}, {contacts} overlapping contacts on {} pairs ({multi} with several)",
+            scene.phi(),
+            e / n as f64,
+            g.iter().map(|x| x * x).sum::<f64>(),
+            gaps.len()
+        );
+        let mut fire = Fire::new(FireParams {
+            max_steps: self.steps,
+            ..self.settings.for_family(&scene.packing().shape)
+        });
+        let mut t = Traced {
+            scene: &mut scene,
+            last: None,
+            dq: vec![0.0; dof],
+            calls: 0,
+            worst: Vec::new(),
+            events: 0,
+            verbose: true,
+        };
+        let out = fire.minimize(&mut t);
+        let (calls, events) = (t.calls, t.events);
+        let mut worst = std::mem::take(&mut t.worst);
+        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+        println!("{calls} evaluations, {events} with contact changes; largest |ΔV − trapezoid|:");
+        for (err, k, s) in worst.iter().take(10) {
+            println!("  eval {k}: {err:.3e} ({s})");
+        }
+        let e = scene.energy_gradient(&mut g);
+        println!(
+            "after: {}, V/N = {:.4e}, Σg² = {:.3e}",
+            match out {
+                Ok(o) => format!("stopped {:?} after {} steps", o.reason, o.steps),
+                Err(e) => format!("{e}"),
+            },
+            e / n as f64,
+            g.iter().map(|x| x * x).sum::<f64>()
+        );
+    }
+}
+
+/// Jam `particles` fourier near-disks (sizes 0.5 and 0.7) by a plain
+/// bisection on φ (steps of 1e-3 from φ = 0.6, the window 1e-16 … 2e-16
+/// of V/N), every minimisation traced.
+fn jam_mode(n: u32, delta: f64, particles: usize, seed: u64, max_steps: u64, budget: f64) {
+    use jamkit_fourier::{FourierParams, NearDisk};
+    use rand::SeedableRng;
+    let s = NearDisk::fourier(&FourierParams {
+        n,
+        delta,
+        inertia: None,
+        gap: jamkit_planar::gap2d::GapModel::Exact,
+    })
+    .unwrap();
+    let sizes: Vec<f64> = (0..particles)
+        .map(|k| if k % 2 == 0 { 0.5 } else { 0.7 })
+        .collect();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let skin = 0.4 * s.bounding_radius(0.5);
+    let packing = jamkit_core::Packing::random(s, sizes, 0.6, &mut rng).unwrap();
+    let mut scene = Scene::new(packing, jamkit_core::Potential::Harmonic, skin);
+    let params = FireParams {
+        energy_tol: 1e-16,
+        force_tol: 1e-25,
+        max_steps,
+        ..FireParams::default()
+    }
+    .for_family(&scene.packing().shape);
+    let mut fire = Fire::new(params);
+    let mut eps = 1e-3;
+    let start = std::time::Instant::now();
+    let dof = Objective::dof(&scene);
+    for round in 0..2000 {
+        let t0 = std::time::Instant::now();
+        let mut t = Traced {
+            scene: &mut scene,
+            last: None,
+            dq: vec![0.0; dof],
+            calls: 0,
+            worst: Vec::new(),
+            events: 0,
+            verbose: false,
+        };
+        let out = fire.minimize(&mut t);
+        let (calls, events) = (t.calls, t.events);
+        let mut worst = std::mem::take(&mut t.worst);
+        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut g = vec![0.0; dof];
+        let e = scene.energy_gradient(&mut g) / particles as f64;
+        let gaps = gaps_of(&mut scene);
+        let contacts: usize = gaps.values().map(Vec::len).sum();
+        let multi = gaps.values().filter(|v| v.len() > 1).count();
+        let (steps, reason) = match &out {
+            Ok(o) => (o.steps, format!("{:?}", o.reason)),
+            Err(_) => (max_steps, "capped".into()),
+        };
+        println!(
+            "{round}: φ {:.6} V/N {e:.3e} Σg² {:.2e} steps {steps} {reason} evals {calls} contact-events {events} contacts {contacts} multi {multi} worst-err {:.2e} [{}] {:.1}s",
+            scene.phi(),
+            g.iter().map(|x| x * x).sum::<f64>(),
+            worst.first().map_or(0.0, |w| w.0),
+            worst.first().map_or(String::new(), |w| w.2.clone()),
+            t0.elapsed().as_secs_f64()
+        );
+        if out.is_err() || start.elapsed().as_secs_f64() > budget {
+            println!(
+                "stopped at φ {:.6} after {:.0} s",
+                scene.phi(),
+                start.elapsed().as_secs_f64()
+            );
+            return;
+        }
+        if e > 1e-16 && e < 2e-16 {
+            println!("jammed at φ {:.6}", scene.phi());
+            return;
+        }
+        let over = e >= 2e-16;
+        if over == (eps > 0.0) {
+            eps *= -0.5;
+        }
+        let phi = scene.phi();
+        scene.set_phi(phi + eps);
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("jam") {
+        let a = |i: usize| args[i].parse::<f64>().expect("a number");
+        jam_mode(
+            a(2) as u32,
+            a(3),
+            a(4) as usize,
+            a(5) as u64,
+            a(6) as u64,
+            a(7),
+        );
+        return;
+    }
+    let Some(path) = args.get(1) else {
+        eprintln!("usage: trace_fire PACKING.json [STEPS]");
+        std::process::exit(2);
+    };
+    let file = PackingFile::load_checked(std::path::Path::new(path)).unwrap_or_else(|e| {
+        eprintln!("{e}");
+        std::process::exit(2)
+    });
+    let steps = args.get(2).map_or(20_000, |s| s.parse().expect("a number"));
+    let settings: FireParams = FireParams::default();
+    reload(&file, Trace { steps, settings }).unwrap_or_else(|e| {
+        eprintln!("{e}");
+        std::process::exit(2)
+    });
+}
