@@ -1258,6 +1258,39 @@ mod tests {
         }
     }
 
+    /// `Shape::contacts_warm` goes through `Shape::contact_warm` to the
+    /// warm solve: from an empty memo it visits `Shape::contacts`' contact
+    /// bit for bit and records the memo; a pair apart (past the screens)
+    /// gives none and leaves the memo as it was.
+    #[test]
+    fn contacts_warm_is_contacts_from_an_empty_memo() {
+        let mut rnd = uniform(9);
+        let s = ellipse(1.5);
+        let (mut touching, mut apart) = (0, 0);
+        for _ in 0..400 {
+            let (ri, rj) = (0.5 + 0.2 * rnd(), 0.5 + 0.2 * rnd());
+            let phi = 6.3 * rnd();
+            let d = Vector::<2>::new(phi.cos(), phi.sin()) * ((ri + rj) * (0.8 + 0.6 * rnd()));
+            let pair = Pair::new(ri, Axis::new(6.3 * rnd()), rj, Axis::new(6.3 * rnd()), d);
+            let (mut cold, mut warm) = (Vec::new(), Vec::new());
+            s.contacts(&pair, 0.0, |c| cold.push(c));
+            let mut memo: PairMemo = None;
+            s.contacts_warm(&pair, 0.0, &mut memo, |c| warm.push(c));
+            assert_eq!(warm, cold);
+            assert!(matches!(
+                s.contact_warm(&pair, 0.0, &mut memo.clone()),
+                Warm::Solved(c) if c.is_some() == !cold.is_empty()
+            ));
+            assert_eq!(memo.is_some(), !cold.is_empty());
+            if cold.is_empty() {
+                apart += 1;
+            } else {
+                touching += 1;
+            }
+        }
+        assert!(touching > 50 && apart > 50, "{touching} {apart}");
+    }
+
     /// An independent check of where the gap vanishes: the Perram–Wertheim
     /// contact function `F = max_λ λ(1 − λ) rᵀ C(λ)⁻¹ r`,
     /// `C(λ) = (1 − λ) M_i + λ M_j` (`M = R diag(a², b²) Rᵀ`, so that
