@@ -909,7 +909,7 @@ impl Shape<2> for Ellipse {
 
     /// [`Ellipse::exact_gap_warm`]: the exact gap started where the
     /// pair's last solve ended.
-    #[inline]
+    #[inline(always)]
     fn contact_warm(&self, pair: &Pair<2, Axis>, max_gap: f64, memo: &mut PairMemo) -> Warm<2> {
         Warm::Solved(
             self.exact_gap_warm(pair, max_gap, memo)
@@ -1279,7 +1279,7 @@ mod tests {
             assert_eq!(warm, cold);
             assert!(matches!(
                 s.contact_warm(&pair, 0.0, &mut memo.clone()),
-                Warm::Solved(c) if c.is_some() == !cold.is_empty()
+                Warm::Solved(c) if c.is_some() != cold.is_empty()
             ));
             assert_eq!(memo.is_some(), !cold.is_empty());
             if cold.is_empty() {
