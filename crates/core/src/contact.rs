@@ -1,7 +1,8 @@
 //! What the engine asks and a family answers about a pair of bodies: the
 //! [`Pair`] (sizes, orientations, separation), each [`Contact`] (a gap and
 //! its first derivatives), for the Hessian its [`GapHessian`], and what a
-//! family may keep of a pair's last solve ([`PairMemo`]).
+//! family may keep of a pair's last solve ([`PairMemo`]) and what its warm
+//! solve found ([`Warm`]).
 //!
 //! Gaps depend on the two centres only through `r_ij = r_j − r_i` (minimum
 //! image), so `∂h/∂r_i = −∂h/∂r_j` and a [`Contact`] stores one of them.
@@ -123,3 +124,15 @@ pub const MEMO_LEN: usize = 9;
 /// and starts a pair new to the list at `None`, so that it is a function of
 /// the run alone (not of threads or shards).
 pub type PairMemo = Option<[f64; MEMO_LEN]>;
+
+/// What a family's warm solve of one listed pair found
+/// ([`Shape::contact_warm`](crate::Shape::contact_warm)), for a family with
+/// at most one contact per pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Warm<const D: usize> {
+    /// No warm solve for this pair (e.g. not for this gap model):
+    /// [`Shape::contacts`](crate::Shape::contacts) answers.
+    Cold,
+    /// The contact, or `None` where the gap certainly exceeds `max_gap`.
+    Solved(Option<Contact<D>>),
+}

@@ -51,7 +51,7 @@ pub mod shape;
 pub mod sizes;
 pub mod stats;
 
-pub use contact::{Contact, GapHessian, MEMO_LEN, Pair, PairMemo};
+pub use contact::{Contact, GapHessian, MEMO_LEN, Pair, PairMemo, Warm};
 pub use error::{Error, Result};
 pub use family::{Dims, Family, FamilyInfo, ParamSpec, ShapeVisitor};
 pub use lanes::{ContactLanes, MAX_SLOTS, PairLanes, SlotPairs};

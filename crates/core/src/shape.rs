@@ -23,7 +23,7 @@
 //! A near-disk yields one contact per pair, a dimer up to four; the energy is
 //! then `Σ v(h)` over all contacts, with `v` a [`Potential`](crate::Potential).
 
-use crate::contact::{Contact, GapHessian, Pair, PairMemo};
+use crate::contact::{Contact, GapHessian, Pair, PairMemo, Warm};
 use crate::error::{Error, Result};
 use crate::lanes::{ContactLanes, PairLanes, SlotPairs};
 use crate::look::Look;
@@ -92,16 +92,36 @@ pub trait Shape<const D: usize>: Clone + Debug + Send + Sync + 'static {
     /// different configuration), and a function of `pair` and `memo` alone
     /// (the engine's runs stay reproducible bit for bit).
     ///
-    /// The default ignores the memo and calls [`Shape::contacts`].
+    /// The default visits what [`Shape::contact_warm`] found, or calls
+    /// [`Shape::contacts`] where it has no warm solve.
     #[inline(always)]
     fn contacts_warm<F: FnMut(Contact<D>)>(
         &self,
         pair: &Pair<D, Self::Orientation>,
         max_gap: f64,
-        _memo: &mut PairMemo,
-        visit: F,
+        memo: &mut PairMemo,
+        mut visit: F,
     ) {
-        self.contacts(pair, max_gap, visit)
+        match self.contact_warm(pair, max_gap, memo) {
+            Warm::Cold => self.contacts(pair, max_gap, visit),
+            Warm::Solved(Some(c)) => visit(c),
+            Warm::Solved(None) => {}
+        }
+    }
+
+    /// The warm solve of [`Shape::contacts_warm`]'s default, for a family
+    /// with at most one contact per pair: the contact of `pair` (`None`
+    /// where its gap certainly exceeds `max_gap`) started from `memo`, with
+    /// [`Shape::contacts_warm`]'s promises, or [`Warm::Cold`] for none.
+    /// The default: [`Warm::Cold`].
+    #[inline(always)]
+    fn contact_warm(
+        &self,
+        _pair: &Pair<D, Self::Orientation>,
+        _max_gap: f64,
+        _memo: &mut PairMemo,
+    ) -> Warm<D> {
+        Warm::Cold
     }
 
     /// Like [`Shape::contacts`], with the second derivatives of each gap

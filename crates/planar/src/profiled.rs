@@ -53,7 +53,7 @@ use crate::gap2d::{self, GapModel, Jet3, SupportJet, direction};
 use jamkit_core::math::{Unit, cmul, turn_unit};
 use jamkit_core::{
     Angle, BodyOrientation, Contact, Error, GapHessian, Look, MEMO_LEN, NoFastPath, Outline, Pair,
-    PairMemo, Policy, RotVec, Rotation2, Shape, Vector,
+    PairMemo, Policy, RotVec, Rotation2, Shape, Vector, Warm,
 };
 use std::f64::consts::PI;
 use std::fmt::Debug;
@@ -485,9 +485,18 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     /// test).
     #[inline(always)]
     pub fn first_order(&self, pair: &Pair<2, O>) -> Contact<2> {
+        self.first_order_at(pair, direction(&pair.r_ij))
+    }
+
+    /// [`Profiled::first_order`] given `(|r_ij|, r_ij/|r_ij|, 1/|r_ij|)`
+    /// ([`direction`]).
+    #[inline(always)]
+    fn first_order_at(
+        &self,
+        pair: &Pair<2, O>,
+        (r, u, inv_r): (f64, Vector<2>, f64),
+    ) -> Contact<2> {
         let (size_i, size_j) = (pair.size_i, pair.size_j);
-        let r = pair.r_ij.norm();
-        let (_, u, inv_r) = direction(&pair.r_ij);
         let [(ci, si), (cj, sj)] = self.phases(&pair.o_i, &pair.o_j, &u);
         let (p_i, dp_i) = self.profile.value_slope(ci, si);
         let (p_j, dp_j) = self.profile.value_slope(cj, sj);
@@ -520,18 +529,29 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     /// Δ = 0.1, N = 256, same bits).
     #[cold]
     #[inline(never)]
-    fn beyond_first_order(
-        &self,
-        pair: &Pair<2, O>,
-        max_gap: f64,
-        memo: Option<&mut PairMemo>,
-    ) -> Option<Contact<2>> {
+    fn beyond_first_order(&self, pair: &Pair<2, O>, r: f64, max_gap: f64) -> Option<Contact<2>> {
         match self.gap {
             GapModel::SecondOrder => Some(self.second_order(pair).contact(&pair.r_ij)),
             _ => self
-                .exact_in(pair, max_gap, ExactSolve::Joint, memo, false)
+                .exact_in(pair, r, max_gap, ExactSolve::Joint, None, false)
                 .map(|e| e.contact()),
         }
+    }
+
+    /// The exact contact of [`Shape::contact_warm`]
+    /// ([`Profiled::exact_solve_warm`]) past the bounding test at `r =
+    /// |r_ij|`: out of line as [`Profiled::beyond_first_order`], though not
+    /// cold (the pair loop of the exact gap calls it for every pair).
+    #[inline(never)]
+    fn exact_warm(
+        &self,
+        pair: &Pair<2, O>,
+        r: f64,
+        max_gap: f64,
+        memo: &mut PairMemo,
+    ) -> Option<Contact<2>> {
+        self.exact_in(pair, r, max_gap, ExactSolve::Joint, Some(memo), false)
+            .map(|e| e.contact())
     }
 
     /// The second-order gap's partials (see [`crate::gap2d`]).
@@ -573,7 +593,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         max_gap: f64,
         solve: ExactSolve,
     ) -> Option<gap2d::ExactGap> {
-        self.exact_in(pair, max_gap, solve, None, true)
+        self.exact_in(pair, pair.r_ij.norm(), max_gap, solve, None, true)
     }
 
     /// The exact gap as the engine's pair loop finds it
@@ -593,34 +613,53 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         max_gap: f64,
         memo: &mut PairMemo,
     ) -> Option<gap2d::ExactGap> {
-        self.exact_in(pair, max_gap, ExactSolve::Joint, Some(memo), false)
+        self.exact_in(
+            pair,
+            pair.r_ij.norm(),
+            max_gap,
+            ExactSolve::Joint,
+            Some(memo),
+            false,
+        )
     }
 
-    /// [`Profiled::exact_solve`] with a memo (warm start and record, for
-    /// [`ExactSolve::Joint`]) and `H''` only with `second`.
+    /// [`Profiled::exact_solve`] at `r = |r_ij|` with a memo (warm start
+    /// and record, for [`ExactSolve::Joint`]) and `H''` only with `second`.
+    #[inline(always)]
     fn exact_in(
         &self,
         pair: &Pair<2, O>,
+        r: f64,
         max_gap: f64,
         solve: ExactSolve,
         memo: Option<&mut PairMemo>,
         second: bool,
     ) -> Option<gap2d::ExactGap> {
         let (size_i, size_j, r_ij) = (pair.size_i, pair.size_j, &pair.r_ij);
-        let r = r_ij.norm();
-        let first = self.first_order(pair);
+        let inv_r = if r > 0.0 { 1.0 / r } else { 0.0 };
+        let line = if r > 0.0 {
+            r_ij * inv_r
+        } else {
+            Vector::<2>::new(1.0, 0.0)
+        };
+        let first = self.first_order_at(pair, (r, line, inv_r));
         if first.gap - self.exact_slack * (size_i + size_j) > max_gap {
             return None;
         }
         // ψ₀ as the turn `dψ` of the line of centres `u`: by `turn_step` for
-        // the joint iteration, by `turn_unit` for the nested solve.
-        let (u, dpsi) = if r > 0.0 {
-            (
-                (r_ij[0] / r, r_ij[1] / r),
-                -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r,
-            )
+        // the joint iteration, by `turn_unit` for the nested solve (asked
+        // only where the warm start is missing or fails).
+        let u = if r > 0.0 {
+            (r_ij[0] / r, r_ij[1] / r)
         } else {
-            ((1.0, 0.0), 0.0)
+            (1.0, 0.0)
+        };
+        let dpsi = || {
+            if r > 0.0 {
+                -(first.grad_rot_i[0] + first.grad_rot_j[0]) / r
+            } else {
+                0.0
+            }
         };
         let d = self.delta;
         // R(φ)/R⁰ = 1 + Δ P(−φ) at p = e^{iφ}: e^{−iφ} = p̄.
@@ -683,7 +722,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
                 _ => None,
             };
             let joint = warm.or_else(|| {
-                let w0 = gap2d::turn_step(u, dpsi);
+                let w0 = gap2d::turn_step(u, dpsi());
                 // From each support point's first-order offset from its
                 // direction, δ = atan(R'/R) ≈ R'/R⁰ = ∂h₁/∂θ / R⁰ (error O(Δ²)).
                 let (e_i, e_j) = (
@@ -702,7 +741,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         if solve == ExactSolve::JointAlone {
             return found;
         }
-        let found = found.unwrap_or_else(|| self.nested(pair, u, dpsi, z_i, z_j, &outline));
+        let found = found.unwrap_or_else(|| self.nested(pair, u, dpsi(), z_i, z_j, &outline));
         if let Some(memo) = memo {
             *memo = Some(remember(&found, u));
         }
@@ -847,7 +886,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
         let contact = if self.gap == GapModel::FirstOrder {
             Some(self.first_order(pair))
         } else if self.arcs.is_none() {
-            self.beyond_first_order(pair, max_gap, None)
+            self.beyond_first_order(pair, r, max_gap)
         } else {
             self.several_contacts(pair, max_gap, &mut visit);
             None
@@ -857,27 +896,18 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
         }
     }
 
-    /// The exact gap started where the pair's last solve ended
-    /// ([`Profiled::exact_solve_warm`]); the other gap models as
-    /// [`Shape::contacts`].
+    /// The convex exact gap started where the pair's last solve ended
+    /// ([`Profiled::exact_solve_warm`]); none for the other gap models.
     #[inline(always)]
-    fn contacts_warm<F: FnMut(Contact<2>)>(
-        &self,
-        pair: &Pair<2, O>,
-        max_gap: f64,
-        memo: &mut PairMemo,
-        mut visit: F,
-    ) {
+    fn contact_warm(&self, pair: &Pair<2, O>, max_gap: f64, memo: &mut PairMemo) -> Warm<2> {
         if self.gap != GapModel::Exact || self.arcs.is_some() {
-            return self.contacts(pair, max_gap, visit);
+            return Warm::Cold;
         }
         let r = pair.r_ij.norm();
         if r - self.bounding_radius(pair.size_i) - self.bounding_radius(pair.size_j) > max_gap {
-            return;
+            return Warm::Solved(None);
         }
-        if let Some(c) = self.beyond_first_order(pair, max_gap, Some(memo)) {
-            visit(c);
-        }
+        Warm::Solved(self.exact_warm(pair, r, max_gap, memo))
     }
 
     /// The same gap with its second derivatives

@@ -13,7 +13,7 @@
 //! Throughput is in pairs.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use jamkit_core::Vector;
+use jamkit_core::{Pair, Vector};
 use jamkit_ellipse::{Axis, Ellipse, EllipseParams};
 use std::hint::black_box;
 
@@ -48,13 +48,13 @@ fn cases(s: &Ellipse, contact: bool) -> Vec<Case> {
             let target = -1e-4 * rnd();
             for _ in 0..20 {
                 let h = s
-                    .exact_gap_safeguarded(ri, &oi, rj, &oj, &d, f64::INFINITY)
+                    .exact_gap_safeguarded(&Pair::new(ri, oi, rj, oj, d), f64::INFINITY)
                     .unwrap()
                     .gap;
                 d += u * (target - h);
             }
             let h = s
-                .exact_gap_safeguarded(ri, &oi, rj, &oj, &d, f64::INFINITY)
+                .exact_gap_safeguarded(&Pair::new(ri, oi, rj, oj, d), f64::INFINITY)
                 .unwrap()
                 .gap;
             if !(h < 0.0 && h > -1e-4) {
@@ -85,7 +85,7 @@ fn pair(c: &mut Criterion) {
                     kept += 1;
                     steps += m.iterations;
                 }
-                if let Some(m) = s.exact_gap_safeguarded(*ri, oi, *rj, oj, d, 0.0) {
+                if let Some(m) = s.exact_gap_safeguarded(&Pair::new(*ri, *oi, *rj, *oj, *d), 0.0) {
                     old_steps += m.iterations;
                 }
             }
@@ -111,9 +111,10 @@ fn pair(c: &mut Criterion) {
                 b.iter(|| {
                     let mut sum = 0.0;
                     for (ri, oi, rj, oj, d) in &pairs {
-                        if let Some(m) =
-                            s.exact_gap_safeguarded(*ri, oi, *rj, oj, black_box(d), 0.0)
-                        {
+                        if let Some(m) = s.exact_gap_safeguarded(
+                            &Pair::new(*ri, *oi, *rj, *oj, *black_box(d)),
+                            0.0,
+                        ) {
                             sum += m.gap;
                         }
                     }

@@ -109,7 +109,7 @@
 
 use jamkit_core::{
     Contact, Dims, Family, FamilyInfo, GapHessian, Look, MEMO_LEN, NoFastPath, Outline, Pair,
-    PairMemo, ParamSpec, Policy, RotVec, Shape, ShapeVisitor, Vector,
+    PairMemo, ParamSpec, Policy, RotVec, Shape, ShapeVisitor, Vector, Warm,
 };
 use jamkit_planar::gap2d::{ExactGap, SupportJet};
 use serde::Deserialize;
@@ -313,8 +313,12 @@ impl Ellipse {
         r_ij: &Vector<2>,
         max_gap: f64,
     ) -> Option<Solution> {
-        let (fi, fj, r) = self.screen(size_i, o_i, size_j, o_j, r_ij, max_gap)?;
-        self.cold(&fi, &fj, (size_i, o_i, size_j, o_j), r_ij, r, max_gap, true)
+        self.solve(
+            &Pair::new(size_i, *o_i, size_j, *o_j, *r_ij),
+            max_gap,
+            None,
+            true,
+        )
     }
 
     /// [`Ellipse::exact_gap`] as the engine's pair loop finds it
@@ -334,40 +338,54 @@ impl Ellipse {
         max_gap: f64,
         memo: &mut PairMemo,
     ) -> Option<Solution> {
-        let (size_i, o_i, size_j, o_j, r_ij) =
-            (pair.size_i, &pair.o_i, pair.size_j, &pair.o_j, &pair.r_ij);
-        let (fi, fj, r) = self.screen(size_i, o_i, size_j, o_j, r_ij, max_gap)?;
+        self.solve(pair, max_gap, Some(memo), false)
+    }
+
+    /// The solve of [`Ellipse::exact_gap`] (`memo` `None`, `second`) and
+    /// of [`Ellipse::exact_gap_warm`] (`memo` given): the screens, Halley's
+    /// iteration from the memo's normal where there is one, else or where
+    /// a guard fails [`Ellipse::cold`]; the memo, where given, gets the
+    /// normal found.
+    #[inline(always)]
+    fn solve(
+        &self,
+        pair: &Pair<2, Axis>,
+        max_gap: f64,
+        memo: Option<&mut PairMemo>,
+        second: bool,
+    ) -> Option<Solution> {
+        let r_ij = &pair.r_ij;
+        let (fi, fj, r) = self.screen(
+            pair.size_i,
+            &pair.o_i,
+            pair.size_j,
+            &pair.o_j,
+            r_ij,
+            max_gap,
+        )?;
         let (x, y) = (r_ij[0], r_ij[1]);
-        let warm = match memo {
+        let warm = match memo.as_deref() {
             // The line of centres `r_ij` turned by the memo's `n ū` (both
             // of any length).
-            Some([a0, a1, ..]) => match halley(
+            Some(Some([a0, a1, ..])) => match halley(
                 &fi,
                 &fj,
                 (x, y),
                 (x * *a0 - y * *a1, y * *a0 + x * *a1),
                 max_gap,
-                false,
+                second,
             ) {
                 Fast::Done(s) => Some(Some(s)),
                 Fast::Apart => Some(None),
                 Fast::Failed => None,
             },
-            None => None,
+            _ => None,
         };
         let found = match warm {
             Some(found) => found,
-            None => self.cold(
-                &fi,
-                &fj,
-                (size_i, o_i, size_j, o_j),
-                r_ij,
-                r,
-                max_gap,
-                false,
-            ),
+            None => self.cold(&fi, &fj, pair, r, max_gap, second),
         };
-        if let Some(s) = &found {
+        if let (Some(memo), Some(s)) = (memo, &found) {
             // n r̄_ij: the normal relative to the line of centres, times r
             // (any length will do, and no division).
             let n = (s.normal[0], s.normal[1]);
@@ -418,26 +436,24 @@ impl Ellipse {
     /// iteration where its guards fail (the solve of
     /// [`Ellipse::exact_gap`] after its screens); Halley's jets at its
     /// final normal with `second`, else moved to it ([`halley`]).
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn cold(
         &self,
         fi: &Form,
         fj: &Form,
-        (size_i, o_i, size_j, o_j): (f64, &Axis, f64, &Axis),
-        r_ij: &Vector<2>,
+        pair: &Pair<2, Axis>,
         r: f64,
         max_gap: f64,
         second: bool,
     ) -> Option<Solution> {
-        let (x, y) = (r_ij[0], r_ij[1]);
+        let (x, y) = (pair.r_ij[0], pair.r_ij[1]);
         let v0 = if r > 0.0 { (x, y) } else { (1.0, 0.0) };
         match halley(fi, fj, (x, y), v0, max_gap, second) {
             Fast::Done(s) => Some(s),
             Fast::Apart => None,
             Fast::Failed => {
                 count_fallback();
-                self.exact_gap_safeguarded(size_i, o_i, size_j, o_j, r_ij, max_gap)
+                self.exact_gap_safeguarded(pair, max_gap)
             }
         }
     }
@@ -446,15 +462,9 @@ impl Ellipse {
     /// the line of centres (module documentation), or `None` when `g` at
     /// the line of centres exceeds `max_gap`: what [`Ellipse::exact_gap`]
     /// runs where Halley's iteration fails its guards.
-    pub fn exact_gap_safeguarded(
-        &self,
-        size_i: f64,
-        o_i: &Axis,
-        size_j: f64,
-        o_j: &Axis,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-    ) -> Option<Solution> {
+    pub fn exact_gap_safeguarded(&self, pair: &Pair<2, Axis>, max_gap: f64) -> Option<Solution> {
+        let (size_i, o_i, size_j, o_j, r_ij) =
+            (pair.size_i, &pair.o_i, pair.size_j, &pair.o_j, &pair.r_ij);
         let r = r_ij.norm();
         // h ≥ |r| − a_i − a_j: skip pairs that are certainly apart.
         if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
@@ -892,39 +902,19 @@ impl Shape<2> for Ellipse {
 
     #[inline]
     fn contacts<F: FnMut(Contact<2>)>(&self, pair: &Pair<2, Axis>, max_gap: f64, mut visit: F) {
-        let size_i = pair.size_i;
-        let o_i = &pair.o_i;
-        let size_j = pair.size_j;
-        let o_j = &pair.o_j;
-        let r_ij = &pair.r_ij;
-        if let Some((fi, fj, r)) = self.screen(size_i, o_i, size_j, o_j, r_ij, max_gap)
-            && let Some(s) = self.cold(
-                &fi,
-                &fj,
-                (size_i, o_i, size_j, o_j),
-                r_ij,
-                r,
-                max_gap,
-                false,
-            )
-        {
+        if let Some(s) = self.solve(pair, max_gap, None, false) {
             visit(s.contact());
         }
     }
 
     /// [`Ellipse::exact_gap_warm`]: the exact gap started where the
     /// pair's last solve ended.
-    #[inline]
-    fn contacts_warm<F: FnMut(Contact<2>)>(
-        &self,
-        pair: &Pair<2, Axis>,
-        max_gap: f64,
-        memo: &mut PairMemo,
-        mut visit: F,
-    ) {
-        if let Some(s) = self.exact_gap_warm(pair, max_gap, memo) {
-            visit(s.contact());
-        }
+    #[inline(always)]
+    fn contact_warm(&self, pair: &Pair<2, Axis>, max_gap: f64, memo: &mut PairMemo) -> Warm<2> {
+        Warm::Solved(
+            self.exact_gap_warm(pair, max_gap, memo)
+                .map(|s| s.contact()),
+        )
     }
 
     fn gap_hessians<V: FnMut(GapHessian<2>)>(
@@ -933,12 +923,7 @@ impl Shape<2> for Ellipse {
         max_gap: f64,
         mut visit: V,
     ) -> jamkit_core::Result<()> {
-        let size_i = pair.size_i;
-        let o_i = &pair.o_i;
-        let size_j = pair.size_j;
-        let o_j = &pair.o_j;
-        let r_ij = &pair.r_ij;
-        if let Some(s) = self.exact_gap(size_i, o_i, size_j, o_j, r_ij, max_gap) {
+        if let Some(s) = self.solve(pair, max_gap, None, true) {
             visit(s.hessian());
         }
         Ok(())
@@ -1144,14 +1129,14 @@ mod tests {
                     // minus the gap, twice (h changes by ~the move).
                     for _ in 0..2 {
                         let h = s
-                            .exact_gap_safeguarded(ri, &oi, rj, &oj, &d, f64::INFINITY)
+                            .exact_gap_safeguarded(&Pair::new(ri, oi, rj, oj, d), f64::INFINITY)
                             .unwrap()
                             .gap;
                         d -= u * (h - 1e-3 * (2.0 * rnd() - 1.0));
                     }
                 }
                 let safe = s
-                    .exact_gap_safeguarded(ri, &oi, rj, &oj, &d, f64::INFINITY)
+                    .exact_gap_safeguarded(&Pair::new(ri, oi, rj, oj, d), f64::INFINITY)
                     .unwrap();
                 near += usize::from(safe.gap.abs() < 1e-3);
                 let fast = match halley(
@@ -1217,7 +1202,10 @@ mod tests {
                 let mut d = u * (ri + rj);
                 for _ in 0..2 {
                     let h = s
-                        .exact_gap_safeguarded(ri, &Axis::new(ti), rj, &Axis::new(tj), &d, 1.0)
+                        .exact_gap_safeguarded(
+                            &Pair::new(ri, Axis::new(ti), rj, Axis::new(tj), d),
+                            1.0,
+                        )
                         .unwrap()
                         .gap;
                     d -= u * (h - 1e-3 * (2.0 * rnd() - 1.0));
@@ -1268,6 +1256,39 @@ mod tests {
                 "α = {aspect}: {one_step} of {tiny}"
             );
         }
+    }
+
+    /// `Shape::contacts_warm` goes through `Shape::contact_warm` to the
+    /// warm solve: from an empty memo it visits `Shape::contacts`' contact
+    /// bit for bit and records the memo; a pair apart (past the screens)
+    /// gives none and leaves the memo as it was.
+    #[test]
+    fn contacts_warm_is_contacts_from_an_empty_memo() {
+        let mut rnd = uniform(9);
+        let s = ellipse(1.5);
+        let (mut touching, mut apart) = (0, 0);
+        for _ in 0..400 {
+            let (ri, rj) = (0.5 + 0.2 * rnd(), 0.5 + 0.2 * rnd());
+            let phi = 6.3 * rnd();
+            let d = Vector::<2>::new(phi.cos(), phi.sin()) * ((ri + rj) * (0.8 + 0.6 * rnd()));
+            let pair = Pair::new(ri, Axis::new(6.3 * rnd()), rj, Axis::new(6.3 * rnd()), d);
+            let (mut cold, mut warm) = (Vec::new(), Vec::new());
+            s.contacts(&pair, 0.0, |c| cold.push(c));
+            let mut memo: PairMemo = None;
+            s.contacts_warm(&pair, 0.0, &mut memo, |c| warm.push(c));
+            assert_eq!(warm, cold);
+            assert!(matches!(
+                s.contact_warm(&pair, 0.0, &mut memo.clone()),
+                Warm::Solved(c) if c.is_some() != cold.is_empty()
+            ));
+            assert_eq!(memo.is_some(), !cold.is_empty());
+            if cold.is_empty() {
+                apart += 1;
+            } else {
+                touching += 1;
+            }
+        }
+        assert!(touching > 50 && apart > 50, "{touching} {apart}");
     }
 
     /// An independent check of where the gap vanishes: the Perram–Wertheim

@@ -46,7 +46,7 @@
 use jamkit_core::math::{Unit, cmul};
 use jamkit_core::{
     Contact, ContactLanes, Dims, Family, FamilyInfo, FastContacts, GapHessian, Look, Outline, Pair,
-    PairLanes, PairMemo, ParamSpec, Policy, Shape, ShapeVisitor, contacts_one_by_one,
+    PairLanes, PairMemo, ParamSpec, Policy, Shape, ShapeVisitor, Warm, contacts_one_by_one,
 };
 use jamkit_planar::gap2d::{GapModel, Jet3};
 use jamkit_planar::profiled::{NearDiskProfile, Profiled};
@@ -664,14 +664,8 @@ impl Shape<2> for NearDisk {
     }
 
     #[inline(always)]
-    fn contacts_warm<F: FnMut(Contact<2>)>(
-        &self,
-        pair: &Pair<2, Angle>,
-        max_gap: f64,
-        memo: &mut PairMemo,
-        visit: F,
-    ) {
-        self.shape.contacts_warm(pair, max_gap, memo, visit)
+    fn contact_warm(&self, pair: &Pair<2, Angle>, max_gap: f64, memo: &mut PairMemo) -> Warm<2> {
+        self.shape.contact_warm(pair, max_gap, memo)
     }
 
     fn gap_hessians<V: FnMut(GapHessian<2>)>(

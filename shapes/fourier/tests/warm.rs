@@ -3,7 +3,7 @@
 //! solve (`Profiled::exact_solve`): the same contacts to round-off, whatever
 //! the memo holds, and the convergence the joint iteration promises.
 
-use jamkit_core::{Contact, Pair, PairMemo, Rotation2, Shape, ShapeExt, Vector};
+use jamkit_core::{Contact, Pair, PairMemo, Rotation2, Shape, ShapeExt, Vector, Warm};
 use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
 use jamkit_planar::gap2d::{ExactGap, GapModel};
 use jamkit_planar::profiled::ExactSolve;
@@ -277,4 +277,45 @@ fn converged_means_stationary_to_round_off() {
         }
     }
     assert!(checked > 1000, "{checked}");
+}
+
+/// `Shape::contact_warm`, through which `contacts_warm` reaches the warm
+/// solve: the exact gap answers with its contact (bit for bit
+/// `Shape::contacts` from an empty memo, which it fills); the first- and
+/// second-order gaps have no warm solve (`Warm::Cold`, the memo left
+/// empty), and their `contacts_warm` is `contacts`, bit for bit.
+#[test]
+fn contact_warm_answers_for_the_exact_gap_alone() {
+    let mut u = Uniform(3);
+    let (mut exact, mut approximate) = (0, 0);
+    for gap in [GapModel::Exact, GapModel::FirstOrder, GapModel::SecondOrder] {
+        let s = NearDisk::fourier(&FourierParams {
+            n: 2,
+            delta: 0.2,
+            inertia: None,
+            gap,
+        })
+        .unwrap();
+        for _ in 0..200 {
+            let pair = random_pair(&mut u);
+            let reference = cold(&s, &pair);
+            let mut memo: PairMemo = None;
+            match s.contact_warm(&pair, 0.0, &mut memo) {
+                Warm::Solved(c) => {
+                    assert_eq!(gap, GapModel::Exact);
+                    let got: Vec<[f64; 5]> = c.iter().map(numbers).collect();
+                    assert_eq!(got, reference);
+                    assert_eq!(memo.is_some(), c.is_some());
+                    exact += usize::from(c.is_some());
+                }
+                Warm::Cold => {
+                    assert_ne!(gap, GapModel::Exact);
+                    assert!(memo.is_none());
+                    assert_eq!(warm(&s, &pair, &mut memo), reference);
+                    approximate += reference.len();
+                }
+            }
+        }
+    }
+    assert!(exact > 50 && approximate > 100, "{exact} {approximate}");
 }
