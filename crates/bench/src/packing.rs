@@ -346,8 +346,7 @@ pub fn run(o: &Options, print: Print) -> Result<()> {
                     seed,
                     o.skin,
                     &fire,
-                    &jam_params,
-                    o.escape_saddles(),
+                    (&jam_params, o.escape_saddles()),
                     trace_out.as_mut(),
                 )?
             };
@@ -422,15 +421,15 @@ pub fn packing_hash<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> u64 {
     h
 }
 
-/// Jam one packing; its line of the table (see [`HEADER`]).
+/// Jam one packing (the search of `jam_params`, then the saddle escape if
+/// `escape`); its line of the table (see [`HEADER`]).
 fn bench_packing<const D: usize, S: Shape<D>>(
     shape: S,
     n: usize,
     seed: u64,
     skin: f64,
     params: &FireParams,
-    jam_params: &JamParams,
-    escape: bool,
+    (jam_params, escape): (&JamParams, bool),
     trace: Option<&mut std::io::BufWriter<std::fs::File>>,
 ) -> Result<String> {
     let family = shape.family();

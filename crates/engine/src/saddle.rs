@@ -119,7 +119,7 @@ impl Default for SaddleParams {
 /// What the escape did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SaddleOutcome {
-    /// Pushes made (0: the end state of the search was not a saddle).
+    /// Kicks made (0: the end state of the search is no saddle).
     pub rounds: u32,
     /// Whether the last state checked is still a saddle (the cap was hit).
     pub still_saddle: bool,
