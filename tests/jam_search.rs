@@ -318,3 +318,47 @@ fn packings_without_the_unjamming_forecast_are_refused_where_it_acts_and_resume_
         settings(&experiment("AboveJam(delta_phi: 1e-2)", ""))
     );
 }
+
+/// A run directory of jamming packings made without the saddle escape
+/// (jamkit's default before it; they record no `escape_saddles`) is refused
+/// under the default, with the field named and the fix said, and resumed
+/// under an explicit `escape_saddles: false`; `paper_path: true` records no
+/// escape either, so the paper path's packings keep their settings.
+#[test]
+fn packings_without_the_saddle_escape_are_refused_under_the_default_and_resume_as_off() {
+    let experiment = |protocol: &str, more: &str| {
+        let text = format!(
+            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3,
+            protocol: {protocol}{more})"#
+        );
+        Experiment::from_ron(&text, "inline").unwrap()
+    };
+    common::refused_then_resumed(
+        &experiment("Jam(escape_saddles: false)", ""),
+        &experiment("Jam()", ""),
+        &[
+            "protocol.Jam.escape_saddles",
+            "true",
+            "false (not written; the default before true",
+            "--set protocol.escape_saddles=false",
+        ],
+    );
+    let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
+    assert_eq!(
+        settings(&experiment("Jam()", ", paper_path: true")),
+        settings(&experiment(
+            "Jam(escape_saddles: false, search: Bisection)",
+            ", paper_path: true"
+        ))
+    );
+    assert!(
+        !settings(&experiment("Jam()", ", paper_path: true"))
+            .to_string()
+            .contains("escape_saddles")
+    );
+    assert!(
+        settings(&experiment("Jam()", ""))
+            .to_string()
+            .contains("escape_saddles")
+    );
+}

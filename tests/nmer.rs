@@ -639,21 +639,21 @@ fn random_start_is_overlap_free() {
     assert!(err.contains("protocol.phi_start"), "{err}");
 }
 
-/// The saddle escape (`protocol.escape_saddles`, `jamkit_observe::saddle`)
+/// The saddle escape (`protocol.escape_saddles`, `jamkit_engine::saddle`)
 /// on 2D dimers, N = 64, α = 1.5, seeds 1–2 (seed 1 has iso_margin −2 and
 /// two negative modes of `K + T` of the non-rattlers): the true Hessian has
-/// no eigenvalue below −10⁻¹⁰ λ_max, so no push is made (0 rounds
-/// recorded), and the packing is the one without the escape, bit for bit.
-/// Off, nothing is recorded (`saddle_escapes` is `None`). A wrong mapping
-/// of Hessian rows to coordinates, or a sign error in the stress part,
-/// would show up here as pushes.
+/// no eigenvalue below −10⁻¹⁰ of its mean diagonal, so no push is made (0
+/// rounds recorded), and the packing is the one without the escape, bit
+/// for bit. Off, nothing is recorded (`saddle_escapes` is `None`). A wrong
+/// mapping of Hessian rows to coordinates, or a sign error in the stress
+/// part, would show up here as pushes.
 #[test]
 fn saddle_escape_finds_no_saddle_on_small_dimer_packings() {
     let sets = ["dim=2", "particles=64", "samples=2", "params.alpha=1.5"];
-    let off = run_small("experiments/sanity/dimers.ron", &sets);
-    let mut with = sets.to_vec();
-    with.push("protocol.escape_saddles=true");
-    let on = run_small("experiments/sanity/dimers.ron", &with);
+    let on = run_small("experiments/sanity/dimers.ron", &sets);
+    let mut without = sets.to_vec();
+    without.push("protocol.escape_saddles=false");
+    let off = run_small("experiments/sanity/dimers.ron", &without);
     assert_eq!(off.len(), 2);
     for (a, b) in off.iter().zip(&on) {
         assert_eq!(a.measures.saddle_escapes, None, "{}", a.id);

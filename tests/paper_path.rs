@@ -1,6 +1,7 @@
 //! `paper_path: true`, the paper's path as one named setting: its packings
 //! are those of the paper's fields set one by one (FIRE all the way with
-//! plain masses and no L-BFGS, `Σ (∂V/∂q)²`, the plain bisection), bit for
+//! plain masses and no L-BFGS, `Σ (∂V/∂q)²`, the plain bisection, no
+//! saddle escape), bit for
 //! bit and with the same recorded settings; it is not jamkit's default
 //! path; and a file that contradicts it is refused, naming the field.
 
@@ -30,6 +31,7 @@ fn paper_path_is_the_paper_fields_set_one_by_one_bit_for_bit() {
         "minimizer.lbfgs=None",
         "minimizer.force_criterion=Sum",
         "protocol.search=Bisection",
+        "protocol.escape_saddles=false",
     ]);
     let default = near_disks(&[]);
     let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();

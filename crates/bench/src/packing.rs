@@ -14,6 +14,7 @@ use jamkit_core::{BodyOrientation, Packing, Potential, Shape, SizeDistribution};
 use jamkit_engine::{
     Fire, FireParams, FireVariant, ForceCriterion, JamParams, JamSearch, LbfgsChoice, LbfgsParams,
     Masses, PreconParams, Scene, jam,
+    saddle::{self, SaddleParams},
 };
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_observe::summarize;
@@ -24,7 +25,7 @@ use std::io::Write;
 use std::time::Instant;
 
 /// The header of the lines [`run`] prints, one per packing.
-pub const HEADER: &str = "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s,lbfgs_evals";
+pub const HEADER: &str = "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s,lbfgs_evals,saddle_escapes";
 /// The header of the step trace (`--trace`).
 pub const TRACE_HEADER: &str =
     "seed,phi,fire_steps,newton_iterations,reason,energy_per_particle,force_sq,lbfgs_evals";
@@ -242,6 +243,11 @@ pub struct Options {
     /// files].
     #[arg(long, value_enum)]
     pub search: Option<SearchArg>,
+    /// No saddle escape after the search (`protocol.escape_saddles:
+    /// false`) [default: the escape, as in experiment files; none with
+    /// `--minimizer paper`, so that it is the paper's path bit for bit].
+    #[arg(long)]
+    pub no_saddle_escape: bool,
     /// Write every minimisation (φ, FIRE steps, Newton iterations, why it
     /// stopped, V/N, Σ g², L-BFGS evaluations) of every packing to this
     /// CSV (a step trace).
@@ -263,6 +269,12 @@ impl Options {
             },
             ..JamParams::default()
         }
+    }
+
+    /// Whether the saddle escape follows the search: not with
+    /// `--no-saddle-escape` or `--minimizer paper`.
+    pub fn escape_saddles(&self) -> bool {
+        !self.no_saddle_escape && self.minimizer != MinimizerArg::Paper
     }
 
     /// The minimiser's parameters the flags describe, checked.
@@ -334,7 +346,7 @@ pub fn run(o: &Options, print: Print) -> Result<()> {
                     seed,
                     o.skin,
                     &fire,
-                    &jam_params,
+                    (&jam_params, o.escape_saddles()),
                     trace_out.as_mut(),
                 )?
             };
@@ -409,14 +421,15 @@ pub fn packing_hash<const D: usize, S: Shape<D>>(p: &Packing<D, S>) -> u64 {
     h
 }
 
-/// Jam one packing; its line of the table (see [`HEADER`]).
+/// Jam one packing (the search of `jam_params`, then the saddle escape if
+/// `escape`); its line of the table (see [`HEADER`]).
 fn bench_packing<const D: usize, S: Shape<D>>(
     shape: S,
     n: usize,
     seed: u64,
     skin: f64,
     params: &FireParams,
-    jam_params: &JamParams,
+    (jam_params, escape): (&JamParams, bool),
     trace: Option<&mut std::io::BufWriter<std::fs::File>>,
 ) -> Result<String> {
     let family = shape.family();
@@ -428,7 +441,23 @@ fn bench_packing<const D: usize, S: Shape<D>>(
     }
     let cpu = cpu_seconds();
     let t = Instant::now();
-    let out = jam(&mut scene, &mut fire, jam_params)?;
+    let mut out = jam(&mut scene, &mut fire, jam_params)?;
+    let threshold = scene.packing().shape.policy().rattler_threshold;
+    let mut escapes = String::new();
+    if escape {
+        let s = saddle::escape_saddles(
+            &mut scene,
+            &mut fire,
+            jam_params,
+            &SaddleParams::default(),
+            |scene| summarize(scene, threshold).rattler,
+        )?;
+        out.phi = s.phi;
+        out.fire_steps += s.fire_steps;
+        out.newton_iterations += s.newton_iterations;
+        out.lbfgs_evaluations += s.lbfgs_evaluations;
+        escapes = s.rounds.to_string();
+    }
     let wall = t.elapsed().as_secs_f64();
     let cpu = cpu_seconds() - cpu;
     if let Some(f) = trace {
@@ -446,10 +475,9 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         }
         f.flush()?;
     }
-    let threshold = scene.packing().shape.policy().rattler_threshold;
     let s = summarize(&mut scene, threshold);
     Ok(format!(
-        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2},{}",
+        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2},{},{escapes}",
         out.phi,
         s.z_j,
         s.iso_margin,

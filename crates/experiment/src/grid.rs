@@ -328,18 +328,22 @@ pub fn settings(experiment: &Experiment, point: &Point, seed: u64) -> serde_json
 }
 
 /// The protocol as a packing records it: as written to `experiment.ron`,
-/// except that `search: Bisection` and `AboveJam`'s `rejams: 0` are left
-/// out. Packings made before these fields existed were bisection packings
-/// without re-jams and record neither, so they still resume under an
-/// explicit `search: Bisection` or `rejams: 0`; the others
+/// except that `search: Bisection`, `escape_saddles: false` and
+/// `AboveJam`'s `rejams: 0` are left out. Packings made before these
+/// fields existed were bisection packings without saddle escapes or
+/// re-jams and record none, so they still resume under an explicit
+/// `search: Bisection`, `escape_saddles: false` or `rejams: 0`; the others
 /// (`Adaptive`, the default, and `Extrapolated`) are always written, so no
 /// packing of one search is ever taken for another's.
 fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
     let mut value = serde_json::to_value(protocol).expect("protocol serialises");
-    if let Some(jam) = value.get_mut("Jam").and_then(|j| j.as_object_mut())
-        && jam.get("search") == Some(&serde_json::json!("Bisection"))
-    {
-        jam.remove("search");
+    if let Some(jam) = value.get_mut("Jam").and_then(|j| j.as_object_mut()) {
+        if jam.get("search") == Some(&serde_json::json!("Bisection")) {
+            jam.remove("search");
+        }
+        if jam.get("escape_saddles") == Some(&serde_json::json!(false)) {
+            jam.remove("escape_saddles");
+        }
     }
     if let Some(above) = value.get_mut("AboveJam").and_then(|j| j.as_object_mut())
         && above.get("rejams") == Some(&serde_json::json!(0))

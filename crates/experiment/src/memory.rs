@@ -3,10 +3,10 @@
 //! validation, before any packing is made, instead of failing (or being
 //! killed) when its first packing is measured.
 //!
-//! Three things diagonalise the Hessian densely: the `Spectrum` observable
-//! (every eigenvalue; with `modes`, every eigenvector too), the `Moduli`
-//! observable with `solver: Dense` (every mode, for the pseudo-inverse) and
-//! `protocol.escape_saddles` (the lowest mode of the full Hessian). The
+//! Two things diagonalise the Hessian densely: the `Spectrum` observable
+//! (every eigenvalue; with `modes`, every eigenvector too) and the `Moduli`
+//! observable with `solver: Dense` (every mode, for the pseudo-inverse);
+//! the saddle escape (`protocol.escape_saddles`) is sparse. The
 //! Hessian has `n = N (d + k)` rows, `N` bodies of `d` translational and
 //! `k` rotational coordinates (rattlers' rows included: they are removed
 //! only with `remove_rattlers`, and a packing may have none), and the
@@ -24,7 +24,7 @@
 //! count. Where `/proc/meminfo` is absent (not Linux) nothing is checked.
 
 use crate::error::ExperimentError;
-use crate::schema::{Experiment, Protocol};
+use crate::schema::Experiment;
 
 /// Bytes of one matrix entry (`f64`).
 const ENTRY: u64 = 8;
@@ -64,9 +64,8 @@ pub struct DenseSolve {
     alternative: fn(max_particles: u64) -> String,
 }
 
-/// The dense eigen-solves of one sample of `experiment` under `protocol`
-/// (a grid point's protocol: `escape_saddles` may be scanned).
-pub fn dense_solves(experiment: &Experiment, protocol: &Protocol) -> Vec<DenseSolve> {
+/// The dense eigen-solves of one sample of `experiment`.
+pub fn dense_solves(experiment: &Experiment) -> Vec<DenseSolve> {
     const VALUES: &str = "the Hessian and the eigensolver's working copy";
     const VECTORS: &str = "the Hessian, the eigensolver's working copy and the eigenvectors";
     let mut out = Vec::new();
@@ -107,23 +106,6 @@ pub fn dense_solves(experiment: &Experiment, protocol: &Protocol) -> Vec<DenseSo
             alternative: |n| {
                 format!(
                     "use Moduli(solver: Sparse) (a sparse Cholesky factorisation, no dense matrix; it falls back to the dense path, which would not fit either, only for a packing with zero modes besides the translations, a negative mode or a softest mode with λ ≤ 2 omega_zero²), or at most particles = {n} here"
-                )
-            },
-        });
-    }
-    if let Protocol::Jam {
-        escape_saddles: true,
-        ..
-    } = protocol
-    {
-        out.push(DenseSolve {
-            field: "protocol.escape_saddles",
-            value: "true".into(),
-            matrices: 3,
-            what: VECTORS,
-            alternative: |n| {
-                format!(
-                    "the saddle escape finds the lowest mode of the full Hessian densely: leave it out (false), or use at most particles = {n} here"
                 )
             },
         });
@@ -194,21 +176,20 @@ pub fn check_dense_solves(
 }
 
 /// The dense eigen-solves of one grid point (`experiment`'s observables,
-/// its `protocol`, `dim`, `particles`, and the family's `rot_dof` there)
+/// the point's `dim`, `particles`, and the family's `rot_dof` there)
 /// checked against `memory`, this machine's ([`machine_memory`]; nothing
 /// is checked where it cannot be read). Asked for every point as the grid
 /// is planned ([`crate::plan::Plan::new`]), so `jamkit validate` and `jamkit run`
 /// both refuse such a file.
 pub(crate) fn check_point(
     experiment: &Experiment,
-    protocol: &Protocol,
     (dim, particles, rot_dof): (usize, usize, usize),
     memory: Option<u64>,
 ) -> Result<(), ExperimentError> {
     let Some(memory) = memory else {
         return Ok(());
     };
-    let solves = dense_solves(experiment, protocol);
+    let solves = dense_solves(experiment);
     if solves.is_empty() {
         return Ok(());
     }
@@ -239,7 +220,7 @@ mod tests {
     #[test]
     fn a_spectrum_of_30000_spheres_in_3d_needs_two_hessians_of_65_gb() {
         let e = experiment("Contacts, Spectrum()", "Jam()");
-        let solves = dense_solves(&e, &e.protocol);
+        let solves = dense_solves(&e);
         assert_eq!(solves.len(), 1);
         assert_eq!(dense_bytes(90_000, 1), 64_800_000_000);
         let sphere = ("sphere", 3, 0);
@@ -273,7 +254,7 @@ mod tests {
     #[test]
     fn rotational_coordinates_count_in_the_rows() {
         let e = experiment("Spectrum()", "Jam()");
-        let solves = dense_solves(&e, &e.protocol);
+        let solves = dense_solves(&e);
         let memory = dense_bytes(90_000, 2);
         check_dense_solves(&solves, ("sphere", 3, 0), 30_000, memory).unwrap();
         let err = check_dense_solves(&solves, ("ellipsoid", 3, 3), 30_000, memory)
@@ -283,21 +264,17 @@ mod tests {
         assert!(err.contains("at most particles = 15000 here"), "{err}");
     }
 
-    /// Dense moduli and the saddle escape hold the eigenvectors too, and
-    /// name their alternatives; sparse moduli build no dense matrix.
+    /// Dense moduli hold the eigenvectors too, and name their
+    /// alternative; sparse moduli and the saddle escape build no dense
+    /// matrix.
     #[test]
-    fn dense_moduli_and_saddle_escapes_are_counted_sparse_moduli_are_not() {
+    fn dense_moduli_are_counted_sparse_moduli_and_saddle_escapes_are_not() {
         let memory = dense_bytes(90_000, 2);
         let sphere = ("sphere", 3, 0);
         let dense = experiment("Moduli(solver: Dense)", "Pressure(pressure: 1e-3)");
-        let err = check_dense_solves(
-            &dense_solves(&dense, &dense.protocol),
-            sphere,
-            30_000,
-            memory,
-        )
-        .unwrap_err()
-        .to_string();
+        let err = check_dense_solves(&dense_solves(&dense), sphere, 30_000, memory)
+            .unwrap_err()
+            .to_string();
         assert!(
             err.starts_with("observables = Moduli(solver: Dense):")
                 && err.contains("3 matrices")
@@ -306,20 +283,12 @@ mod tests {
         );
         for sparse in ["Moduli(solver: Sparse)", "Moduli()"] {
             let sparse = experiment(sparse, "Pressure(pressure: 1e-3)");
-            assert!(dense_solves(&sparse, &sparse.protocol).is_empty());
+            assert!(dense_solves(&sparse).is_empty());
         }
         let escape = experiment("Contacts", "Jam(escape_saddles: true)");
-        let err = check_dense_solves(
-            &dense_solves(&escape, &escape.protocol),
-            sphere,
-            30_000,
-            memory,
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(err.starts_with("protocol.escape_saddles = true:"), "{err}");
+        assert!(dense_solves(&escape).is_empty());
         let plain = experiment("Contacts, Pressure, Gaps()", "Jam()");
-        assert!(dense_solves(&plain, &plain.protocol).is_empty());
+        assert!(dense_solves(&plain).is_empty());
     }
 
     #[test]

@@ -3,9 +3,10 @@
 //! The paper runs FIRE (Bitzek et al.) all the way with the bodies' own
 //! masses and no L-BFGS, stops a minimisation on `Σ (∂V/∂q)² < force_tol`
 //! ([`FireParams::paper`]), and finds the jamming point by the plain
-//! bisection (`search: Bisection`). jamkit's defaults differ in the
-//! Newton finish, the family's masses and L-BFGS, and the extrapolated
-//! search (docs/how-to/paper-protocol.md); `paper_path: true` sets those
+//! bisection (`search: Bisection`), and takes the end state of the
+//! bisection as it is. jamkit's defaults differ in the Newton finish, the
+//! family's masses and L-BFGS, the extrapolated search and the saddle
+//! escape (docs/how-to/paper-protocol.md); `paper_path: true` sets those
 //! fields to the paper's, so that the packings are the paper path's bit
 //! for bit, the same as with each field set by hand.
 //!
@@ -83,7 +84,10 @@ pub(crate) fn check(e: &Experiment) -> Result<(), ExperimentError> {
     }
     for axis in &e.scan {
         for key in axis.keys() {
-            if MINIMIZER_FIELDS.contains(&key.as_str()) || key == "protocol.search" {
+            if MINIMIZER_FIELDS.contains(&key.as_str())
+                || key == "protocol.search"
+                || key == "protocol.escape_saddles"
+            {
                 return Err(ExperimentError::invalid(
                     format!("scan.{key}"),
                     "(given)",
@@ -111,6 +115,9 @@ pub(crate) fn apply(mut e: Experiment) -> Experiment {
     m.lbfgs = paper.lbfgs;
     if let Protocol::Jam { search, .. } | Protocol::AboveJam { search, .. } = &mut e.protocol {
         *search = JamSearch::Bisection;
+    }
+    if let Protocol::Jam { escape_saddles, .. } = &mut e.protocol {
+        *escape_saddles = false;
     }
     e
 }

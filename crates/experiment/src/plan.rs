@@ -64,7 +64,6 @@ impl Plan {
             let built = registry::dispatch(&experiment.family, point.dim, &point.params, build)??;
             memory::check_point(
                 &experiment,
-                &point.protocol,
                 (point.dim, point.particles, built.rot_dof),
                 machine,
             )?;

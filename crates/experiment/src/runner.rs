@@ -336,6 +336,13 @@ fn unwritten_setting(key: &str) -> Option<&'static str> {
             "0 (not written; the default before 2: add `rejams: 0` to the \
              protocol, or `--set protocol.rejams=0`, to resume them)",
         ),
+        // Packings made without the saddle escape record none
+        // (`grid::protocol_settings`).
+        "protocol.Jam.escape_saddles" => Some(
+            "false (not written; the default before true: add \
+             `escape_saddles: false` to the protocol, or \
+             `--set protocol.escape_saddles=false`, to resume them)",
+        ),
         // Packings made without the unjamming forecast record none
         // (`grid::minimizer_settings`).
         "minimizer.unjam_forecast" => Some(

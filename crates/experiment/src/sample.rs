@@ -1,7 +1,7 @@
 //! One sample, from start to end: the family's shape for its point, the
 //! random start from its seed, the protocol (the engine's `jam`,
 //! `compress_to_phi`, `compress_to_pressure` or `above_jam`, with the saddle
-//! escape when asked), the observables (contacts and rattlers, pressure,
+//! escape after `jam` unless it is turned off), the observables (contacts and rattlers, pressure,
 //! spectrum, gaps), and the packing file that records it all. The
 //! observables are measured on the configuration as its file records it
 //! (`measure_saved`), by the same code as the re-measurement of a saved
@@ -236,6 +236,7 @@ impl Sample<'_> {
                         outcome.phi = s.phi;
                         outcome.energy_per_particle = s.energy_per_particle;
                         outcome.fire_steps += s.fire_steps;
+                        outcome.newton_iterations += s.newton_iterations;
                         outcome.lbfgs_evaluations += s.lbfgs_evaluations;
                         outcome.minimizations += s.minimizations;
                         saddle_escapes = Some(s.rounds);

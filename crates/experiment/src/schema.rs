@@ -114,7 +114,8 @@ pub struct Experiment {
     #[serde(default)]
     pub output: OutputParams,
     /// `true`: the paper's path, bit for bit (FIRE all the way with plain
-    /// masses and no L-BFGS, `Σ (∂V/∂q)²`, and the plain bisection),
+    /// masses and no L-BFGS, `Σ (∂V/∂q)²`, the plain bisection and no
+    /// saddle escape),
     /// whatever jamkit's defaults (`paper` module).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub paper_path: bool,
@@ -154,13 +155,14 @@ pub enum Protocol {
         /// Give up after this many changes of φ.
         #[serde(default = "default_max_density_steps")]
         max_density_steps: u64,
-        /// After the bisection, push the packing off saddles of the true
-        /// Hessian and re-jam (`jamkit_engine::saddle`). Off by default,
-        /// and not written out when off, so that settings (and the resume
-        /// check) of earlier runs are unchanged: on 2D dimers the end
-        /// states of the bisection are true minima
-        /// (docs/reports/sanity.md), so the escape is a diagnostic, not a fix.
-        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        /// After the search, check the true Hessian for a negative
+        /// eigenvalue (one sparse factorisation) and, on a saddle, push the
+        /// packing along the negative mode and re-jam
+        /// (`jamkit_engine::saddle`). On by default; `paper_path: true`
+        /// turns it off. A packing records none when off, so that packings
+        /// made before it existed (and the paper path's) record what they
+        /// did; on a packing that is no saddle it moves nothing.
+        #[serde(default = "default_escape_saddles")]
         escape_saddles: bool,
         /// How the search moves: `Adaptive` (the default: a jammed state is
         /// decompressed by the step its pressure predicts, and the
@@ -301,6 +303,9 @@ fn default_energy_high() -> f64 {
 fn default_max_density_steps() -> u64 {
     JamParams::default().max_density_steps
 }
+fn default_escape_saddles() -> bool {
+    true
+}
 fn default_pressure_tol() -> f64 {
     PressureParams::default().tol
 }
@@ -313,7 +318,7 @@ impl Default for Protocol {
             energy_low: default_energy_low(),
             energy_high: default_energy_high(),
             max_density_steps: default_max_density_steps(),
-            escape_saddles: false,
+            escape_saddles: default_escape_saddles(),
             search: JamSearch::default(),
         }
     }

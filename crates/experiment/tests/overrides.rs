@@ -94,11 +94,13 @@ fn unknown_key_is_named() {
 /// An override edits one field and keeps every other as the file set it,
 /// including settings that differ from their defaults and that a packing's
 /// record leaves out (`unjam_forecast: false`, `masses: Plain`,
-/// `rejams: 0`): the experiment goes through its serialised form and back.
+/// `escape_saddles: false`, `rejams: 0`): the experiment goes through its
+/// serialised form and back.
 #[test]
 fn an_override_keeps_the_other_fields_that_differ_from_their_defaults() {
     let jam = Experiment::from_ron(
         r#"(name: "t", family: "sphere", particles: 16,
+            protocol: Jam(escape_saddles: false),
             minimizer: (unjam_forecast: false, masses: Plain, force_criterion: Sum))"#,
         "t",
     )
@@ -108,6 +110,11 @@ fn an_override_keeps_the_other_fields_that_differ_from_their_defaults() {
     assert_eq!(edited.minimizer, jam.minimizer);
     assert!(!edited.minimizer.unjam_forecast);
     assert_eq!(edited.minimizer.masses, jamkit_engine::Masses::Plain);
+    assert_eq!(edited.protocol, jam.protocol);
+    match edited.protocol {
+        schema::Protocol::Jam { escape_saddles, .. } => assert!(!escape_saddles),
+        other => panic!("expected Jam, got {other:?}"),
+    }
 
     let above = Experiment::from_ron(
         r#"(name: "t", family: "sphere", particles: 16,
