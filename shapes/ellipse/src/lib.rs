@@ -355,14 +355,7 @@ impl Ellipse {
         second: bool,
     ) -> Option<Solution> {
         let r_ij = &pair.r_ij;
-        let (fi, fj, r) = self.screen(
-            pair.size_i,
-            &pair.o_i,
-            pair.size_j,
-            &pair.o_j,
-            r_ij,
-            max_gap,
-        )?;
+        let (fi, fj, r) = self.screen(pair, max_gap)?;
         let (x, y) = (r_ij[0], r_ij[1]);
         let warm = match memo.as_deref() {
             // The line of centres `r_ij` turned by the memo's `n ū` (both
@@ -396,26 +389,29 @@ impl Ellipse {
         found
     }
 
+    /// The bounding circles' screen: `None` for a pair whose gap
+    /// `h ≥ |r_ij| − a_i − a_j` certainly exceeds `max_gap`, else both
+    /// bodies' quadratic forms and `r = |r_ij|`.
+    #[inline(always)]
+    fn bounded(&self, pair: &Pair<2, Axis>, max_gap: f64) -> Option<(Form, Form, f64)> {
+        let r = pair.r_ij.norm();
+        if r - self.bounding_radius(pair.size_i) - self.bounding_radius(pair.size_j) > max_gap {
+            return None;
+        }
+        Some((
+            self.form(pair.size_i, &pair.o_i),
+            self.form(pair.size_j, &pair.o_j),
+            r,
+        ))
+    }
+
     /// The two screens of [`Ellipse::exact_gap`]: `None` for a pair whose
     /// gap certainly exceeds `max_gap`, else both bodies' quadratic forms
     /// and `r = |r_ij|`.
     #[inline(always)]
-    fn screen(
-        &self,
-        size_i: f64,
-        o_i: &Axis,
-        size_j: f64,
-        o_j: &Axis,
-        r_ij: &Vector<2>,
-        max_gap: f64,
-    ) -> Option<(Form, Form, f64)> {
-        let r = r_ij.norm();
-        // h ≥ |r| − a_i − a_j: skip pairs that are certainly apart.
-        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
-            return None;
-        }
-        let (fi, fj) = (self.form(size_i, o_i), self.form(size_j, o_j));
-        let (x, y) = (r_ij[0], r_ij[1]);
+    fn screen(&self, pair: &Pair<2, Axis>, max_gap: f64) -> Option<(Form, Form, f64)> {
+        let (fi, fj, r) = self.bounded(pair, max_gap)?;
+        let (x, y) = (pair.r_ij[0], pair.r_ij[1]);
         // h ≥ g(ψ₀) = r − H_i − H_j at the line of centres: skip when
         // t = r − max_gap > H_i + H_j, i.e. t r > √U_i + √U_j with
         // U = r² H² = u(r_ij) (the quadratic form at the separation itself),
@@ -463,15 +459,8 @@ impl Ellipse {
     /// the line of centres exceeds `max_gap`: what [`Ellipse::exact_gap`]
     /// runs where Halley's iteration fails its guards.
     pub fn exact_gap_safeguarded(&self, pair: &Pair<2, Axis>, max_gap: f64) -> Option<Solution> {
-        let (size_i, o_i, size_j, o_j, r_ij) =
-            (pair.size_i, &pair.o_i, pair.size_j, &pair.o_j, &pair.r_ij);
-        let r = r_ij.norm();
-        // h ≥ |r| − a_i − a_j: skip pairs that are certainly apart.
-        if r - self.bounding_radius(size_i) - self.bounding_radius(size_j) > max_gap {
-            return None;
-        }
-        let (fi, fj) = (self.form(size_i, o_i), self.form(size_j, o_j));
-        let (x, y) = (r_ij[0], r_ij[1]);
+        let (fi, fj, r) = self.bounded(pair, max_gap)?;
+        let (x, y) = (pair.r_ij[0], pair.r_ij[1]);
         let eval = |n: (f64, f64)| {
             let w = (n.0 * n.0 - n.1 * n.1, 2.0 * n.0 * n.1);
             let (ji, jj) = (fi.jet(w), fj.jet(w));
