@@ -179,8 +179,9 @@ fn quick_experiment_jams() {
     }
 }
 
-/// `exact_solver` read through the registry: absent is `"Nested"` (the
-/// default path), a string names the solver (case ignored); a wrong name
+/// `exact_solver` read through the registry: absent is `"Nested"` (what a
+/// packing that records none was made with; an experiment's grid fills in
+/// the default `"Joint"`), a string names the solver (case ignored); a wrong name
 /// and a bare RON identifier (of the solver or of the gap) are refused
 /// naming the field or what is allowed.
 #[test]
@@ -217,4 +218,31 @@ fn the_exact_solver_is_read_and_checked() {
             ),
         ],
     );
+}
+
+/// An experiment that does not give `exact_solver` runs the default
+/// `"Joint"`, and its packing records it (label and `params`); one that
+/// gives `"Nested"` records none, as packings written before the parameter
+/// existed. Each record reads back as the solver that made it.
+#[test]
+fn packings_record_the_exact_solver_only_where_it_is_not_nested() {
+    let run = |extra: &str| {
+        common::run_inline(&format!(
+            r#"(name: "s", dim: 3, family: "harmonic", params: {{"l": 2, "delta": 0.1, "gap": "Exact"{extra}}}, particles: 32, samples: 1, seed: 1, protocol: Phi(phi: 0.1), observables: [Contacts])"#
+        ))
+        .remove(0)
+    };
+    let solver = |p: &jamkit_format::PackingFile| {
+        let map = jamkit_registry::params_from_json(&p.params).unwrap();
+        let params: HarmonicParams = jamkit_registry::parse_params("harmonic", &map).unwrap();
+        Harmonic::new(&params).unwrap().exact_solver()
+    };
+    let joint = run("");
+    assert_eq!(joint.params["exact_solver"], "Joint");
+    assert!(joint.id.contains("exact_solver_Joint"), "{}", joint.id);
+    assert_eq!(solver(&joint), ExactSolver::Joint);
+    let nested = run(r#", "exact_solver": "Nested""#);
+    assert!(nested.params.get("exact_solver").is_none());
+    assert!(!nested.id.contains("exact_solver"), "{}", nested.id);
+    assert_eq!(solver(&nested), ExactSolver::Nested);
 }

@@ -34,13 +34,32 @@ pub struct ParamSpec {
     pub is_list: bool,
     /// Its default, in RON, or `None` when it must be given.
     pub default: Option<&'static str>,
-    /// True for a parameter added after packings were written without it
-    /// (its default `"None"`): when an experiment does not give it, it is
-    /// left out of the grid point, and so of the point's label and of the
-    /// packing file's `params` and `settings`, so that those files, and the
-    /// resumption of runs that wrote them, stay as they were. False: an
-    /// absent parameter is written with its default (`null` for `"None"`).
-    pub absent_is_omitted: bool,
+    /// `Some` for a parameter added after packings were written without
+    /// it ([`Added`]); `None`: the packing records it as the point has it
+    /// (`null` for `"None"`).
+    pub added: Option<Added>,
+}
+
+/// How a parameter added to a family after packings were written without
+/// it keeps those packings as they were (their ids, `params` and
+/// `settings`, hence the resumption of the runs that wrote them).
+///
+/// The family reads the parameter with the default the experiment layer
+/// fills in ([`ParamSpec::default`]) when an experiment file leaves it out;
+/// the packing's record leaves it out where it holds [`Added::before`] (what
+/// the packings written without it had), and, when the file does not give
+/// it, where [`Added::read_with`] says the family does not read it. So the
+/// family's own reading of a missing key (its serde default, used when a
+/// packing's record is read back) must be `before`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Added {
+    /// The value, in RON, that the packings written before the parameter
+    /// existed had.
+    pub before: &'static str,
+    /// `(other, value)`: the family reads the parameter only where the
+    /// parameter `other` has `value` (RON; strings compared without case),
+    /// e.g. an exact-gap solver only with `gap: "Exact"`.
+    pub read_with: Option<(&'static str, &'static str)>,
 }
 
 /// Which dimensions a family supports.

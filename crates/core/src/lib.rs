@@ -53,7 +53,7 @@ pub mod stats;
 
 pub use contact::{Contact, GapHessian, MEMO_LEN, Pair, PairMemo, Warm};
 pub use error::{Error, Result};
-pub use family::{Dims, Family, FamilyInfo, ParamSpec, ShapeVisitor};
+pub use family::{Added, Dims, Family, FamilyInfo, ParamSpec, ShapeVisitor};
 pub use lanes::{ContactLanes, MAX_SLOTS, PairLanes, SlotPairs};
 pub use look::{Look, Outline, RoundOutline, SharedOutline, SharedSurface, Surface};
 pub use math::{MAX_ROT, Matrix, RotVec, Vector};

@@ -27,8 +27,13 @@ pub struct Point {
     pub dim: usize,
     /// Number of bodies.
     pub particles: usize,
-    /// Every family parameter (defaults filled in).
+    /// Every family parameter (defaults filled in): what the family reads.
     pub params: ParamMap,
+    /// The parameters as the point's label and packings record them:
+    /// `params` without the added parameters that hold their value of
+    /// before they existed, or that the file does not give and the family
+    /// does not read here ([`jamkit_core::Added`]).
+    pub record: ParamMap,
     /// The minimiser at this point (a scanned setting written in); the
     /// plan fills in the family's defaults (`dt_max`: the experiment's,
     /// else the family's, else 0.5) where it builds the point's shape
@@ -51,7 +56,7 @@ impl Point {
         let mut s = format!("{family}_d{}_N{}", self.dim, self.particles);
         // `None` (a default such as "inertia: None") says nothing: left out.
         for (k, v) in self
-            .params
+            .record
             .iter()
             .filter(|(_, v)| !matches!(v, ron::Value::Option(None) | ron::Value::Unit))
         {
@@ -191,6 +196,7 @@ pub fn points(experiment: &Experiment) -> Result<Vec<Point>, ExperimentError> {
                             dim,
                             particles,
                             params: params.clone(),
+                            record: record(experiment, &info, params),
                             minimizer: e.minimizer.clone(),
                             protocol,
                             target_label,
@@ -262,6 +268,37 @@ impl Shard {
     }
 }
 
+/// The parameters of a point as its label and packings record them
+/// ([`Point::record`]).
+fn record(experiment: &Experiment, info: &FamilyInfo, params: &ParamMap) -> ParamMap {
+    let value = |text: &str| ron::from_str::<ron::Value>(text).expect("family specs are valid RON");
+    let mut out = params.clone();
+    for spec in info.params {
+        let Some(added) = spec.added else { continue };
+        let here = params.get(spec.name);
+        let before = here.is_some_and(|v| same_value(v, &value(added.before)));
+        let unread = !experiment.params.contains_key(spec.name)
+            && added.read_with.is_some_and(|(other, want)| {
+                !params
+                    .get(other)
+                    .is_some_and(|v| same_value(v, &value(want)))
+            });
+        if before || unread {
+            out.remove(spec.name);
+        }
+    }
+    out
+}
+
+/// Two parameter values equal, strings compared without case (the families
+/// read their named choices so).
+fn same_value(a: &ron::Value, b: &ron::Value) -> bool {
+    match (a, b) {
+        (ron::Value::String(a), ron::Value::String(b)) => a.eq_ignore_ascii_case(b),
+        _ => a == b,
+    }
+}
+
 fn param_axes(
     experiment: &Experiment,
     info: &FamilyInfo,
@@ -289,8 +326,6 @@ fn param_axes(
     for spec in info.params {
         let value = match (experiment.params.get(spec.name), spec.default) {
             (Some(v), _) => v.clone(),
-            // Left out of the point: the family reads it as absent.
-            (None, Some(_)) if spec.absent_is_omitted => continue,
             (None, Some(default)) => ron::from_str(default).expect("family defaults are valid RON"),
             (None, None) => {
                 return Err(ExperimentError::invalid(
@@ -315,7 +350,7 @@ pub fn settings(experiment: &Experiment, point: &Point, seed: u64) -> serde_json
     serde_json::json!({
         "dim": point.dim,
         "family": e.family,
-        "params": point.params,
+        "params": point.record,
         "particles": point.particles,
         "seed": seed,
         "sizes": e.sizes,
@@ -411,36 +446,53 @@ mod tests {
         );
     }
 
-    /// A parameter with `absent_is_omitted` (harmonic's `exact_solver`)
-    /// is left out of the point when the file does not give it, so the
-    /// point's parameters (hence the packing file's) are those written
-    /// before it existed; given, it is kept and labelled. Another optional
-    /// parameter left out (`inertia`) is still written as `None`.
+    /// An added parameter (harmonic's `exact_solver`, added after
+    /// packings were written without it, when they were `"Nested"`): the
+    /// family reads the default the grid fills in, `"Joint"`; the record
+    /// leaves it out where it is `"Nested"` (given, in any case) and, when
+    /// the file does not give it, where the gap is not exact (the family
+    /// does not read it there), so those points keep the labels and records
+    /// of before it existed. Another optional parameter left out
+    /// (`inertia`) is still recorded as `None`.
     #[test]
-    fn a_parameter_absent_is_omitted_only_when_its_spec_says_so() {
-        let point = |extra: &str| {
+    fn an_added_parameter_is_recorded_only_where_it_differs_from_before_and_is_read() {
+        let point = |gap: &str, extra: &str| {
             let e = Experiment::from_ron(
                 &format!(
-                    r#"(name: "g", dim: 3, family: "harmonic", particles: 8, params: {{"l": 2, "delta": 0.1, "gap": "Exact"{extra}}})"#
+                    r#"(name: "g", dim: 3, family: "harmonic", particles: 8, params: {{"l": 2, "delta": 0.1, "gap": "{gap}"{extra}}})"#
                 ),
                 "g",
             )
             .unwrap();
             points(&e).unwrap().remove(0)
         };
-        let absent = point("");
-        assert!(!absent.params.contains_key("exact_solver"));
+        let joint = ron::Value::String("Joint".into());
+        let absent = point("Exact", "");
+        assert_eq!(absent.params.get("exact_solver"), Some(&joint));
+        assert_eq!(absent.record.get("exact_solver"), Some(&joint));
+        assert!(absent.label("harmonic").contains("exact_solver_Joint"));
         assert_eq!(
-            absent.params.get("inertia"),
+            absent.record.get("inertia"),
             Some(&ron::Value::Option(None))
         );
-        let given = point(r#", "exact_solver": "Joint""#);
-        assert_eq!(
-            given.params.get("exact_solver"),
-            Some(&ron::Value::String("Joint".into()))
-        );
-        assert!(given.label("harmonic").contains("exact_solver"));
-        assert!(!absent.label("harmonic").contains("exact_solver"));
+        // Read with an exact gap only; `gap` is read without case.
+        let first = point("FirstOrder", "");
+        assert_eq!(first.params.get("exact_solver"), Some(&joint));
+        assert!(!first.record.contains_key("exact_solver"));
+        assert!(!first.label("harmonic").contains("exact_solver"));
+        assert!(point("exact", "").record.contains_key("exact_solver"));
+        for nested in ["Nested", "nested"] {
+            let given = point("Exact", &format!(r#", "exact_solver": "{nested}""#));
+            assert_eq!(
+                given.params.get("exact_solver"),
+                Some(&ron::Value::String(nested.into()))
+            );
+            assert!(!given.record.contains_key("exact_solver"));
+            assert!(!given.label("harmonic").contains("exact_solver"));
+        }
+        // Given, it is recorded wherever it differs from before.
+        let given = point("FirstOrder", r#", "exact_solver": "Joint""#);
+        assert_eq!(given.record.get("exact_solver"), Some(&joint));
     }
 
     #[test]

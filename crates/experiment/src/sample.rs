@@ -418,7 +418,7 @@ impl Sample<'_> {
             id: job.id.clone(),
             experiment: e.name.clone(),
             family: e.family.clone(),
-            params: serde_json::to_value(&self.point.params).expect("params serialise"),
+            params: serde_json::to_value(&self.point.record).expect("params serialise"),
             dim: D,
             particles: p.len(),
             seed: job.seed,

@@ -126,14 +126,14 @@ pub const INFO: FamilyInfo = FamilyInfo {
             about: "α = a/b ≥ 1, finite; 1 gives disks (the sphere family)",
             is_list: false,
             default: None,
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "inertia",
             about: "moment of inertia I of the angle θ; None: I = (a² + b²)/4 (uniform ellipse of unit mass)",
             is_list: false,
             default: Some("None"),
-            absent_is_omitted: false,
+            added: None,
         },
     ],
 };

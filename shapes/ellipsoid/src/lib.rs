@@ -89,8 +89,8 @@
 
 use jamkit_core::Error;
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, Look, MAX_ROT, MEMO_LEN, NoFastPath, Pair,
-    PairMemo, ParamSpec, Policy, Quaternion, RotVec, Shape, ShapeVisitor, Vector,
+    Added, Contact, Dims, Family, FamilyInfo, GapHessian, Look, MAX_ROT, MEMO_LEN, NoFastPath,
+    Pair, PairMemo, ParamSpec, Policy, Quaternion, RotVec, Shape, ShapeVisitor, Vector,
 };
 use jamkit_gap3d::{self as gap3d, ExactGap3, QuadraticSupport, WORLD_AXES};
 use serde::Deserialize;
@@ -111,28 +111,31 @@ pub const INFO: FamilyInfo = FamilyInfo {
             about: "spheroid aspect ratio α = a/b > 0 (α > 1 prolate, α < 1 oblate, 1 the sphere family), longest over shortest axis ≤ 10; give alpha or axes",
             is_list: false,
             default: Some("None"),
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "axes",
             about: "semi-axis ratios [x, y, z], each > 0, longest over shortest ≤ 10, normalised to unit product; two equal: a spheroid (the distinct axis becomes body z)",
             is_list: true,
             default: Some("None"),
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "inertia",
             about: "moment of inertia of every rotational coordinate; None: a uniform solid ellipsoid of unit mass ((a² + b²)/5 for a spheroid, 2(a² + b² + c²)/15 triaxial)",
             is_list: false,
             default: Some("None"),
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "warm_start",
             about: "true: the engine's energy pass starts each listed pair's gap solve at the normal where its last one ended (the same optimum to 1e-14, not the same bits); None or false: every solve starts at the line of centres",
             is_list: false,
             default: Some("None"),
-            absent_is_omitted: true,
+            added: Some(Added {
+                before: "None",
+                read_with: None,
+            }),
         },
     ],
 };

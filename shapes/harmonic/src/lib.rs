@@ -72,22 +72,22 @@
 //! [`CONVEXITY_GRID`] × 2·[`CONVEXITY_GRID`] directions, and refuses
 //! `"SecondOrder"` (there is none in 3D).
 //!
-//! **Exact solver** (`exact_solver`, read with `gap: "Exact"` only). The
-//! default `"Nested"` is the iteration above, bit for bit. `"Joint"` runs
+//! **Exact solver** (`exact_solver`, read with `gap: "Exact"` only).
+//! `"Nested"` is the iteration above, cold. `"Joint"`, the default, runs
 //! [`jamkit_gap3d::exact_joint`]: one Newton iteration on the normal and
 //! both support points at once, on the same radial jets, falling back to
 //! the nested solve where it fails (counted by
-//! [`jamkit_gap3d::joint_fallbacks`]). Both converge to the same
-//! tolerance; the results agree to ~10⁻¹⁴, not bit for bit, so a packing
-//! made with `"Joint"` is a different (equally valid) packing. With
-//! `"Joint"` the engine's energy pass starts each listed pair's solve
-//! where its last one ended ([`Harmonic::exact_gap_warm`],
-//! [`jamkit_gap3d::exact_joint_warm`]): the same optimum to the same
-//! tolerance, in two or three steps after a small move. `"Nested"` stays
-//! cold. When an
-//! experiment does not give `exact_solver`, it is left out of the packing
-//! file (`ParamSpec::absent_is_omitted`): files made without it are
-//! those of before it existed.
+//! [`jamkit_gap3d::joint_fallbacks`]), and the engine's energy pass starts
+//! each listed pair's solve where its last one ended
+//! ([`Harmonic::exact_gap_warm`], [`jamkit_gap3d::exact_joint_warm`]): the
+//! same optimum to the same tolerance, in two or three steps after a small
+//! move. Both converge to the same tolerance; the results agree to
+//! ~10⁻¹⁴, not bit for bit, so a packing made with `"Joint"` is a
+//! different (equally valid) packing. A packing file records
+//! `exact_solver` only where it is `"Joint"` and the gap exact, so files
+//! of `"Nested"` packings are those written before the parameter existed
+//! ([`jamkit_core::Added`]), and a file or run that records none reads
+//! back as `"Nested"`.
 //!
 //! **Rotational coordinates.** Three (`ω` in the world frame, the nmer
 //! convention: `Q → exp(ω) Q`), or two when `F` is axisymmetric (every mode
@@ -121,7 +121,7 @@ pub mod solid;
 use jamkit_core::Error;
 use jamkit_core::gap_model::GapModel;
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, Look, MAX_ROT, Matrix, NoFastPath, Pair,
+    Added, Contact, Dims, Family, FamilyInfo, GapHessian, Look, MAX_ROT, Matrix, NoFastPath, Pair,
     PairMemo, ParamSpec, Policy, Quaternion, RotVec, Shape, ShapeVisitor, Vector,
 };
 /// How the exact gap is solved (`exact_solver`).
@@ -143,49 +143,52 @@ pub const INFO: FamilyInfo = FamilyInfo {
             about: "degree of a single mode Ŷ_lm, an integer in [2, 8]; give l (with m) or modes",
             is_list: false,
             default: Some("None"),
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "m",
             about: "order of the single mode, an integer in [−l, l] (m > 0: cos mφ, m < 0: sin |m|φ); None: 0",
             is_list: false,
             default: Some("None"),
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "modes",
             about: "list of (l: integer in [2, 8], m: integer in [−l, l], c: coefficient), each (l, m) once: F = Σ c Ŷ_lm",
             is_list: true,
             default: Some("None"),
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "delta",
             about: "Δ ≥ 0, the amplitude; 0 gives spheres (the sphere family)",
             is_list: false,
             default: None,
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "inertia",
             about: "moment of inertia of every rotational coordinate; None: I = Δ (the paper's 2D choice)",
             is_list: false,
             default: Some("None"),
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "gap",
             about: "gap model, a string: \"FirstOrder\" (the paper's, error O(Δ²)) or \"Exact\" (signed distance along the common normal from the support functions; convex bodies only); None: FirstOrder",
             is_list: false,
             default: Some("None"),
-            absent_is_omitted: false,
+            added: None,
         },
         ParamSpec {
             name: "exact_solver",
-            about: "how the exact gap is solved, a string: \"Nested\" (a Newton iteration on the normal, both support searches converged at each of its steps) or \"Joint\" (one Newton iteration on the normal and both support points, the nested solve where it fails; the same optimum to 1e-14, not the same bits); read with gap \"Exact\" only; None: Nested",
+            about: "how the exact gap is solved, a string: \"Joint\" (one Newton iteration on the normal and both support points, each listed pair started where its last solve ended, the nested solve where it fails) or \"Nested\" (a Newton iteration on the normal, both support searches converged at each of its steps, from the line of centres); the same optimum to 1e-14, not the same bits; read with gap \"Exact\" only; a packing that records none was made with \"Nested\"",
             is_list: false,
-            default: Some("None"),
-            absent_is_omitted: true,
+            default: Some("\"Joint\""),
+            added: Some(Added {
+                before: "\"Nested\"",
+                read_with: Some(("gap", "\"Exact\"")),
+            }),
         },
     ],
 };
@@ -231,15 +234,16 @@ pub struct HarmonicParams {
         deserialize_with = "jamkit_core::gap_model::deserialize_first_or_exact"
     )]
     pub gap: GapModel,
-    /// How the exact gap is solved (default: `Nested`, the path of packings
-    /// recorded without this parameter, bit for bit); read with
-    /// `gap: "Exact"` only.
+    /// How the exact gap is solved; read with `gap: "Exact"` only. An
+    /// experiment that does not give it runs `Joint` (the default the
+    /// experiment layer fills in); a missing key reads as `Nested`, what a
+    /// packing that records none was made with ([`jamkit_core::Added`]).
     #[serde(default, deserialize_with = "deserialize_exact_solver")]
     pub exact_solver: ExactSolver,
 }
 
 /// Read `exact_solver`: a string, `"Nested"` or `"Joint"` (case ignored),
-/// or `None`/absent for `Nested`. A bare RON identifier reaches a family
+/// or `None`/absent for `Nested` (a packing's record). A bare RON identifier reaches a family
 /// without its name and is refused with how to write it.
 fn deserialize_exact_solver<'de, D: serde::Deserializer<'de>>(
     d: D,
