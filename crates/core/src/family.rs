@@ -47,10 +47,10 @@ pub struct ParamSpec {
 /// The family reads the parameter with the default the experiment layer
 /// fills in ([`ParamSpec::default`]) when an experiment file leaves it out;
 /// the packing's record leaves it out where it holds [`Added::before`] (what
-/// the packings written without it had), and, when the file does not give
+/// the packings written without it had) or `None`, and, when the file does not give
 /// it, where [`Added::read_with`] says the family does not read it. So the
-/// family's own reading of a missing key (its serde default, used when a
-/// packing's record is read back) must be `before`.
+/// family's own reading of a missing key and of `None` (its serde default,
+/// used when a packing's record is read back) must be `before`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Added {
     /// The value, in RON, that the packings written before the parameter

@@ -31,8 +31,9 @@ pub struct Point {
     pub params: ParamMap,
     /// The parameters as the point's label and packings record them:
     /// `params` without the added parameters that hold their value of
-    /// before they existed, or that the file does not give and the family
-    /// does not read here ([`jamkit_core::Added`]).
+    /// before they existed (or `None`, which reads as a missing key), or
+    /// that the file does not give and the family does not read here
+    /// ([`jamkit_core::Added`]).
     pub record: ParamMap,
     /// The minimiser at this point (a scanned setting written in); the
     /// plan fills in the family's defaults (`dt_max`: the experiment's,
@@ -276,7 +277,9 @@ fn record(experiment: &Experiment, info: &FamilyInfo, params: &ParamMap) -> Para
     for spec in info.params {
         let Some(added) = spec.added else { continue };
         let here = params.get(spec.name);
-        let before = here.is_some_and(|v| same_value(v, &value(added.before)));
+        // `None` reads as a missing key, i.e. as `before`.
+        let before = here
+            .is_some_and(|v| *v == ron::Value::Option(None) || same_value(v, &value(added.before)));
         let unread = !experiment.params.contains_key(spec.name)
             && added.read_with.is_some_and(|(other, want)| {
                 !params
@@ -493,6 +496,35 @@ mod tests {
         // Given, it is recorded wherever it differs from before.
         let given = point("FirstOrder", r#", "exact_solver": "Joint""#);
         assert_eq!(given.record.get("exact_solver"), Some(&joint));
+        // `None` reads as a missing key: as before.
+        let none = point("Exact", r#", "exact_solver": None"#);
+        assert!(!none.record.contains_key("exact_solver"));
+    }
+
+    /// `ellipsoid`'s `warm_start` (added when packings were cold): absent,
+    /// the family reads `true` and the record says so; `false` and `None`
+    /// are left out of the record, as before the parameter existed.
+    #[test]
+    fn the_ellipsoid_warm_start_is_recorded_where_it_is_on() {
+        let point = |extra: &str| {
+            let e = Experiment::from_ron(
+                &format!(
+                    r#"(name: "g", dim: 3, family: "ellipsoid", particles: 8, params: {{"alpha": 1.5{extra}}})"#
+                ),
+                "g",
+            )
+            .unwrap();
+            points(&e).unwrap().remove(0)
+        };
+        let on = ron::Value::Bool(true);
+        let absent = point("");
+        assert_eq!(absent.params.get("warm_start"), Some(&on));
+        assert_eq!(absent.record.get("warm_start"), Some(&on));
+        for off in ["false", "None"] {
+            let p = point(&format!(r#", "warm_start": {off}"#));
+            assert!(!p.record.contains_key("warm_start"), "{off}");
+            assert!(!p.label("ellipsoid").contains("warm_start"), "{off}");
+        }
     }
 
     #[test]

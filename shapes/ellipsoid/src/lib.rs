@@ -51,14 +51,16 @@
 //!
 //! ## Warm start
 //!
-//! With `warm_start: true` the engine's energy pass starts each listed
-//! pair's solve at the normal where its last one ended
-//! ([`Ellipsoid::exact_gap_warm`], [`jamkit_gap3d::exact_warm`]), kept
-//! relative to the line of centres in body `i`'s frame. The result is the
-//! cold solve's optimum to the solver's tolerance (normal ~10⁻¹⁴, gap
-//! ~10⁻²⁸), not its bits; pairs are skipped exactly where the cold solve
-//! skips them. Absent or false, every solve starts at the line of
-//! centres: the packings made without the parameter, bit for bit.
+//! With `warm_start: true`, the default of an experiment, the engine's
+//! energy pass starts each listed pair's solve at the normal where its
+//! last one ended ([`Ellipsoid::exact_gap_warm`],
+//! [`jamkit_gap3d::exact_warm`]), kept relative to the line of centres in
+//! body `i`'s frame. The result is the cold solve's optimum to the
+//! solver's tolerance (normal ~10⁻¹⁴, gap ~10⁻²⁸), not its bits; pairs are
+//! skipped exactly where the cold solve skips them. With `false` every
+//! solve starts at the line of centres: the packings made before the
+//! parameter existed, bit for bit, whose records have none (a missing key
+//! reads as `false`; [`jamkit_core::Added`]).
 //!
 //! ## Rotational coordinates, inertia
 //!
@@ -129,11 +131,11 @@ pub const INFO: FamilyInfo = FamilyInfo {
         },
         ParamSpec {
             name: "warm_start",
-            about: "true: the engine's energy pass starts each listed pair's gap solve at the normal where its last one ended (the same optimum to 1e-14, not the same bits); None or false: every solve starts at the line of centres",
+            about: "true: the engine's energy pass starts each listed pair's gap solve at the normal where its last one ended; false: every solve starts at the line of centres (the same optimum to 1e-14, not the same bits); a packing that records none was made with false",
             is_list: false,
-            default: Some("None"),
+            default: Some("true"),
             added: Some(Added {
-                before: "None",
+                before: "false",
                 read_with: None,
             }),
         },
@@ -154,9 +156,10 @@ pub struct EllipsoidParams {
     /// Moment of inertia (`None`: a uniform solid ellipsoid of unit mass).
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub inertia: Option<f64>,
-    /// Start each listed pair's solve where its last one ended (`None`:
-    /// no, the path of packings recorded without this parameter, bit for
-    /// bit).
+    /// Start each listed pair's solve where its last one ended. An
+    /// experiment that does not give it runs `true` (the default the
+    /// experiment layer fills in); `None` or a missing key reads as `false`,
+    /// what a packing that records none was made with.
     #[serde(default, deserialize_with = "jamkit_core::family::lenient_option")]
     pub warm_start: Option<bool>,
 }
