@@ -62,6 +62,7 @@
 
 use crate::gap2d::{ExactGap, SupportJet};
 use jamkit_core::math::{Unit, Vector, cmul, turn_unit, unit_of_angle};
+use jamkit_core::{Contact, GapHessian};
 use std::f64::consts::{PI, TAU};
 
 /// A polar outline `φ ↦ (R, R', R'')` (body frame, unit size) at
@@ -312,6 +313,112 @@ pub fn arc_support_unit<F: PolarOutline>(
     )
 }
 
+/// A contact of two arcs ([`arc_contacts`]): the common normal where the
+/// depth of the overlap is locally largest (`exact`), and the saddle it
+/// meets, if any: the neighbouring stationary point of the same arc pair
+/// where the depth is locally smallest, overlapping (`h_s < 0`) and
+/// shallower than the contact. With a saddle the contact's gap is its
+/// prominence
+///
+/// ```text
+/// h = h_c − h_s²/h_c   (h_c ≤ h_s < 0),
+/// ```
+///
+/// which is `h_c` when the saddle reaches `h_s = 0` (first derivatives
+/// too) and 0 where the two merge (a fold, `h_s = h_c`), so that a contact
+/// leaving at a fold takes no energy with it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArcContact {
+    /// The contact's common normal and support jets (sizes included).
+    pub exact: ExactGap,
+    /// The saddle paired with it.
+    pub saddle: Option<ExactGap>,
+}
+
+impl ArcContact {
+    /// The gap: `h_c`, or with a saddle `h_c − h_s²/h_c`.
+    pub fn gap(&self) -> f64 {
+        match self.saddle {
+            None => self.exact.gap,
+            Some(s) => {
+                let (c, a) = (self.exact.gap, s.gap);
+                c - a * a / c
+            }
+        }
+    }
+
+    /// The gap and its first derivatives.
+    pub fn contact(&self) -> Contact<2> {
+        let c = self.exact.contact();
+        let Some(s) = self.saddle else {
+            return c;
+        };
+        let a = s.contact();
+        let (hc, ha) = (c.gap, a.gap);
+        let (fc, fa) = (1.0 + ha * ha / (hc * hc), -2.0 * ha / hc);
+        Contact {
+            gap: self.gap(),
+            grad_r: c.grad_r * fc + a.grad_r * fa,
+            grad_rot_i: [fc * c.grad_rot_i[0] + fa * a.grad_rot_i[0], 0.0, 0.0],
+            grad_rot_j: [fc * c.grad_rot_j[0] + fa * a.grad_rot_j[0], 0.0, 0.0],
+        }
+    }
+
+    /// The gap with its second derivatives: those of `h_c` and `h_s`
+    /// ([`ExactGap::hessian_signed`]) by the chain rule.
+    pub fn hessian(&self) -> GapHessian<2> {
+        let hc = self.exact.hessian_signed();
+        let Some(s) = self.saddle else {
+            return hc;
+        };
+        let ha = s.hessian_signed();
+        let (c, a) = (hc.contact.gap, ha.contact.gap);
+        let (fc, fa) = (1.0 + a * a / (c * c), -2.0 * a / c);
+        let (fcc, faa, fca) = (-2.0 * a * a / (c * c * c), -2.0 / c, 2.0 * a / (c * c));
+        let (mc, ma) = (as_matrix(&hc), as_matrix(&ha));
+        let (gc, ga) = (as_gradient(&hc.contact), as_gradient(&ha.contact));
+        let mut m = [[0.0; 4]; 4];
+        for (k, row) in m.iter_mut().enumerate() {
+            for (l, x) in row.iter_mut().enumerate() {
+                *x = fc * mc[k][l]
+                    + fa * ma[k][l]
+                    + fcc * gc[k] * gc[l]
+                    + faa * ga[k] * ga[l]
+                    + fca * (gc[k] * ga[l] + ga[k] * gc[l]);
+            }
+        }
+        let mut g = hc;
+        g.contact = self.contact();
+        for k in 0..2 {
+            for l in 0..2 {
+                g.rr[(k, l)] = m[k][l];
+            }
+            g.r_qi[0][k] = m[k][2];
+            g.r_qj[0][k] = m[k][3];
+        }
+        g.qi_qi[0][0] = m[2][2];
+        g.qj_qj[0][0] = m[3][3];
+        g.qi_qj[0][0] = m[2][3];
+        g
+    }
+}
+
+/// `(∂h/∂r_j, ∂h/∂θ_i, ∂h/∂θ_j)` as one vector.
+fn as_gradient(c: &Contact<2>) -> [f64; 4] {
+    [c.grad_r[0], c.grad_r[1], c.grad_rot_i[0], c.grad_rot_j[0]]
+}
+
+/// The second derivatives in the order of [`as_gradient`].
+fn as_matrix(h: &GapHessian<2>) -> [[f64; 4]; 4] {
+    let (rq_i, rq_j) = (h.r_qi[0], h.r_qj[0]);
+    [
+        [h.rr[(0, 0)], h.rr[(0, 1)], rq_i[0], rq_j[0]],
+        [h.rr[(1, 0)], h.rr[(1, 1)], rq_i[1], rq_j[1]],
+        [rq_i[0], rq_i[1], h.qi_qi[0][0], h.qi_qj[0][0]],
+        [rq_j[0], rq_j[1], h.qi_qj[0][0], h.qj_qj[0][0]],
+    ]
+}
+
 /// One body as [`arc_contacts`] sees it: its arcs and outline (unit size),
 /// size and orientation angle.
 pub struct ArcBody<'a, F> {
@@ -330,7 +437,7 @@ pub struct ArcBody<'a, F> {
 /// (sizes included): every one with `−reach ≤ h ≤ max_gap` and perhaps
 /// deeper ones (arc pairs whose bounding circles are more than
 /// `max(max_gap, 0) + reach` apart are skipped).
-pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
+pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
     i: &ArcBody<'_, F>,
     j: &ArcBody<'_, G>,
     r_ij: &Vector<2>,
@@ -389,7 +496,7 @@ fn bound_of<F>(b: &ArcBody<'_, F>) -> f64 {
 
 /// The contacts of one pair of arcs.
 #[allow(clippy::too_many_arguments)]
-fn pair_of_arcs<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
+fn pair_of_arcs<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
     i: &ArcBody<'_, F>,
     arc_a: &OutlineArc,
     j: &ArcBody<'_, G>,
@@ -428,7 +535,7 @@ struct Eval {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
+fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
     i: &ArcBody<'_, F>,
     arc_a: &OutlineArc,
     j: &ArcBody<'_, G>,
@@ -477,22 +584,18 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
         }
     };
     let inside = |phi: f64, arc: &OutlineArc| phi >= arc.phi.0 && phi < arc.phi.1;
+    // The piece's stationary points in order of ψ: the contacts with
+    // `h ≤ max_gap` and the others (`k ρ_A ρ_B < 0`) with `h < 0`.
+    let mut found: Vec<(f64, u32, Eval, bool)> = Vec::new();
     let mut root = |x0: f64, f0: f64, x1: f64, f1: f64| {
         if let Some((psi, steps, e)) = refine(&eval, (x0, f0), (x1, f1))
-            && e.g <= max_gap
-            && -e.g2 * e.rho_sign > 0.0
             && inside(e.phis.0, arc_a)
             && inside(e.phis.1, arc_b)
         {
-            let (s, c) = psi.sin_cos();
-            visit(ExactGap {
-                normal: (c, s),
-                gap: e.g,
-                jet_i: e.jets.0,
-                jet_j: e.jets.1,
-                iterations: steps,
-                converged: true,
-            });
+            let contact = -e.g2 * e.rho_sign > 0.0;
+            if (contact && e.g <= max_gap) || (!contact && e.g < 0.0) {
+                found.push((psi, steps, e, contact));
+            }
         }
     };
     let mut left = eval(lo);
@@ -513,6 +616,45 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
         }
         left = right;
         x0 = x1;
+    }
+    let exact = |(psi, steps, e): (f64, u32, &Eval)| {
+        let (s, c) = psi.sin_cos();
+        ExactGap {
+            normal: (c, s),
+            gap: e.g,
+            jet_i: e.jets.0,
+            jet_j: e.jets.1,
+            iterations: steps,
+            converged: true,
+        }
+    };
+    // Each overlapping saddle (a stationary point that is not a contact)
+    // goes to the shallower of its neighbours that are contacts deeper
+    // than it; each contact keeps the deepest saddle it was given.
+    let mut saddle: Vec<Option<usize>> = vec![None; found.len()];
+    for m in 0..found.len() {
+        if found[m].3 {
+            continue;
+        }
+        let h_a = found[m].2.g;
+        let partner = [m.checked_sub(1), Some(m + 1)]
+            .into_iter()
+            .flatten()
+            .filter(|&c| c < found.len() && found[c].3 && found[c].2.g < h_a)
+            .max_by(|&a, &b| found[a].2.g.total_cmp(&found[b].2.g));
+        if let Some(c) = partner
+            && saddle[c].is_none_or(|s| found[s].2.g > h_a)
+        {
+            saddle[c] = Some(m);
+        }
+    }
+    for (c, (psi, steps, e, contact)) in found.iter().enumerate() {
+        if *contact {
+            visit(ArcContact {
+                exact: exact((*psi, *steps, e)),
+                saddle: saddle[c].map(|m| exact((found[m].0, found[m].1, &found[m].2))),
+            });
+        }
     }
 }
 

@@ -335,7 +335,7 @@ fn contacts_agree_with_fine_polygons() {
             let c = Config::random(&mut rng, n, delta, 1.2);
             let mut found = Vec::new();
             s.profiled()
-                .arc_contacts(&c.pair(), 0.0, None, &mut |e| found.push(e));
+                .arc_contacts(&c.pair(), 0.0, None, &mut |e| found.push(e.exact));
             let pi = Polygon::new(&s, c.size[0], c.theta[0], [0.0, 0.0], 8192);
             let pj = Polygon::new(&s, c.size[1], c.theta[1], c.r, 8192);
             let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
@@ -373,8 +373,8 @@ fn contacts_agree_with_fine_polygons() {
 /// a body of size 1 rolled (turned and carried) over a quarter turn of a
 /// body of size 4 along its outline, a tenth of a lobe of the small one
 /// deep; two bodies of size 1 and 1.4 slid past each other, turning, a
-/// tenth of a lobe deep. (Deeper, a path can cross a fold at h < 0, where
-/// the energy does jump: `docs/explanation/gap-models.md`.)
+/// tenth of a lobe deep. (Paths through a fold at h < 0:
+/// [`energy_is_continuous_through_a_fold`].)
 #[test]
 fn energy_is_continuous_as_contacts_come_and_go() {
     for &(n, delta) in &[(8u32, 0.3), (16, 0.2)] {
@@ -447,6 +447,134 @@ fn energy_is_continuous_as_contacts_come_and_go() {
     }
 }
 
+/// A step of FIRE in a compressed packing of n = 16, Δ = 0.1 (bodies of
+/// size 0.7), stretched to `t ∈ [−1, 2]` (the step is `t ∈ [0, 1]`): a
+/// tip's flank in the mouth of a valley, six hundredths of a lobe deep,
+/// where the contact of arcs 20 (concave) and 11 (convex) meets the saddle
+/// of the same arcs at `t ≈ 0.14`, `h ≈ −6.1·10⁻⁴`, and leaves (a fold).
+fn fold_path(t: f64) -> Config {
+    let (th0, th1) = ([-1.240604858, -2.812204518], [-1.240686550, -2.812325416]);
+    let (r0, r1) = (
+        [-1.277477671288, 0.557135519072],
+        [-1.277439931465, 0.557253542028],
+    );
+    let at = |a: f64, b: f64| a + t * (b - a);
+    Config {
+        size: [0.7, 0.7],
+        theta: [at(th0[0], th1[0]), at(th0[1], th1[1])],
+        r: [at(r0[0], r1[0]), at(r0[1], r1[1])],
+    }
+}
+
+/// Through the fold of [`fold_path`] the harmonic energy Σ h²/2 changes
+/// step by step (3000 steps) by no more than 1.5 times its largest
+/// derivative at the two ends of the step, plus 10⁻¹⁸ (the energy is
+/// ~4·10⁻⁷, its change per step ~10⁻¹³; the contact leaving with its own
+/// h would jump by h²/2 ≈ 1.9·10⁻⁷). Along the path the pair goes from
+/// two contacts, one with a saddle, to one.
+#[test]
+fn energy_is_continuous_through_a_fold() {
+    let s = fourier(16, 0.1, GapModel::Exact);
+    let energy = |t: f64| {
+        let c = fold_path(t);
+        let list = contacts(&s, &c, 0.0);
+        let e: f64 = list.iter().map(|k| 0.5 * k.gap * k.gap).sum();
+        let (p, q) = (fold_path(t + 1e-6), fold_path(t - 1e-6));
+        let v = [
+            (p.r[0] - q.r[0]) / 2e-6,
+            (p.r[1] - q.r[1]) / 2e-6,
+            (p.theta[0] - q.theta[0]) / 2e-6,
+            (p.theta[1] - q.theta[1]) / 2e-6,
+        ];
+        let de: f64 = list
+            .iter()
+            .map(|k| {
+                let g = gradient(k);
+                k.gap * (0..4).map(|a| g[a] * v[a]).sum::<f64>()
+            })
+            .sum();
+        let mut saddles = 0;
+        s.profiled().arc_contacts(&c.pair(), 0.0, None, &mut |e| {
+            saddles += usize::from(e.saddle.is_some());
+        });
+        (e, de, list.len(), saddles)
+    };
+    let steps = 3000;
+    let dt = 3.0 / steps as f64;
+    let mut prev = energy(-1.0);
+    assert_eq!((prev.2, prev.3), (2, 1), "two contacts, one with a saddle");
+    for k in 1..=steps {
+        let t = -1.0 + k as f64 * dt;
+        let cur = energy(t);
+        let bound = 1.5 * prev.1.abs().max(cur.1.abs()) * dt + 1e-18;
+        assert!(
+            (cur.0 - prev.0).abs() <= bound,
+            "t = {t}: E {} → {} ({} → {} contacts), bound {bound}",
+            prev.0,
+            cur.0,
+            prev.2,
+            cur.2
+        );
+        prev = cur;
+    }
+    assert_eq!((prev.2, prev.3), (1, 0), "one contact left");
+}
+
+/// The gradient and the second derivatives of a contact with a saddle
+/// ([`fold_path`] at `t ∈ [−1, 0]`, 2·10⁻⁵ to 2·10⁻⁴ from the fold)
+/// against central differences (step 10⁻⁸: truncation ~10⁻¹⁶ × third
+/// derivatives up to ~10⁶ near the fold, round-off ~10⁻⁸ on the second
+/// derivatives): tolerance 10⁻⁷ on the gradient, 10⁻⁵ relative to the
+/// largest second derivative.
+#[test]
+fn a_contact_with_a_saddle_matches_finite_differences() {
+    let s = fourier(16, 0.1, GapModel::Exact);
+    let mut checked = 0;
+    for k in 0..=10 {
+        let c = fold_path(-1.0 + 0.1 * k as f64);
+        let mut with_saddle = Vec::new();
+        s.profiled().arc_contacts(&c.pair(), 0.0, None, &mut |e| {
+            if e.saddle.is_some() {
+                with_saddle.push(e.hessian());
+            }
+        });
+        assert_eq!(with_saddle.len(), 1, "{c:?}");
+        let h = with_saddle[0];
+        let (g, m) = (gradient(&h.contact), second(&h));
+        let scale = m.iter().flatten().fold(0.0f64, |x, y| x.max(y.abs()));
+        let eps = 1e-8;
+        for a in 0..4 {
+            let (lp, lq) = (
+                contacts(&s, &c.moved(a, eps), 0.0),
+                contacts(&s, &c.moved(a, -eps), 0.0),
+            );
+            let (Some(p), Some(q)) = (
+                matching(&lp, &h.contact, 1e-2),
+                matching(&lq, &h.contact, 1e-2),
+            ) else {
+                panic!("{c:?}: contact lost under a move of {eps} along {a}");
+            };
+            let fd = (p.gap - q.gap) / (2.0 * eps);
+            assert!(
+                (fd - g[a]).abs() < 1e-7,
+                "{c:?}, {a}: {fd} against {}",
+                g[a]
+            );
+            let (gp, gq) = (gradient(p), gradient(q));
+            for b in 0..4 {
+                let fd2 = (gp[b] - gq[b]) / (2.0 * eps);
+                assert!(
+                    (fd2 - m[b][a]).abs() < 1e-5 * scale,
+                    "{c:?}, ∂²h/∂{b}∂{a}: {fd2} against {}",
+                    m[b][a]
+                );
+            }
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 11);
+}
+
 /// On a convex outline (n = 3, Δ = 0.2; n = 16, Δ = 0.04) the arc search,
 /// with the whole outline as its one arc and no cut, finds as its contact
 /// of largest h the convex exact gap's (nested solve), to round-off (any
@@ -471,7 +599,10 @@ fn convex_outlines_give_the_convex_exact_gap() {
                 .exact_solve(&pair, f64::INFINITY, ExactSolve::Nested)
                 .unwrap();
             let mut found = Vec::new();
-            p.arc_contacts(&pair, f64::INFINITY, Some(&whole), &mut |e| found.push(e));
+            p.arc_contacts(&pair, f64::INFINITY, Some(&whole), &mut |e| {
+                assert!(e.saddle.is_none(), "{e:?}");
+                found.push(e.exact)
+            });
             found.sort_by(|a, b| b.gap.total_cmp(&a.gap));
             // Others are maxima of g on the far sides, through both bodies.
             assert!(found.len() == 1 || found[1].gap < -1.0, "{c:?}: {found:?}");
