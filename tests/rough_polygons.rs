@@ -7,67 +7,10 @@ use jamkit_engine::{Fire, FireParams, Objective, Scene};
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_planar::gap2d::GapModel;
 use rand::SeedableRng;
-use std::f64::consts::TAU;
 
-/// A body's outline as a polygon of `m` vertices at polar angles 2πk/m
-/// about its centre `c` (lab frame, counter-clockwise).
-struct Polygon {
-    c: [f64; 2],
-    v: Vec<[f64; 2]>,
-}
-
-impl Polygon {
-    fn new(s: &NearDisk, size: f64, theta: f64, c: [f64; 2], m: usize) -> Self {
-        let v = (0..m)
-            .map(|k| {
-                let phi = TAU * k as f64 / m as f64;
-                // R(φ) = R⁰ [1 + Δ F(θ − φ)] in the lab direction φ.
-                let r = size * s.relative_radius(theta - phi);
-                [c[0] + r * phi.cos(), c[1] + r * phi.sin()]
-            })
-            .collect();
-        Self { c, v }
-    }
-
-    fn sector(&self, p: [f64; 2]) -> usize {
-        let m = self.v.len();
-        let a = (p[1] - self.c[1]).atan2(p[0] - self.c[0]).rem_euclid(TAU);
-        ((a / TAU * m as f64) as usize).min(m - 1)
-    }
-
-    /// Inside: on the inner side of its sector's edge (star-shaped).
-    fn contains(&self, p: [f64; 2]) -> bool {
-        let m = self.v.len();
-        let k = self.sector(p);
-        let (a, b) = (self.v[k], self.v[(k + 1) % m]);
-        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0.0
-    }
-
-    /// Distance from `p` to the edges within 64 sectors of its own.
-    fn distance(&self, p: [f64; 2]) -> f64 {
-        let m = self.v.len();
-        let k = self.sector(p) + m;
-        (k - 64..k + 64)
-            .map(|e| {
-                let (a, b) = (self.v[e % m], self.v[(e + 1) % m]);
-                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-                let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy))
-                    .clamp(0.0, 1.0);
-                (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
-            })
-            .fold(f64::INFINITY, f64::min)
-    }
-
-    /// How deep the other polygon's vertices reach into this one (0: none).
-    fn depth_of(&self, other: &Polygon) -> f64 {
-        other
-            .v
-            .iter()
-            .filter(|p| self.contains(**p))
-            .map(|p| self.distance(*p))
-            .fold(0.0, f64::max)
-    }
-}
+#[path = "../shapes/fourier/tests/support/polygon.rs"]
+mod polygon;
+use polygon::Polygon;
 
 /// `particles` near-disks (n, Δ) with the exact gap from a random start
 /// at `phi` (deep overlaps), relaxed by `steps` FIRE steps (jamming to
@@ -123,8 +66,11 @@ fn check(n: u32, delta: f64, phi: f64, particles: usize, steps: u64) -> (usize, 
                 cores += 1;
                 continue;
             }
+            // The depth of each contact's common normal (a contact that
+            // meets a saddle reports its prominence as its gap).
             let mut gaps = Vec::new();
-            s.contacts(&pair, 0.0, |c| gaps.push(c.gap));
+            s.profiled()
+                .arc_contacts(&pair, 0.0, None, &mut |c| gaps.push(c.exact.gap));
             let model = gaps.iter().fold(0.0f64, |m, g| m.max(-g));
             let theta = |k: usize| p.orientations[k].theta();
             let pi = Polygon::new(&s, si, theta(i), [0.0, 0.0], 8192);

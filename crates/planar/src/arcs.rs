@@ -32,12 +32,27 @@
 //! maximum of `g_AB` for two convex arcs, a minimum for a convex arc
 //! against a concave one. At `h = 0` this is the condition that the
 //! outlines touch without crossing (the signed curvatures add up to a
-//! positive one). Concave–concave pairs are not searched: at `h ≤ 0` they
+//! positive one). Two concave arcs have no contact: at `h ≤ 0` they
 //! cross, and they meet the rule only at `h > |ρ_A| + |ρ_B|`.
 //!
 //! By the envelope theorem the derivatives are those of the convex exact
 //! gap ([`crate::gap2d`]) with the arc's jets; the second derivatives divide
 //! by `k`, of either sign ([`crate::gap2d::ExactGap::hessian_signed`]).
+//!
+//! ## Saddles
+//!
+//! The other stationary points (`k ρ_A ρ_B < 0`, on any two arcs) are the
+//! local minima of the depth along the overlap. A contact is born or dies
+//! where it merges with one of them: inside an arc pair at `k = 0` (a
+//! fold), or at an end of the normal range shared by two arc pairs (an
+//! inflection point). At `h < 0` its energy would go with it. So each
+//! overlapping saddle (`h_s < 0`) goes to the shallower of its neighbours
+//! among all stationary points of the pair, in order of the support
+//! point's polar angle on body `i`, that are contacts deeper than it; a
+//! contact with a saddle (the deepest, if given two) reports its
+//! prominence `h = h_c − h_s²/h_c` ([`ArcContact`]): `h_c` with its first
+//! derivatives when the saddle reaches `h_s = 0`, and 0 where the two
+//! merge.
 //!
 //! ## The search
 //!
@@ -445,6 +460,7 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
     reach: f64,
     mut visit: V,
 ) {
+    let mut found: Vec<Stationary> = Vec::new();
     let cut = max_gap.max(0.0) + reach;
     let (zi, zj) = (unit_of_angle(i.theta), unit_of_angle(j.theta));
     let place = |z: Unit, c: (f64, f64), size: f64| {
@@ -462,9 +478,6 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
             continue;
         }
         for arc_b in j.arcs {
-            if !arc_a.convex && !arc_b.convex {
-                continue;
-            }
             let cb = place(zj, arc_b.centre, j.size);
             if norm(r_ij[0] + cb.0, r_ij[1] + cb.1) - j.size * arc_b.radius > bound_i + cut {
                 continue;
@@ -475,9 +488,48 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
             if apart > cut {
                 continue;
             }
-            pair_of_arcs(i, arc_a, j, arc_b, r_ij, max_gap, &mut visit);
+            pair_of_arcs(i, arc_a, j, arc_b, r_ij, &mut found);
         }
     }
+    // Each saddle goes to the shallower of its neighbours along body i's
+    // outline (by the polar angle of the support point, around the circle)
+    // that are contacts deeper than it; each contact keeps the deepest
+    // saddle it is given.
+    found.sort_by(|a, b| a.phi_i.total_cmp(&b.phi_i));
+    let m = found.len();
+    let mut saddle: Vec<Option<usize>> = vec![None; m];
+    for s in 0..m {
+        if found[s].contact {
+            continue;
+        }
+        let h_s = found[s].exact.gap;
+        let partner = [(s + m - 1) % m, (s + 1) % m]
+            .into_iter()
+            .filter(|&c| found[c].contact && found[c].exact.gap < h_s)
+            .max_by(|&a, &b| found[a].exact.gap.total_cmp(&found[b].exact.gap));
+        if let Some(c) = partner
+            && saddle[c].is_none_or(|t| found[t].exact.gap > h_s)
+        {
+            saddle[c] = Some(s);
+        }
+    }
+    for (c, f) in found.iter().enumerate() {
+        if f.contact && f.exact.gap <= max_gap {
+            visit(ArcContact {
+                exact: f.exact,
+                saddle: saddle[c].map(|s| found[s].exact),
+            });
+        }
+    }
+}
+
+/// A stationary point of an arc pair: a contact, or an overlapping saddle.
+struct Stationary {
+    exact: ExactGap,
+    /// The polar angle of its support point on body `i` (body frame, in
+    /// `[0, 2π)`).
+    phi_i: f64,
+    contact: bool,
 }
 
 #[inline(always)]
@@ -496,14 +548,13 @@ fn bound_of<F>(b: &ArcBody<'_, F>) -> f64 {
 
 /// The contacts of one pair of arcs.
 #[allow(clippy::too_many_arguments)]
-fn pair_of_arcs<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
+fn pair_of_arcs<F: PolarOutline, G: PolarOutline>(
     i: &ArcBody<'_, F>,
     arc_a: &OutlineArc,
     j: &ArcBody<'_, G>,
     arc_b: &OutlineArc,
     r_ij: &Vector<2>,
-    max_gap: f64,
-    visit: &mut V,
+    found: &mut Vec<Stationary>,
 ) {
     let (na, nb) = (arc_a.normal_range(), arc_b.normal_range());
     let (a_lo, a_len) = (i.theta + na.0, na.1 - na.0);
@@ -517,7 +568,7 @@ fn pair_of_arcs<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
         let lo = a_lo.max(b_lo0 + shift);
         let hi = (a_lo + a_len).min(b_lo0 + shift + b_len);
         if hi > lo {
-            piece(i, arc_a, j, arc_b, shift, (lo, hi), r_ij, max_gap, visit);
+            piece(i, arc_a, j, arc_b, shift, (lo, hi), r_ij, found);
         }
         shift += TAU;
     }
@@ -535,7 +586,7 @@ struct Eval {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
+fn piece<F: PolarOutline, G: PolarOutline>(
     i: &ArcBody<'_, F>,
     arc_a: &OutlineArc,
     j: &ArcBody<'_, G>,
@@ -543,8 +594,7 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
     shift: f64,
     (lo, hi): (f64, f64),
     r_ij: &Vector<2>,
-    max_gap: f64,
-    visit: &mut V,
+    found: &mut Vec<Stationary>,
 ) {
     let (zi, zj) = (unit_of_angle(i.theta), unit_of_angle(j.theta));
     let eval = |psi: f64| {
@@ -584,17 +634,35 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
         }
     };
     let inside = |phi: f64, arc: &OutlineArc| phi >= arc.phi.0 && phi < arc.phi.1;
-    // The piece's stationary points in order of ψ: the contacts with
-    // `h ≤ max_gap` and the others (`k ρ_A ρ_B < 0`) with `h < 0`.
-    let mut found: Vec<(f64, u32, Eval, bool)> = Vec::new();
+    // The contacts (those above `max_gap` too: they are neighbours in the
+    // pairing of saddles) and the saddles (`k ρ_A ρ_B < 0`) with `h < 0`.
     let mut root = |x0: f64, f0: f64, x1: f64, f1: f64| {
         if let Some((psi, steps, e)) = refine(&eval, (x0, f0), (x1, f1))
             && inside(e.phis.0, arc_a)
             && inside(e.phis.1, arc_b)
         {
+            // Two concave arcs give saddles only (their other stationary
+            // points lie at h > |ρ_A| + |ρ_B|).
             let contact = -e.g2 * e.rho_sign > 0.0;
-            if (contact && e.g <= max_gap) || (!contact && e.g < 0.0) {
-                found.push((psi, steps, e, contact));
+            let keep = if contact {
+                arc_a.convex || arc_b.convex
+            } else {
+                e.g < 0.0
+            };
+            if keep {
+                let (s, c) = psi.sin_cos();
+                found.push(Stationary {
+                    exact: ExactGap {
+                        normal: (c, s),
+                        gap: e.g,
+                        jet_i: e.jets.0,
+                        jet_j: e.jets.1,
+                        iterations: steps,
+                        converged: true,
+                    },
+                    phi_i: e.phis.0.rem_euclid(TAU),
+                    contact,
+                });
             }
         }
     };
@@ -616,45 +684,6 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
         }
         left = right;
         x0 = x1;
-    }
-    let exact = |(psi, steps, e): (f64, u32, &Eval)| {
-        let (s, c) = psi.sin_cos();
-        ExactGap {
-            normal: (c, s),
-            gap: e.g,
-            jet_i: e.jets.0,
-            jet_j: e.jets.1,
-            iterations: steps,
-            converged: true,
-        }
-    };
-    // Each overlapping saddle (a stationary point that is not a contact)
-    // goes to the shallower of its neighbours that are contacts deeper
-    // than it; each contact keeps the deepest saddle it was given.
-    let mut saddle: Vec<Option<usize>> = vec![None; found.len()];
-    for m in 0..found.len() {
-        if found[m].3 {
-            continue;
-        }
-        let h_a = found[m].2.g;
-        let partner = [m.checked_sub(1), Some(m + 1)]
-            .into_iter()
-            .flatten()
-            .filter(|&c| c < found.len() && found[c].3 && found[c].2.g < h_a)
-            .max_by(|&a, &b| found[a].2.g.total_cmp(&found[b].2.g));
-        if let Some(c) = partner
-            && saddle[c].is_none_or(|s| found[s].2.g > h_a)
-        {
-            saddle[c] = Some(m);
-        }
-    }
-    for (c, (psi, steps, e, contact)) in found.iter().enumerate() {
-        if *contact {
-            visit(ArcContact {
-                exact: exact((*psi, *steps, e)),
-                saddle: saddle[c].map(|m| exact((found[m].0, found[m].1, &found[m].2))),
-            });
-        }
     }
 }
 

@@ -16,6 +16,10 @@ use jamkit_planar::gap2d::{ExactGap, GapModel};
 use jamkit_planar::profiled::ExactSolve;
 use std::f64::consts::TAU;
 
+#[path = "support/polygon.rs"]
+mod polygon;
+use polygon::Polygon;
+
 /// A small deterministic generator (splitmix64), uniform in `[0, 1)`.
 struct Uniform(u64);
 
@@ -197,7 +201,9 @@ fn derivatives_match_finite_differences_with_several_contacts() {
                 let m = second(h);
                 for k in 0..4 {
                     let (p, q) = (c.moved(k, eps), c.moved(k, -eps));
-                    let (hp, hq) = (hessians(&s, &p, 2.0 * cut), hessians(&s, &q, 2.0 * cut));
+                    // At the same cut: the saddles a contact is paired with
+                    // are found among the arc pairs within it.
+                    let (hp, hq) = (hessians(&s, &p, cut), hessians(&s, &q, cut));
                     let lp: Vec<_> = hp.iter().map(|x| x.contact).collect();
                     let lq: Vec<_> = hq.iter().map(|x| x.contact).collect();
                     let (Some(a), Some(b)) = (
@@ -236,69 +242,6 @@ fn derivatives_match_finite_differences_with_several_contacts() {
         by_count[2] > 0 && by_count[3] > 0 && overlapping[2] > 0 && overlapping[3] > 0,
         "pairs by number of contacts: {by_count:?}, overlapping {overlapping:?}"
     );
-}
-
-/// The outline of a body as a polygon of `m` vertices (lab frame,
-/// counter-clockwise, at polar angles 2πk/m about its centre `c`).
-struct Polygon {
-    c: [f64; 2],
-    v: Vec<[f64; 2]>,
-}
-
-impl Polygon {
-    fn new(s: &NearDisk, size: f64, theta: f64, c: [f64; 2], m: usize) -> Self {
-        let v = (0..m)
-            .map(|k| {
-                let phi = TAU * k as f64 / m as f64;
-                // R(φ) = R⁰ [1 + Δ F(θ − φ)] in the lab direction φ.
-                let r = size * s.relative_radius(theta - phi);
-                [c[0] + r * phi.cos(), c[1] + r * phi.sin()]
-            })
-            .collect();
-        Self { c, v }
-    }
-
-    /// The sector of `p` (the polygon is star-shaped about its centre).
-    fn sector(&self, p: [f64; 2]) -> usize {
-        let m = self.v.len();
-        let a = (p[1] - self.c[1]).atan2(p[0] - self.c[0]).rem_euclid(TAU);
-        ((a / TAU * m as f64) as usize).min(m - 1)
-    }
-
-    /// Whether `p` is inside: on the inner side of its sector's edge.
-    fn contains(&self, p: [f64; 2]) -> bool {
-        let m = self.v.len();
-        let k = self.sector(p);
-        let (a, b) = (self.v[k], self.v[(k + 1) % m]);
-        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0.0
-    }
-
-    /// The distance from `p` to the polygon's edges within 64 sectors of
-    /// its own.
-    fn distance(&self, p: [f64; 2]) -> f64 {
-        let m = self.v.len();
-        let k = self.sector(p) + m;
-        (k - 64..k + 64)
-            .map(|e| {
-                let (a, b) = (self.v[e % m], self.v[(e + 1) % m]);
-                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-                let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy))
-                    .clamp(0.0, 1.0);
-                (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
-            })
-            .fold(f64::INFINITY, f64::min)
-    }
-
-    /// How deep the other polygon's vertices reach into this one (0: none
-    /// inside).
-    fn depth_of(&self, other: &Polygon) -> f64 {
-        other
-            .v
-            .iter()
-            .filter(|p| self.contains(**p))
-            .map(|p| self.distance(*p))
-            .fold(0.0, f64::max)
-    }
 }
 
 /// The support points of a contact: `a` on body `i` (centre at 0), `b` on
@@ -599,10 +542,15 @@ fn convex_outlines_give_the_convex_exact_gap() {
                 .exact_solve(&pair, f64::INFINITY, ExactSolve::Nested)
                 .unwrap();
             let mut found = Vec::new();
+            let mut saddle = None;
             p.arc_contacts(&pair, f64::INFINITY, Some(&whole), &mut |e| {
-                assert!(e.saddle.is_none(), "{e:?}");
+                if saddle.is_none_or(|(h, _)| e.exact.gap > h) {
+                    saddle = Some((e.exact.gap, e.saddle));
+                }
                 found.push(e.exact)
             });
+            // The contact of largest h has no saddle.
+            assert_eq!(saddle.map(|s| s.1), Some(None), "{c:?}");
             found.sort_by(|a, b| b.gap.total_cmp(&a.gap));
             // Others are maxima of g on the far sides, through both bodies.
             assert!(found.len() == 1 || found[1].gap < -1.0, "{c:?}: {found:?}");
