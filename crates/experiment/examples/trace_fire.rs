@@ -21,24 +21,28 @@
 //! ```
 
 use jamkit_core::{Pair, Shape};
-use jamkit_engine::{Fire, FireParams, Objective, Scene};
+use jamkit_engine::{Fire, FireParams, MinimizeOutcome, Objective, Scene};
 use jamkit_experiment::reload::{PackingVisitor, reload};
 use jamkit_format::PackingFile;
 use std::collections::BTreeMap;
 
 type Gaps = BTreeMap<(usize, usize), Vec<f64>>;
 type Pairs<const D: usize, O> = BTreeMap<(usize, usize), Pair<D, O>>;
+/// The last evaluation: energy, gradient, overlapping gaps, pairs.
+type Last<const D: usize, O> = (f64, Vec<f64>, Gaps, Pairs<D, O>);
+/// Each step's `|ΔV − trapezoid|`, evaluation and description.
+type Worst = Vec<(f64, u64, String)>;
 /// A pair's contacts described in detail (for the steps that jump).
 type Explain<'a, const D: usize, O> = &'a dyn Fn(&Pair<D, O>) -> String;
 
 struct Traced<'a, const D: usize, S: Shape<D>> {
     scene: &'a mut Scene<D, S>,
-    last: Option<(f64, Vec<f64>, Gaps, Pairs<D, S::Orientation>)>,
+    last: Option<Last<D, S::Orientation>>,
     dq: Vec<f64>,
     explain: Option<Explain<'a, D, S::Orientation>>,
     explained: u64,
     calls: u64,
-    worst: Vec<(f64, u64, String)>,
+    worst: Worst,
     events: u64,
     verbose: bool,
 }
@@ -199,6 +203,32 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
     }
 }
 
+/// One minimisation traced: its outcome, the evaluations, those with
+/// contact changes, and every step's `|ΔV − trapezoid|` (largest first).
+fn traced<const D: usize, S: Shape<D>>(
+    fire: &mut Fire,
+    scene: &mut Scene<D, S>,
+    verbose: bool,
+    explain: Option<Explain<'_, D, S::Orientation>>,
+) -> (jamkit_core::Result<MinimizeOutcome>, u64, u64, Worst) {
+    let dof = Objective::dof(&*scene);
+    let mut t = Traced {
+        scene,
+        last: None,
+        dq: vec![0.0; dof],
+        calls: 0,
+        worst: Vec::new(),
+        events: 0,
+        verbose,
+        explain,
+        explained: 0,
+    };
+    let out = fire.minimize(&mut t);
+    let mut worst = std::mem::take(&mut t.worst);
+    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+    (out, t.calls, t.events, worst)
+}
+
 struct Trace {
     steps: u64,
     settings: FireParams,
@@ -225,21 +255,7 @@ impl PackingVisitor for Trace {
             max_steps: self.steps,
             ..self.settings.for_family(&scene.packing().shape)
         });
-        let mut t = Traced {
-            scene: &mut scene,
-            last: None,
-            dq: vec![0.0; dof],
-            calls: 0,
-            worst: Vec::new(),
-            events: 0,
-            verbose: true,
-            explain: None,
-            explained: 0,
-        };
-        let out = fire.minimize(&mut t);
-        let (calls, events) = (t.calls, t.events);
-        let mut worst = std::mem::take(&mut t.worst);
-        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let (out, calls, events, worst) = traced(&mut fire, &mut scene, true, None);
         println!("{calls} evaluations, {events} with contact changes; largest |ΔV − trapezoid|:");
         for (err, k, s) in worst.iter().take(10) {
             println!("  eval {k}: {err:.3e} ({s})");
@@ -293,21 +309,7 @@ fn jam_mode(n: u32, delta: f64, particles: usize, seed: u64, max_steps: u64, bud
     let dof = Objective::dof(&scene);
     for round in 0..2000 {
         let t0 = std::time::Instant::now();
-        let mut t = Traced {
-            scene: &mut scene,
-            last: None,
-            dq: vec![0.0; dof],
-            calls: 0,
-            worst: Vec::new(),
-            events: 0,
-            verbose: false,
-            explain: Some(&explain),
-            explained: 0,
-        };
-        let out = fire.minimize(&mut t);
-        let (calls, events) = (t.calls, t.events);
-        let mut worst = std::mem::take(&mut t.worst);
-        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let (out, calls, events, worst) = traced(&mut fire, &mut scene, false, Some(&explain));
         let mut g = vec![0.0; dof];
         let e = scene.energy_gradient(&mut g) / particles as f64;
         let gaps = gaps_of(&mut scene);

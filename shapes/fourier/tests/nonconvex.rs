@@ -307,6 +307,30 @@ fn contacts_agree_with_fine_polygons() {
     assert!(judged[1] > 150, "{judged:?} (apart, overlapping)");
 }
 
+/// At `path(t)`: the harmonic energy Σ_{h<0} h²/2 of the pair's contacts,
+/// its derivative along the path (the contacts' gradients against the
+/// path's velocity by central differences of step 10⁻⁶), and the number of
+/// contacts.
+fn harmonic_along(s: &NearDisk, path: &dyn Fn(f64) -> Config, t: f64) -> (f64, f64, usize) {
+    let list = contacts(s, &path(t), 0.0);
+    let e: f64 = list.iter().map(|k| 0.5 * k.gap * k.gap).sum();
+    let (p, q) = (path(t + 1e-6), path(t - 1e-6));
+    let v = [
+        (p.r[0] - q.r[0]) / 2e-6,
+        (p.r[1] - q.r[1]) / 2e-6,
+        (p.theta[0] - q.theta[0]) / 2e-6,
+        (p.theta[1] - q.theta[1]) / 2e-6,
+    ];
+    let de: f64 = list
+        .iter()
+        .map(|k| {
+            let g = gradient(k);
+            k.gap * (0..4).map(|a| g[a] * v[a]).sum::<f64>()
+        })
+        .sum();
+    (e, de, list.len())
+}
+
 /// Along paths on which contacts appear and leave, the harmonic energy
 /// Σ_{h<0} h²/2 changes step by step by no more than its derivative
 /// allows: |E(t + dt) − E(t)| ≤ 1.5 max|dE/dt| dt + 1e-15 at the two ends
@@ -342,26 +366,7 @@ fn energy_is_continuous_as_contacts_come_and_go() {
         let paths: [&dyn Fn(f64) -> Config; 2] = [&rolled, &slid];
         let mut two = false;
         for path in paths {
-            let energy = |t: f64| {
-                let c = path(t);
-                let list = contacts(&s, &c, 0.0);
-                let e: f64 = list.iter().map(|k| 0.5 * k.gap * k.gap).sum();
-                let (p, q) = (path(t + 1e-6), path(t - 1e-6));
-                let v = [
-                    (p.r[0] - q.r[0]) / 2e-6,
-                    (p.r[1] - q.r[1]) / 2e-6,
-                    (p.theta[0] - q.theta[0]) / 2e-6,
-                    (p.theta[1] - q.theta[1]) / 2e-6,
-                ];
-                let de: f64 = list
-                    .iter()
-                    .map(|k| {
-                        let g = gradient(k);
-                        k.gap * (0..4).map(|a| g[a] * v[a]).sum::<f64>()
-                    })
-                    .sum();
-                (e, de, list.len())
-            };
+            let energy = |t: f64| harmonic_along(&s, path, t);
             let steps = 4000;
             let dt = 1.0 / steps as f64;
             let mut prev = energy(0.0);
@@ -419,28 +424,13 @@ fn fold_path(t: f64) -> Config {
 fn energy_is_continuous_through_a_fold() {
     let s = fourier(16, 0.1, GapModel::Exact);
     let energy = |t: f64| {
-        let c = fold_path(t);
-        let list = contacts(&s, &c, 0.0);
-        let e: f64 = list.iter().map(|k| 0.5 * k.gap * k.gap).sum();
-        let (p, q) = (fold_path(t + 1e-6), fold_path(t - 1e-6));
-        let v = [
-            (p.r[0] - q.r[0]) / 2e-6,
-            (p.r[1] - q.r[1]) / 2e-6,
-            (p.theta[0] - q.theta[0]) / 2e-6,
-            (p.theta[1] - q.theta[1]) / 2e-6,
-        ];
-        let de: f64 = list
-            .iter()
-            .map(|k| {
-                let g = gradient(k);
-                k.gap * (0..4).map(|a| g[a] * v[a]).sum::<f64>()
-            })
-            .sum();
+        let (e, de, count) = harmonic_along(&s, &fold_path, t);
         let mut saddles = 0;
-        s.profiled().arc_contacts(&c.pair(), 0.0, None, &mut |e| {
-            saddles += usize::from(e.saddle.is_some());
-        });
-        (e, de, list.len(), saddles)
+        s.profiled()
+            .arc_contacts(&fold_path(t).pair(), 0.0, None, &mut |e| {
+                saddles += usize::from(e.saddle.is_some());
+            });
+        (e, de, count, saddles)
     };
     let steps = 3000;
     let dt = 3.0 / steps as f64;
