@@ -337,6 +337,16 @@ fn jam_mode(n: u32, delta: f64, particles: usize, seed: u64, max_steps: u64, bud
         }
         if e > 1e-16 && e < 2e-16 {
             println!("jammed at φ {:.6}", scene.phi());
+            // The state, to the bit: the box's edges, then per body
+            // `x y θ R⁰`.
+            let p = scene.packing();
+            let edges = p.bbox.edges();
+            println!("box {:?} {:?}", edges[0], edges[1]);
+            for k in 0..p.len() {
+                let r = p.positions[k];
+                let theta = p.orientations[k].theta();
+                println!("body {:?} {:?} {theta:?} {:?}", r[0], r[1], p.sizes[k]);
+            }
             return;
         }
         let over = e >= 2e-16;

@@ -18,7 +18,7 @@ use std::f64::consts::TAU;
 
 #[path = "support/polygon.rs"]
 mod polygon;
-use polygon::Polygon;
+use polygon::{Polygon, support_points};
 
 /// A small deterministic generator (splitmix64), uniform in `[0, 1)`.
 struct Uniform(u64);
@@ -242,21 +242,6 @@ fn derivatives_match_finite_differences_with_several_contacts() {
         by_count[2] > 0 && by_count[3] > 0 && overlapping[2] > 0 && overlapping[3] > 0,
         "pairs by number of contacts: {by_count:?}, overlapping {overlapping:?}"
     );
-}
-
-/// The support points of a contact: `a` on body `i` (centre at 0), `b` on
-/// body `j` (centre at `r`).
-fn support_points(e: &ExactGap, r: [f64; 2]) -> ([f64; 2], [f64; 2]) {
-    let (c, s) = e.normal;
-    let a = [
-        e.jet_i.h * c - e.jet_i.d1 * s,
-        e.jet_i.h * s + e.jet_i.d1 * c,
-    ];
-    let b = [
-        r[0] - e.jet_j.h * c + e.jet_j.d1 * s,
-        r[1] - e.jet_j.h * s - e.jet_j.d1 * c,
-    ];
-    (a, b)
 }
 
 /// Random pairs of n = 8 (Δ = 0.3) and n = 16 (Δ = 0.2) near contact

@@ -4,6 +4,7 @@
 //! that use it.
 
 use jamkit_fourier::NearDisk;
+use jamkit_planar::gap2d::ExactGap;
 use std::f64::consts::TAU;
 
 /// The outline of a body as a polygon of `m` vertices (lab frame,
@@ -67,4 +68,19 @@ impl Polygon {
             .map(|p| self.distance(*p))
             .fold(0.0, f64::max)
     }
+}
+
+/// The support points of a contact: `a` on body `i` (centre at 0), `b` on
+/// body `j` (centre at `r`).
+pub fn support_points(e: &ExactGap, r: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    let (c, s) = e.normal;
+    let a = [
+        e.jet_i.h * c - e.jet_i.d1 * s,
+        e.jet_i.h * s + e.jet_i.d1 * c,
+    ];
+    let b = [
+        r[0] - e.jet_j.h * c + e.jet_j.d1 * s,
+        r[1] - e.jet_j.h * s - e.jet_j.d1 * c,
+    ];
+    (a, b)
 }
