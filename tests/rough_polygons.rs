@@ -55,6 +55,37 @@ fn check(n: u32, delta: f64, phi: f64, particles: usize, steps: u64) -> (usize, 
     compare(&s, &mut scene)
 }
 
+/// The pairs of a packing whose bounding circles overlap: `i < j`, the
+/// pair, and the two bodies as polygons of 8192 vertices (body `i`'s
+/// centre at the origin, body `j`'s at `r_ij`).
+fn near_pairs(
+    p: &Packing<2, NearDisk>,
+) -> Vec<(
+    usize,
+    usize,
+    Pair<2, jamkit_fourier::Angle>,
+    Polygon,
+    Polygon,
+)> {
+    let s = &p.shape;
+    let mut out = Vec::new();
+    for i in 0..p.len() {
+        for j in i + 1..p.len() {
+            let d = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
+            let (si, sj) = (p.sizes[i], p.sizes[j]);
+            if d.norm() > s.bounding_radius(si) + s.bounding_radius(sj) {
+                continue;
+            }
+            let pair = Pair::new(si, p.orientations[i], sj, p.orientations[j], d);
+            let theta = |k: usize| p.orientations[k].theta();
+            let pi = Polygon::new(s, si, theta(i), [0.0, 0.0], 8192);
+            let pj = Polygon::new(s, sj, theta(j), [d[0], d[1]], 8192);
+            out.push((i, j, pair, pi, pj));
+        }
+    }
+    out
+}
+
 /// The pairs of `scene` against polygons of 8192 vertices ([`check`]):
 /// the pairs compared in contact, those with several contacts, and those
 /// left to the core.
@@ -63,38 +94,27 @@ fn compare(s: &NearDisk, scene: &mut Scene<2, NearDisk>) -> (usize, usize, usize
     let p = scene.packing();
     let particles = p.len();
     let (mut touching, mut several, mut cores) = (0, 0, 0);
-    for i in 0..particles {
-        for j in i + 1..particles {
-            let d = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
-            let (si, sj) = (p.sizes[i], p.sizes[j]);
-            if d.norm() > s.bounding_radius(si) + s.bounding_radius(sj) {
-                continue;
-            }
-            let pair = Pair::new(si, p.orientations[i], sj, p.orientations[j], d);
-            if s.profiled().core_contact(&pair).is_some() {
-                cores += 1;
-                continue;
-            }
-            // The depth of each contact's common normal (a contact that
-            // meets a saddle reports its prominence as its gap).
-            let mut gaps = Vec::new();
-            s.profiled()
-                .arc_contacts(&pair, 0.0, None, &mut |c| gaps.push(c.exact.gap));
-            let model = gaps.iter().fold(0.0f64, |m, g| m.max(-g));
-            let theta = |k: usize| p.orientations[k].theta();
-            let pi = Polygon::new(s, si, theta(i), [0.0, 0.0], 8192);
-            let pj = Polygon::new(s, sj, theta(j), [d[0], d[1]], 8192);
-            let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
-            if depth.max(model) < 2e-5 {
-                continue;
-            }
-            assert!(
-                (depth - model).abs() < 2e-5,
-                "n = {n}, bodies {i} and {j}: polygons overlap by {depth}, the model by {model} ({gaps:?})"
-            );
-            touching += 1;
-            several += usize::from(gaps.iter().filter(|g| **g < 0.0).count() > 1);
+    for (i, j, pair, pi, pj) in near_pairs(p) {
+        if s.profiled().core_contact(&pair).is_some() {
+            cores += 1;
+            continue;
         }
+        // The depth of each contact's common normal (a contact that
+        // meets a saddle reports its prominence as its gap).
+        let mut gaps = Vec::new();
+        s.profiled()
+            .arc_contacts(&pair, 0.0, None, &mut |c| gaps.push(c.exact.gap));
+        let model = gaps.iter().fold(0.0f64, |m, g| m.max(-g));
+        let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
+        if depth.max(model) < 2e-5 {
+            continue;
+        }
+        assert!(
+            (depth - model).abs() < 2e-5,
+            "n = {n}, bodies {i} and {j}: polygons overlap by {depth}, the model by {model} ({gaps:?})"
+        );
+        touching += 1;
+        several += usize::from(gaps.iter().filter(|g| **g < 0.0).count() > 1);
     }
     let mut g = vec![0.0; Objective::dof(&*scene)];
     let e = scene.energy_gradient(&mut g) / particles as f64;
@@ -191,39 +211,29 @@ fn jammed_non_convex_packings_agree_with_fine_polygons() {
         let s = scene.packing().shape.clone();
         let p = scene.packing();
         let mut touching = 0;
-        for i in 0..particles {
-            for j in i + 1..particles {
-                let d = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
-                let (si, sj) = (p.sizes[i], p.sizes[j]);
-                if d.norm() > s.bounding_radius(si) + s.bounding_radius(sj) {
-                    continue;
-                }
-                let pair = Pair::new(si, p.orientations[i], sj, p.orientations[j], d);
+        for (i, j, pair, pi, pj) in near_pairs(p) {
+            let d = pair.r_ij;
+            assert!(
+                s.profiled().core_contact(&pair).is_none(),
+                "n = {n}: {i}, {j}"
+            );
+            let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
+            assert!(
+                depth < 2e-5,
+                "n = {n}, bodies {i} and {j}: polygons overlap by {depth}"
+            );
+            s.profiled().arc_contacts(&pair, 2e-5, None, &mut |c| {
+                let e = c.exact;
+                let (a, b) = support_points(&e, [d[0], d[1]]);
+                let (cs, sn) = e.normal;
+                assert!((b[0] - a[0] - e.gap * cs).abs() < 1e-9, "{e:?}");
+                assert!((b[1] - a[1] - e.gap * sn).abs() < 1e-9, "{e:?}");
                 assert!(
-                    s.profiled().core_contact(&pair).is_none(),
-                    "n = {n}: {i}, {j}"
+                    pj.distance(a) < 2e-5 && pi.distance(b) < 2e-5,
+                    "n = {n}, bodies {i} and {j}: {e:?}"
                 );
-                let theta = |k: usize| p.orientations[k].theta();
-                let pi = Polygon::new(&s, si, theta(i), [0.0, 0.0], 8192);
-                let pj = Polygon::new(&s, sj, theta(j), [d[0], d[1]], 8192);
-                let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
-                assert!(
-                    depth < 2e-5,
-                    "n = {n}, bodies {i} and {j}: polygons overlap by {depth}"
-                );
-                s.profiled().arc_contacts(&pair, 2e-5, None, &mut |c| {
-                    let e = c.exact;
-                    let (a, b) = support_points(&e, [d[0], d[1]]);
-                    let (cs, sn) = e.normal;
-                    assert!((b[0] - a[0] - e.gap * cs).abs() < 1e-9, "{e:?}");
-                    assert!((b[1] - a[1] - e.gap * sn).abs() < 1e-9, "{e:?}");
-                    assert!(
-                        pj.distance(a) < 2e-5 && pi.distance(b) < 2e-5,
-                        "n = {n}, bodies {i} and {j}: {e:?}"
-                    );
-                    touching += 1;
-                });
-            }
+                touching += 1;
+            });
         }
         eprintln!("n = {n}: {touching} contacts touch the polygons");
         assert!(touching >= 12, "n = {n}: {touching} contacts");
