@@ -12,7 +12,7 @@
 use jamkit_core::{Contact, GapHessian, Pair, Rotation2, Shape, Vector};
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_planar::arcs::split_arcs;
-use jamkit_planar::gap2d::{ExactGap, GapModel};
+use jamkit_planar::gap2d::GapModel;
 use jamkit_planar::profiled::ExactSolve;
 use std::f64::consts::TAU;
 
