@@ -7,67 +7,10 @@ use jamkit_engine::{Fire, FireParams, Objective, Scene};
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_planar::gap2d::GapModel;
 use rand::SeedableRng;
-use std::f64::consts::TAU;
 
-/// A body's outline as a polygon of `m` vertices at polar angles 2πk/m
-/// about its centre `c` (lab frame, counter-clockwise).
-struct Polygon {
-    c: [f64; 2],
-    v: Vec<[f64; 2]>,
-}
-
-impl Polygon {
-    fn new(s: &NearDisk, size: f64, theta: f64, c: [f64; 2], m: usize) -> Self {
-        let v = (0..m)
-            .map(|k| {
-                let phi = TAU * k as f64 / m as f64;
-                // R(φ) = R⁰ [1 + Δ F(θ − φ)] in the lab direction φ.
-                let r = size * s.relative_radius(theta - phi);
-                [c[0] + r * phi.cos(), c[1] + r * phi.sin()]
-            })
-            .collect();
-        Self { c, v }
-    }
-
-    fn sector(&self, p: [f64; 2]) -> usize {
-        let m = self.v.len();
-        let a = (p[1] - self.c[1]).atan2(p[0] - self.c[0]).rem_euclid(TAU);
-        ((a / TAU * m as f64) as usize).min(m - 1)
-    }
-
-    /// Inside: on the inner side of its sector's edge (star-shaped).
-    fn contains(&self, p: [f64; 2]) -> bool {
-        let m = self.v.len();
-        let k = self.sector(p);
-        let (a, b) = (self.v[k], self.v[(k + 1) % m]);
-        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0.0
-    }
-
-    /// Distance from `p` to the edges within 64 sectors of its own.
-    fn distance(&self, p: [f64; 2]) -> f64 {
-        let m = self.v.len();
-        let k = self.sector(p) + m;
-        (k - 64..k + 64)
-            .map(|e| {
-                let (a, b) = (self.v[e % m], self.v[(e + 1) % m]);
-                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-                let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy))
-                    .clamp(0.0, 1.0);
-                (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
-            })
-            .fold(f64::INFINITY, f64::min)
-    }
-
-    /// How deep the other polygon's vertices reach into this one (0: none).
-    fn depth_of(&self, other: &Polygon) -> f64 {
-        other
-            .v
-            .iter()
-            .filter(|p| self.contains(**p))
-            .map(|p| self.distance(*p))
-            .fold(0.0, f64::max)
-    }
-}
+#[path = "../shapes/fourier/tests/support/polygon.rs"]
+mod polygon;
+use polygon::{Polygon, support_points};
 
 /// `particles` near-disks (n, Δ) with the exact gap from a random start
 /// at `phi` (deep overlaps), relaxed by `steps` FIRE steps (jamming to
@@ -109,42 +52,75 @@ fn check(n: u32, delta: f64, phi: f64, particles: usize, steps: u64) -> (usize, 
     );
     // Capped: the state reached is the one compared.
     let _ = fire.minimize(&mut scene);
-    let p = scene.packing();
-    let (mut touching, mut several, mut cores) = (0, 0, 0);
-    for i in 0..particles {
-        for j in i + 1..particles {
+    compare(&s, &mut scene)
+}
+
+/// The pairs of a packing whose bounding circles overlap: `i < j`, the
+/// pair, and the two bodies as polygons of 8192 vertices (body `i`'s
+/// centre at the origin, body `j`'s at `r_ij`).
+fn near_pairs(
+    p: &Packing<2, NearDisk>,
+) -> Vec<(
+    usize,
+    usize,
+    Pair<2, jamkit_fourier::Angle>,
+    Polygon,
+    Polygon,
+)> {
+    let s = &p.shape;
+    let mut out = Vec::new();
+    for i in 0..p.len() {
+        for j in i + 1..p.len() {
             let d = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
             let (si, sj) = (p.sizes[i], p.sizes[j]);
             if d.norm() > s.bounding_radius(si) + s.bounding_radius(sj) {
                 continue;
             }
             let pair = Pair::new(si, p.orientations[i], sj, p.orientations[j], d);
-            if s.profiled().core_contact(&pair).is_some() {
-                cores += 1;
-                continue;
-            }
-            let mut gaps = Vec::new();
-            s.contacts(&pair, 0.0, |c| gaps.push(c.gap));
-            let model = gaps.iter().fold(0.0f64, |m, g| m.max(-g));
             let theta = |k: usize| p.orientations[k].theta();
-            let pi = Polygon::new(&s, si, theta(i), [0.0, 0.0], 8192);
-            let pj = Polygon::new(&s, sj, theta(j), [d[0], d[1]], 8192);
-            let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
-            if depth.max(model) < 2e-5 {
-                continue;
-            }
-            assert!(
-                (depth - model).abs() < 2e-5,
-                "n = {n}, bodies {i} and {j}: polygons overlap by {depth}, the model by {model} ({gaps:?})"
-            );
-            touching += 1;
-            several += usize::from(gaps.iter().filter(|g| **g < 0.0).count() > 1);
+            let pi = Polygon::new(s, si, theta(i), [0.0, 0.0], 8192);
+            let pj = Polygon::new(s, sj, theta(j), [d[0], d[1]], 8192);
+            out.push((i, j, pair, pi, pj));
         }
     }
-    let mut g = vec![0.0; Objective::dof(&scene)];
+    out
+}
+
+/// The pairs of `scene` against polygons of 8192 vertices ([`check`]):
+/// the pairs compared in contact, those with several contacts, and those
+/// left to the core.
+fn compare(s: &NearDisk, scene: &mut Scene<2, NearDisk>) -> (usize, usize, usize) {
+    let n = s.profiled().profile().modes()[0].n;
+    let p = scene.packing();
+    let particles = p.len();
+    let (mut touching, mut several, mut cores) = (0, 0, 0);
+    for (i, j, pair, pi, pj) in near_pairs(p) {
+        if s.profiled().core_contact(&pair).is_some() {
+            cores += 1;
+            continue;
+        }
+        // The depth of each contact's common normal (a contact that
+        // meets a saddle reports its prominence as its gap).
+        let mut gaps = Vec::new();
+        s.profiled()
+            .arc_contacts(&pair, 0.0, None, &mut |c| gaps.push(c.exact.gap));
+        let model = gaps.iter().fold(0.0f64, |m, g| m.max(-g));
+        let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
+        if depth.max(model) < 2e-5 {
+            continue;
+        }
+        assert!(
+            (depth - model).abs() < 2e-5,
+            "n = {n}, bodies {i} and {j}: polygons overlap by {depth}, the model by {model} ({gaps:?})"
+        );
+        touching += 1;
+        several += usize::from(gaps.iter().filter(|g| **g < 0.0).count() > 1);
+    }
+    let mut g = vec![0.0; Objective::dof(&*scene)];
     let e = scene.energy_gradient(&mut g) / particles as f64;
     eprintln!(
-        "n = {n}, Δ = {delta}: φ = {:.4}, V/N = {e:.3e}, {touching} pairs in contact, {several} with several contacts, {cores} left to the core",
+        "n = {n}, Δ = {}: φ = {:.4}, V/N = {e:.3e}, {touching} pairs in contact, {several} with several contacts, {cores} left to the core",
+        s.delta(),
         scene.phi()
     );
     (touching, several, cores)
@@ -158,5 +134,110 @@ fn relaxed_non_convex_packings_agree_with_fine_polygons() {
     for &(n, delta, phi) in &[(8u32, 0.2, 0.86), (16, 0.1, 0.83)] {
         let (touching, _, _) = check(n, delta, phi, 12, 2000);
         assert!(touching >= 5, "n = {n}: {touching} pairs in contact");
+    }
+}
+
+/// A jammed packing of `tests/inputs/rough/` (a line `box Lx Ly`, then a
+/// line `body x y θ R⁰` per body), as jammed by `cargo run --release
+/// --example trace_fire -- jam N_MODE DELTA PARTICLES SEED MAX_STEPS
+/// SECONDS` (the file's header says which).
+fn jammed(n: u32, delta: f64, file: &str) -> Scene<2, NearDisk> {
+    let s = NearDisk::fourier(&FourierParams {
+        n,
+        delta,
+        inertia: None,
+        gap: GapModel::Exact,
+    })
+    .unwrap();
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/inputs/rough")
+            .join(file),
+    )
+    .unwrap();
+    // A packing of the family whose box and bodies the file's replace.
+    let mut packing = Packing::random(
+        s.clone(),
+        vec![0.5; 12],
+        0.5,
+        &mut rand_chacha::ChaCha8Rng::seed_from_u64(1),
+    )
+    .unwrap();
+    let (mut positions, mut orientations, mut sizes) = (Vec::new(), Vec::new(), Vec::new());
+    for line in text.lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let x = |k: usize| w[k].parse::<f64>().unwrap();
+        match w.first() {
+            Some(&"box") => {
+                packing.bbox =
+                    jamkit_core::PeriodicBox::new(jamkit_core::Vector::<2>::new(x(1), x(2)))
+            }
+            Some(&"body") => {
+                positions.push(jamkit_core::Vector::<2>::new(x(1), x(2)));
+                orientations.push(jamkit_core::Rotation2::new(x(3)));
+                sizes.push(x(4));
+            }
+            _ => {}
+        }
+    }
+    packing.positions = positions;
+    packing.orientations = orientations;
+    packing.sizes = sizes;
+    let skin = 0.4 * s.bounding_radius(0.5);
+    Scene::new(packing, Potential::Harmonic, skin)
+}
+
+/// Jammed packings, n = 8 at Δ = 0.15 (12 bodies) and n = 16 at Δ = 0.1
+/// (32 bodies) (Δ(n + 1/n) = 1.22 and 1.6, beyond the convex limit 1): the
+/// energy is in the jamming window, 10⁻¹⁶ < V/N < 2·10⁻¹⁶ (a change of the
+/// model that moves the packing off it fails here), so the model's
+/// overlaps are ~10⁻⁸, below what polygons of 8192 vertices resolve
+/// (2·10⁻⁵, [`check`]). Against them: no pair overlaps as polygons by
+/// more than 2·10⁻⁵ and none is left to the core, and every contact with
+/// h < 2·10⁻⁵ touches them: its support points a distance |h| apart along
+/// its normal (to 10⁻⁶: near an inflection point, ρ ~ 4·10³, the
+/// refinement of the normal leaves them ~10⁻⁷ apart sideways; the gap
+/// errs by k δψ², far less), each on the other body's polygon to 2·10⁻⁵. At least 12
+/// contacts are checked for each.
+#[test]
+fn jammed_non_convex_packings_agree_with_fine_polygons() {
+    for &(n, delta, file) in &[
+        (8u32, 0.15, "n8_d0.15_N12.txt"),
+        (16, 0.1, "n16_d0.1_N32.txt"),
+    ] {
+        let mut scene = jammed(n, delta, file);
+        let mut g = vec![0.0; Objective::dof(&scene)];
+        let particles = scene.packing().len();
+        let e = scene.energy_gradient(&mut g) / particles as f64;
+        assert!(e > 1e-16 && e < 2e-16, "n = {n}: V/N = {e:e}");
+        let s = scene.packing().shape.clone();
+        let p = scene.packing();
+        let mut touching = 0;
+        for (i, j, pair, pi, pj) in near_pairs(p) {
+            let d = pair.r_ij;
+            assert!(
+                s.profiled().core_contact(&pair).is_none(),
+                "n = {n}: {i}, {j}"
+            );
+            let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
+            assert!(
+                depth < 2e-5,
+                "n = {n}, bodies {i} and {j}: polygons overlap by {depth}"
+            );
+            s.profiled().arc_contacts(&pair, 2e-5, None, &mut |c| {
+                let e = c.exact;
+                let (a, b) = support_points(&e, [d[0], d[1]]);
+                let (cs, sn) = e.normal;
+                let off = (b[0] - a[0] - e.gap * cs).hypot(b[1] - a[1] - e.gap * sn);
+                assert!(off < 1e-6, "{off:e}: {e:?}");
+                assert!(
+                    pj.distance(a) < 2e-5 && pi.distance(b) < 2e-5,
+                    "n = {n}, bodies {i} and {j}: {e:?}"
+                );
+                touching += 1;
+            });
+        }
+        eprintln!("n = {n}: {touching} contacts touch the polygons");
+        assert!(touching >= 12, "n = {n}: {touching} contacts");
     }
 }

@@ -20,20 +20,29 @@
 //! cargo run --release --example trace_fire -- jam N_MODE DELTA PARTICLES SEED MAX_STEPS SECONDS
 //! ```
 
-use jamkit_core::Shape;
-use jamkit_engine::{Fire, FireParams, Objective, Scene};
+use jamkit_core::{Pair, Shape};
+use jamkit_engine::{Fire, FireParams, MinimizeOutcome, Objective, Scene};
 use jamkit_experiment::reload::{PackingVisitor, reload};
 use jamkit_format::PackingFile;
 use std::collections::BTreeMap;
 
 type Gaps = BTreeMap<(usize, usize), Vec<f64>>;
+type Pairs<const D: usize, O> = BTreeMap<(usize, usize), Pair<D, O>>;
+/// The last evaluation: energy, gradient, overlapping gaps, pairs.
+type Last<const D: usize, O> = (f64, Vec<f64>, Gaps, Pairs<D, O>);
+/// Each step's `|ΔV − trapezoid|`, evaluation and description.
+type Worst = Vec<(f64, u64, String)>;
+/// A pair's contacts described in detail (for the steps that jump).
+type Explain<'a, const D: usize, O> = &'a dyn Fn(&Pair<D, O>) -> String;
 
 struct Traced<'a, const D: usize, S: Shape<D>> {
     scene: &'a mut Scene<D, S>,
-    last: Option<(f64, Vec<f64>, Gaps)>,
+    last: Option<Last<D, S::Orientation>>,
     dq: Vec<f64>,
+    explain: Option<Explain<'a, D, S::Orientation>>,
+    explained: u64,
     calls: u64,
-    worst: Vec<(f64, u64, String)>,
+    worst: Worst,
     events: u64,
     verbose: bool,
 }
@@ -44,8 +53,22 @@ fn list(v: &[f64]) -> String {
 }
 
 fn gaps_of<const D: usize, S: Shape<D>>(scene: &mut Scene<D, S>) -> Gaps {
+    gaps_pairs(scene).0
+}
+
+/// The overlapping gaps of every pair, and every pair within the bounding
+/// test.
+fn gaps_pairs<const D: usize, S: Shape<D>>(
+    scene: &mut Scene<D, S>,
+) -> (Gaps, Pairs<D, S::Orientation>) {
     let mut gaps: Gaps = BTreeMap::new();
-    scene.for_each_contact(0.0, |i, j, _, c| {
+    let mut pairs = BTreeMap::new();
+    let p = scene.packing();
+    let (sizes, orientations) = (p.sizes.clone(), p.orientations.clone());
+    scene.for_each_contact(0.0, |i, j, d, c| {
+        pairs
+            .entry((i, j))
+            .or_insert_with(|| Pair::new(sizes[i], orientations[i], sizes[j], orientations[j], *d));
         if c.gap < 0.0 {
             gaps.entry((i, j)).or_default().push(c.gap);
         }
@@ -53,7 +76,7 @@ fn gaps_of<const D: usize, S: Shape<D>>(scene: &mut Scene<D, S>) -> Gaps {
     for v in gaps.values_mut() {
         v.sort_by(f64::total_cmp);
     }
-    gaps
+    (gaps, pairs)
 }
 
 impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
@@ -68,9 +91,9 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
     }
     fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
         let e = self.scene.energy_gradient(grad);
-        let gaps = gaps_of(self.scene);
+        let (gaps, pairs) = gaps_pairs(self.scene);
         self.calls += 1;
-        if let Some((e0, g0, gaps0)) = &self.last {
+        if let Some((e0, g0, gaps0, pairs0)) = &self.last {
             let step: f64 = self.dq.iter().map(|x| x * x).sum::<f64>().sqrt();
             if step > 0.0 {
                 let pred: f64 = 0.5
@@ -81,6 +104,7 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
                         .sum::<f64>();
                 let err = (e - e0) - pred;
                 let mut note = String::new();
+                let mut changed = Vec::new();
                 for (k, v) in gaps.iter() {
                     match gaps0.get(k) {
                         Some(v0) if v0.len() == v.len() => {
@@ -91,6 +115,7 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
                                 .fold(0.0, f64::max);
                             if jump > 100.0 * step {
                                 note += &format!(" {k:?} {}->{}", list(v0), list(v));
+                                changed.push(*k);
                             }
                         }
                         other => {
@@ -99,12 +124,34 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
                                 list(&other.cloned().unwrap_or_default()),
                                 list(v)
                             );
+                            changed.push(*k);
                         }
                     }
                 }
                 for (k, v0) in gaps0.iter() {
                     if !gaps.contains_key(k) {
                         note += &format!(" {k:?} {}->[]", list(v0));
+                        changed.push(*k);
+                    }
+                }
+                // A step whose energy misses the trapezoid by more than a
+                // tenth of its change: each changed pair before and after.
+                if let Some(explain) = self.explain
+                    && err.abs() > 1e-10
+                    && err.abs() > 0.1 * (e - e0).abs()
+                    && self.explained < 12
+                {
+                    self.explained += 1;
+                    println!(
+                        "jump at eval {}: |dq| {step:.2e} dV {:.3e} err {err:.3e} V {e:.4e}",
+                        self.calls,
+                        e - e0
+                    );
+                    for k in &changed {
+                        if let (Some(a), Some(b)) = (pairs0.get(k), pairs.get(k)) {
+                            println!("  pair {k:?} before: {}", explain(a));
+                            println!("  pair {k:?} after:  {}", explain(b));
+                        }
                     }
                 }
                 if !note.is_empty() {
@@ -124,7 +171,7 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
                 ));
             }
         }
-        self.last = Some((e, grad.to_vec(), gaps));
+        self.last = Some((e, grad.to_vec(), gaps, pairs));
         self.dq.iter_mut().for_each(|x| *x = 0.0);
         e
     }
@@ -156,6 +203,32 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
     }
 }
 
+/// One minimisation traced: its outcome, the evaluations, those with
+/// contact changes, and every step's `|ΔV − trapezoid|` (largest first).
+fn traced<const D: usize, S: Shape<D>>(
+    fire: &mut Fire,
+    scene: &mut Scene<D, S>,
+    verbose: bool,
+    explain: Option<Explain<'_, D, S::Orientation>>,
+) -> (jamkit_core::Result<MinimizeOutcome>, u64, u64, Worst) {
+    let dof = Objective::dof(&*scene);
+    let mut t = Traced {
+        scene,
+        last: None,
+        dq: vec![0.0; dof],
+        calls: 0,
+        worst: Vec::new(),
+        events: 0,
+        verbose,
+        explain,
+        explained: 0,
+    };
+    let out = fire.minimize(&mut t);
+    let mut worst = std::mem::take(&mut t.worst);
+    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+    (out, t.calls, t.events, worst)
+}
+
 struct Trace {
     steps: u64,
     settings: FireParams,
@@ -182,19 +255,7 @@ impl PackingVisitor for Trace {
             max_steps: self.steps,
             ..self.settings.for_family(&scene.packing().shape)
         });
-        let mut t = Traced {
-            scene: &mut scene,
-            last: None,
-            dq: vec![0.0; dof],
-            calls: 0,
-            worst: Vec::new(),
-            events: 0,
-            verbose: true,
-        };
-        let out = fire.minimize(&mut t);
-        let (calls, events) = (t.calls, t.events);
-        let mut worst = std::mem::take(&mut t.worst);
-        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let (out, calls, events, worst) = traced(&mut fire, &mut scene, true, None);
         println!("{calls} evaluations, {events} with contact changes; largest |ΔV − trapezoid|:");
         for (err, k, s) in worst.iter().take(10) {
             println!("  eval {k}: {err:.3e} ({s})");
@@ -230,6 +291,7 @@ fn jam_mode(n: u32, delta: f64, particles: usize, seed: u64, max_steps: u64, bud
         .collect();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let skin = 0.4 * s.bounding_radius(0.5);
+    let s_explain = s.clone();
     let packing = jamkit_core::Packing::random(s, sizes, 0.6, &mut rng).unwrap();
     let mut scene = Scene::new(packing, jamkit_core::Potential::Harmonic, skin);
     let params = FireParams {
@@ -240,24 +302,14 @@ fn jam_mode(n: u32, delta: f64, particles: usize, seed: u64, max_steps: u64, bud
     }
     .for_family(&scene.packing().shape);
     let mut fire = Fire::new(params);
+    let profiled = s_explain.profiled().clone();
+    let explain = move |p: &Pair<2, jamkit_fourier::Angle>| describe(&profiled, p);
     let mut eps = 1e-3;
     let start = std::time::Instant::now();
     let dof = Objective::dof(&scene);
     for round in 0..2000 {
         let t0 = std::time::Instant::now();
-        let mut t = Traced {
-            scene: &mut scene,
-            last: None,
-            dq: vec![0.0; dof],
-            calls: 0,
-            worst: Vec::new(),
-            events: 0,
-            verbose: false,
-        };
-        let out = fire.minimize(&mut t);
-        let (calls, events) = (t.calls, t.events);
-        let mut worst = std::mem::take(&mut t.worst);
-        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let (out, calls, events, worst) = traced(&mut fire, &mut scene, false, Some(&explain));
         let mut g = vec![0.0; dof];
         let e = scene.energy_gradient(&mut g) / particles as f64;
         let gaps = gaps_of(&mut scene);
@@ -285,6 +337,16 @@ fn jam_mode(n: u32, delta: f64, particles: usize, seed: u64, max_steps: u64, bud
         }
         if e > 1e-16 && e < 2e-16 {
             println!("jammed at φ {:.6}", scene.phi());
+            // The state, to the bit: the box's edges, then per body
+            // `x y θ R⁰`.
+            let p = scene.packing();
+            let edges = p.bbox.edges();
+            println!("box {:?} {:?}", edges[0], edges[1]);
+            for k in 0..p.len() {
+                let r = p.positions[k];
+                let theta = p.orientations[k].theta();
+                println!("body {:?} {:?} {theta:?} {:?}", r[0], r[1], p.sizes[k]);
+            }
             return;
         }
         let over = e >= 2e-16;
@@ -294,6 +356,61 @@ fn jam_mode(n: u32, delta: f64, particles: usize, seed: u64, max_steps: u64, bud
         let phi = scene.phi();
         scene.set_phi(phi + eps);
     }
+}
+
+/// Every contact of a pair: the arcs' (arc indices, convex or concave,
+/// gap, `k = g + ρ_A + ρ_B`, support points' body angles) and the core's.
+fn describe(
+    s: &jamkit_planar::profiled::Profiled<jamkit_fourier::FourierProfile, jamkit_fourier::Angle>,
+    p: &Pair<2, jamkit_fourier::Angle>,
+) -> String {
+    let arcs = s.arcs().unwrap_or(&[]);
+    let angle = |o: &jamkit_fourier::Angle| {
+        let (c, si) = o.unit();
+        si.atan2(c)
+    };
+    let (ti, tj) = (angle(&p.o_i), angle(&p.o_j));
+    let which = |phi: f64| {
+        let t = std::f64::consts::TAU;
+        arcs.iter()
+            .position(|a| {
+                let x = a.phi.0 + (phi - a.phi.0).rem_euclid(t);
+                x >= a.phi.0 && x < a.phi.1
+            })
+            .map_or("?".to_string(), |k| {
+                format!("{k}{}", if arcs[k].convex { "+" } else { "-" })
+            })
+    };
+    let mut out = format!(
+        "sizes {} {} θ {:.9} {:.9} r ({:.12}, {:.12}):",
+        p.size_i, p.size_j, ti, tj, p.r_ij[0], p.r_ij[1]
+    );
+    s.arc_contacts(p, 0.0, None, &mut |ac| {
+        let e = ac.exact;
+        let psi = e.normal.1.atan2(e.normal.0);
+        let phi = |jet: &jamkit_planar::gap2d::SupportJet, beta: f64| beta + jet.d1.atan2(jet.h);
+        let (pa, pb) = (
+            phi(&e.jet_i, psi - ti),
+            phi(&e.jet_j, psi + std::f64::consts::PI - tj),
+        );
+        let k = e.gap + (e.jet_i.h + e.jet_i.d2) + (e.jet_j.h + e.jet_j.d2);
+        out += &format!(
+            " [{}|{} h {:.4e}{} k {:.3e} ψ {:.6} φ {:.6} {:.6}]",
+            which(pa),
+            which(pb),
+            e.gap,
+            ac.saddle
+                .map_or(String::new(), |sd| format!(" saddle {:.4e}", sd.gap)),
+            k,
+            psi,
+            pa.rem_euclid(std::f64::consts::TAU),
+            pb.rem_euclid(std::f64::consts::TAU)
+        );
+    });
+    if let Some(e) = s.core_contact(p) {
+        out += &format!(" [core h {:.4e}]", e.gap);
+    }
+    out
 }
 
 fn main() {

@@ -32,12 +32,27 @@
 //! maximum of `g_AB` for two convex arcs, a minimum for a convex arc
 //! against a concave one. At `h = 0` this is the condition that the
 //! outlines touch without crossing (the signed curvatures add up to a
-//! positive one). Concave–concave pairs are not searched: at `h ≤ 0` they
+//! positive one). Two concave arcs have no contact: at `h ≤ 0` they
 //! cross, and they meet the rule only at `h > |ρ_A| + |ρ_B|`.
 //!
 //! By the envelope theorem the derivatives are those of the convex exact
 //! gap ([`crate::gap2d`]) with the arc's jets; the second derivatives divide
 //! by `k`, of either sign ([`crate::gap2d::ExactGap::hessian_signed`]).
+//!
+//! ## Saddles
+//!
+//! The other stationary points (`k ρ_A ρ_B < 0`, on any two arcs) are the
+//! local minima of the depth along the overlap. A contact is born or dies
+//! where it merges with one of them: inside an arc pair at `k = 0` (a
+//! fold), or at an end of the normal range shared by two arc pairs (an
+//! inflection point). At `h < 0` its energy would go with it. So each
+//! overlapping saddle (`h_s < 0`) goes to the shallower of its neighbours
+//! among all stationary points of the pair, in order of the support
+//! point's polar angle on body `i`, that are contacts deeper than it; a
+//! contact with a saddle (the deepest, if given two) reports its
+//! prominence `h = h_c − h_s²/h_c` ([`ArcContact`]): `h_c` with its first
+//! derivatives when the saddle reaches `h_s = 0`, and 0 where the two
+//! merge.
 //!
 //! ## The search
 //!
@@ -62,6 +77,7 @@
 
 use crate::gap2d::{ExactGap, SupportJet};
 use jamkit_core::math::{Unit, Vector, cmul, turn_unit, unit_of_angle};
+use jamkit_core::{Contact, GapHessian};
 use std::f64::consts::{PI, TAU};
 
 /// A polar outline `φ ↦ (R, R', R'')` (body frame, unit size) at
@@ -312,6 +328,112 @@ pub fn arc_support_unit<F: PolarOutline>(
     )
 }
 
+/// A contact of two arcs ([`arc_contacts`]): the common normal where the
+/// depth of the overlap is locally largest (`exact`), and the saddle it
+/// meets, if any: the neighbouring stationary point of the same arc pair
+/// where the depth is locally smallest, overlapping (`h_s < 0`) and
+/// shallower than the contact. With a saddle the contact's gap is its
+/// prominence
+///
+/// ```text
+/// h = h_c − h_s²/h_c   (h_c ≤ h_s < 0),
+/// ```
+///
+/// which is `h_c` when the saddle reaches `h_s = 0` (first derivatives
+/// too) and 0 where the two merge (a fold, `h_s = h_c`), so that a contact
+/// leaving at a fold takes no energy with it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArcContact {
+    /// The contact's common normal and support jets (sizes included).
+    pub exact: ExactGap,
+    /// The saddle paired with it.
+    pub saddle: Option<ExactGap>,
+}
+
+impl ArcContact {
+    /// The gap: `h_c`, or with a saddle `h_c − h_s²/h_c`.
+    pub fn gap(&self) -> f64 {
+        match self.saddle {
+            None => self.exact.gap,
+            Some(s) => {
+                let (c, a) = (self.exact.gap, s.gap);
+                c - a * a / c
+            }
+        }
+    }
+
+    /// The gap and its first derivatives.
+    pub fn contact(&self) -> Contact<2> {
+        let c = self.exact.contact();
+        let Some(s) = self.saddle else {
+            return c;
+        };
+        let a = s.contact();
+        let (hc, ha) = (c.gap, a.gap);
+        let (fc, fa) = (1.0 + ha * ha / (hc * hc), -2.0 * ha / hc);
+        Contact {
+            gap: self.gap(),
+            grad_r: c.grad_r * fc + a.grad_r * fa,
+            grad_rot_i: [fc * c.grad_rot_i[0] + fa * a.grad_rot_i[0], 0.0, 0.0],
+            grad_rot_j: [fc * c.grad_rot_j[0] + fa * a.grad_rot_j[0], 0.0, 0.0],
+        }
+    }
+
+    /// The gap with its second derivatives: those of `h_c` and `h_s`
+    /// ([`ExactGap::hessian_signed`]) by the chain rule.
+    pub fn hessian(&self) -> GapHessian<2> {
+        let hc = self.exact.hessian_signed();
+        let Some(s) = self.saddle else {
+            return hc;
+        };
+        let ha = s.hessian_signed();
+        let (c, a) = (hc.contact.gap, ha.contact.gap);
+        let (fc, fa) = (1.0 + a * a / (c * c), -2.0 * a / c);
+        let (fcc, faa, fca) = (-2.0 * a * a / (c * c * c), -2.0 / c, 2.0 * a / (c * c));
+        let (mc, ma) = (as_matrix(&hc), as_matrix(&ha));
+        let (gc, ga) = (as_gradient(&hc.contact), as_gradient(&ha.contact));
+        let mut m = [[0.0; 4]; 4];
+        for (k, row) in m.iter_mut().enumerate() {
+            for (l, x) in row.iter_mut().enumerate() {
+                *x = fc * mc[k][l]
+                    + fa * ma[k][l]
+                    + fcc * gc[k] * gc[l]
+                    + faa * ga[k] * ga[l]
+                    + fca * (gc[k] * ga[l] + ga[k] * gc[l]);
+            }
+        }
+        let mut g = hc;
+        g.contact = self.contact();
+        for k in 0..2 {
+            for l in 0..2 {
+                g.rr[(k, l)] = m[k][l];
+            }
+            g.r_qi[0][k] = m[k][2];
+            g.r_qj[0][k] = m[k][3];
+        }
+        g.qi_qi[0][0] = m[2][2];
+        g.qj_qj[0][0] = m[3][3];
+        g.qi_qj[0][0] = m[2][3];
+        g
+    }
+}
+
+/// `(∂h/∂r_j, ∂h/∂θ_i, ∂h/∂θ_j)` as one vector.
+fn as_gradient(c: &Contact<2>) -> [f64; 4] {
+    [c.grad_r[0], c.grad_r[1], c.grad_rot_i[0], c.grad_rot_j[0]]
+}
+
+/// The second derivatives in the order of [`as_gradient`].
+fn as_matrix(h: &GapHessian<2>) -> [[f64; 4]; 4] {
+    let (rq_i, rq_j) = (h.r_qi[0], h.r_qj[0]);
+    [
+        [h.rr[(0, 0)], h.rr[(0, 1)], rq_i[0], rq_j[0]],
+        [h.rr[(1, 0)], h.rr[(1, 1)], rq_i[1], rq_j[1]],
+        [rq_i[0], rq_i[1], h.qi_qi[0][0], h.qi_qj[0][0]],
+        [rq_j[0], rq_j[1], h.qi_qj[0][0], h.qj_qj[0][0]],
+    ]
+}
+
 /// One body as [`arc_contacts`] sees it: its arcs and outline (unit size),
 /// size and orientation angle.
 pub struct ArcBody<'a, F> {
@@ -330,7 +452,7 @@ pub struct ArcBody<'a, F> {
 /// (sizes included): every one with `−reach ≤ h ≤ max_gap` and perhaps
 /// deeper ones (arc pairs whose bounding circles are more than
 /// `max(max_gap, 0) + reach` apart are skipped).
-pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
+pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
     i: &ArcBody<'_, F>,
     j: &ArcBody<'_, G>,
     r_ij: &Vector<2>,
@@ -338,6 +460,7 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
     reach: f64,
     mut visit: V,
 ) {
+    let mut found: Vec<Stationary> = Vec::new();
     let cut = max_gap.max(0.0) + reach;
     let (zi, zj) = (unit_of_angle(i.theta), unit_of_angle(j.theta));
     let place = |z: Unit, c: (f64, f64), size: f64| {
@@ -355,9 +478,6 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
             continue;
         }
         for arc_b in j.arcs {
-            if !arc_a.convex && !arc_b.convex {
-                continue;
-            }
             let cb = place(zj, arc_b.centre, j.size);
             if norm(r_ij[0] + cb.0, r_ij[1] + cb.1) - j.size * arc_b.radius > bound_i + cut {
                 continue;
@@ -368,9 +488,48 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
             if apart > cut {
                 continue;
             }
-            pair_of_arcs(i, arc_a, j, arc_b, r_ij, max_gap, &mut visit);
+            pair_of_arcs(i, arc_a, j, arc_b, r_ij, &mut found);
         }
     }
+    // Each saddle goes to the shallower of its neighbours along body i's
+    // outline (by the polar angle of the support point, around the circle)
+    // that are contacts deeper than it; each contact keeps the deepest
+    // saddle it is given.
+    found.sort_by(|a, b| a.phi_i.total_cmp(&b.phi_i));
+    let m = found.len();
+    let mut saddle: Vec<Option<usize>> = vec![None; m];
+    for s in 0..m {
+        if found[s].contact {
+            continue;
+        }
+        let h_s = found[s].exact.gap;
+        let partner = [(s + m - 1) % m, (s + 1) % m]
+            .into_iter()
+            .filter(|&c| found[c].contact && found[c].exact.gap < h_s)
+            .max_by(|&a, &b| found[a].exact.gap.total_cmp(&found[b].exact.gap));
+        if let Some(c) = partner
+            && saddle[c].is_none_or(|t| found[t].exact.gap > h_s)
+        {
+            saddle[c] = Some(s);
+        }
+    }
+    for (c, f) in found.iter().enumerate() {
+        if f.contact && f.exact.gap <= max_gap {
+            visit(ArcContact {
+                exact: f.exact,
+                saddle: saddle[c].map(|s| found[s].exact),
+            });
+        }
+    }
+}
+
+/// A stationary point of an arc pair: a contact, or an overlapping saddle.
+struct Stationary {
+    exact: ExactGap,
+    /// The polar angle of its support point on body `i` (body frame, in
+    /// `[0, 2π)`).
+    phi_i: f64,
+    contact: bool,
 }
 
 #[inline(always)]
@@ -389,14 +548,13 @@ fn bound_of<F>(b: &ArcBody<'_, F>) -> f64 {
 
 /// The contacts of one pair of arcs.
 #[allow(clippy::too_many_arguments)]
-fn pair_of_arcs<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
+fn pair_of_arcs<F: PolarOutline, G: PolarOutline>(
     i: &ArcBody<'_, F>,
     arc_a: &OutlineArc,
     j: &ArcBody<'_, G>,
     arc_b: &OutlineArc,
     r_ij: &Vector<2>,
-    max_gap: f64,
-    visit: &mut V,
+    found: &mut Vec<Stationary>,
 ) {
     let (na, nb) = (arc_a.normal_range(), arc_b.normal_range());
     let (a_lo, a_len) = (i.theta + na.0, na.1 - na.0);
@@ -410,7 +568,7 @@ fn pair_of_arcs<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
         let lo = a_lo.max(b_lo0 + shift);
         let hi = (a_lo + a_len).min(b_lo0 + shift + b_len);
         if hi > lo {
-            piece(i, arc_a, j, arc_b, shift, (lo, hi), r_ij, max_gap, visit);
+            piece(i, arc_a, j, arc_b, shift, (lo, hi), r_ij, found);
         }
         shift += TAU;
     }
@@ -428,7 +586,7 @@ struct Eval {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
+fn piece<F: PolarOutline, G: PolarOutline>(
     i: &ArcBody<'_, F>,
     arc_a: &OutlineArc,
     j: &ArcBody<'_, G>,
@@ -436,8 +594,7 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
     shift: f64,
     (lo, hi): (f64, f64),
     r_ij: &Vector<2>,
-    max_gap: f64,
-    visit: &mut V,
+    found: &mut Vec<Stationary>,
 ) {
     let (zi, zj) = (unit_of_angle(i.theta), unit_of_angle(j.theta));
     let eval = |psi: f64| {
@@ -477,22 +634,36 @@ fn piece<F: PolarOutline, G: PolarOutline, V: FnMut(ExactGap)>(
         }
     };
     let inside = |phi: f64, arc: &OutlineArc| phi >= arc.phi.0 && phi < arc.phi.1;
+    // The contacts (those above `max_gap` too: they are neighbours in the
+    // pairing of saddles) and the saddles (`k ρ_A ρ_B < 0`) with `h < 0`.
     let mut root = |x0: f64, f0: f64, x1: f64, f1: f64| {
         if let Some((psi, steps, e)) = refine(&eval, (x0, f0), (x1, f1))
-            && e.g <= max_gap
-            && -e.g2 * e.rho_sign > 0.0
             && inside(e.phis.0, arc_a)
             && inside(e.phis.1, arc_b)
         {
-            let (s, c) = psi.sin_cos();
-            visit(ExactGap {
-                normal: (c, s),
-                gap: e.g,
-                jet_i: e.jets.0,
-                jet_j: e.jets.1,
-                iterations: steps,
-                converged: true,
-            });
+            // Two concave arcs give saddles only (their other stationary
+            // points lie at h > |ρ_A| + |ρ_B|).
+            let contact = -e.g2 * e.rho_sign > 0.0;
+            let keep = if contact {
+                arc_a.convex || arc_b.convex
+            } else {
+                e.g < 0.0
+            };
+            if keep {
+                let (s, c) = psi.sin_cos();
+                found.push(Stationary {
+                    exact: ExactGap {
+                        normal: (c, s),
+                        gap: e.g,
+                        jet_i: e.jets.0,
+                        jet_j: e.jets.1,
+                        iterations: steps,
+                        converged: true,
+                    },
+                    phi_i: e.phis.0.rem_euclid(TAU),
+                    contact,
+                });
+            }
         }
     };
     let mut left = eval(lo);

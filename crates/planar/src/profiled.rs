@@ -346,7 +346,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         pair: &Pair<2, O>,
         max_gap: f64,
         arcs: Option<&[OutlineArc]>,
-        visit: &mut dyn FnMut(gap2d::ExactGap),
+        visit: &mut dyn FnMut(arcs::ArcContact),
     ) {
         let Some(arcs) = arcs.or(self.arcs()) else {
             return;
@@ -931,7 +931,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
                 return Ok(());
             }
             GapModel::Exact if self.arcs.is_some() => {
-                self.arc_contacts(pair, max_gap, None, &mut |e| visit(e.hessian_signed()));
+                self.arc_contacts(pair, max_gap, None, &mut |e| visit(e.hessian()));
                 if let Some(e) = self.core_contact(pair) {
                     visit(e.hessian_signed());
                 }

@@ -12,9 +12,13 @@
 use jamkit_core::{Contact, GapHessian, Pair, Rotation2, Shape, Vector};
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_planar::arcs::split_arcs;
-use jamkit_planar::gap2d::{ExactGap, GapModel};
+use jamkit_planar::gap2d::GapModel;
 use jamkit_planar::profiled::ExactSolve;
 use std::f64::consts::TAU;
+
+#[path = "support/polygon.rs"]
+mod polygon;
+use polygon::{Polygon, support_points};
 
 /// A small deterministic generator (splitmix64), uniform in `[0, 1)`.
 struct Uniform(u64);
@@ -197,7 +201,9 @@ fn derivatives_match_finite_differences_with_several_contacts() {
                 let m = second(h);
                 for k in 0..4 {
                     let (p, q) = (c.moved(k, eps), c.moved(k, -eps));
-                    let (hp, hq) = (hessians(&s, &p, 2.0 * cut), hessians(&s, &q, 2.0 * cut));
+                    // At the same cut: the saddles a contact is paired with
+                    // are found among the arc pairs within it.
+                    let (hp, hq) = (hessians(&s, &p, cut), hessians(&s, &q, cut));
                     let lp: Vec<_> = hp.iter().map(|x| x.contact).collect();
                     let lq: Vec<_> = hq.iter().map(|x| x.contact).collect();
                     let (Some(a), Some(b)) = (
@@ -238,84 +244,6 @@ fn derivatives_match_finite_differences_with_several_contacts() {
     );
 }
 
-/// The outline of a body as a polygon of `m` vertices (lab frame,
-/// counter-clockwise, at polar angles 2πk/m about its centre `c`).
-struct Polygon {
-    c: [f64; 2],
-    v: Vec<[f64; 2]>,
-}
-
-impl Polygon {
-    fn new(s: &NearDisk, size: f64, theta: f64, c: [f64; 2], m: usize) -> Self {
-        let v = (0..m)
-            .map(|k| {
-                let phi = TAU * k as f64 / m as f64;
-                // R(φ) = R⁰ [1 + Δ F(θ − φ)] in the lab direction φ.
-                let r = size * s.relative_radius(theta - phi);
-                [c[0] + r * phi.cos(), c[1] + r * phi.sin()]
-            })
-            .collect();
-        Self { c, v }
-    }
-
-    /// The sector of `p` (the polygon is star-shaped about its centre).
-    fn sector(&self, p: [f64; 2]) -> usize {
-        let m = self.v.len();
-        let a = (p[1] - self.c[1]).atan2(p[0] - self.c[0]).rem_euclid(TAU);
-        ((a / TAU * m as f64) as usize).min(m - 1)
-    }
-
-    /// Whether `p` is inside: on the inner side of its sector's edge.
-    fn contains(&self, p: [f64; 2]) -> bool {
-        let m = self.v.len();
-        let k = self.sector(p);
-        let (a, b) = (self.v[k], self.v[(k + 1) % m]);
-        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0.0
-    }
-
-    /// The distance from `p` to the polygon's edges within 64 sectors of
-    /// its own.
-    fn distance(&self, p: [f64; 2]) -> f64 {
-        let m = self.v.len();
-        let k = self.sector(p) + m;
-        (k - 64..k + 64)
-            .map(|e| {
-                let (a, b) = (self.v[e % m], self.v[(e + 1) % m]);
-                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-                let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy))
-                    .clamp(0.0, 1.0);
-                (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
-            })
-            .fold(f64::INFINITY, f64::min)
-    }
-
-    /// How deep the other polygon's vertices reach into this one (0: none
-    /// inside).
-    fn depth_of(&self, other: &Polygon) -> f64 {
-        other
-            .v
-            .iter()
-            .filter(|p| self.contains(**p))
-            .map(|p| self.distance(*p))
-            .fold(0.0, f64::max)
-    }
-}
-
-/// The support points of a contact: `a` on body `i` (centre at 0), `b` on
-/// body `j` (centre at `r`).
-fn support_points(e: &ExactGap, r: [f64; 2]) -> ([f64; 2], [f64; 2]) {
-    let (c, s) = e.normal;
-    let a = [
-        e.jet_i.h * c - e.jet_i.d1 * s,
-        e.jet_i.h * s + e.jet_i.d1 * c,
-    ];
-    let b = [
-        r[0] - e.jet_j.h * c + e.jet_j.d1 * s,
-        r[1] - e.jet_j.h * s - e.jet_j.d1 * c,
-    ];
-    (a, b)
-}
-
 /// Random pairs of n = 8 (Δ = 0.3) and n = 16 (Δ = 0.2) near contact
 /// against polygons of 8192 vertices (edges of ~8e-4 R⁰; a chord leaves the
 /// outline by ≲ 1e-6 R⁰ at the sharpest tip): the pair overlaps as
@@ -335,7 +263,7 @@ fn contacts_agree_with_fine_polygons() {
             let c = Config::random(&mut rng, n, delta, 1.2);
             let mut found = Vec::new();
             s.profiled()
-                .arc_contacts(&c.pair(), 0.0, None, &mut |e| found.push(e));
+                .arc_contacts(&c.pair(), 0.0, None, &mut |e| found.push(e.exact));
             let pi = Polygon::new(&s, c.size[0], c.theta[0], [0.0, 0.0], 8192);
             let pj = Polygon::new(&s, c.size[1], c.theta[1], c.r, 8192);
             let depth = pi.depth_of(&pj).max(pj.depth_of(&pi));
@@ -364,6 +292,30 @@ fn contacts_agree_with_fine_polygons() {
     assert!(judged[1] > 150, "{judged:?} (apart, overlapping)");
 }
 
+/// At `path(t)`: the harmonic energy Σ_{h<0} h²/2 of the pair's contacts,
+/// its derivative along the path (the contacts' gradients against the
+/// path's velocity by central differences of step 10⁻⁶), and the number of
+/// contacts.
+fn harmonic_along(s: &NearDisk, path: &dyn Fn(f64) -> Config, t: f64) -> (f64, f64, usize) {
+    let list = contacts(s, &path(t), 0.0);
+    let e: f64 = list.iter().map(|k| 0.5 * k.gap * k.gap).sum();
+    let (p, q) = (path(t + 1e-6), path(t - 1e-6));
+    let v = [
+        (p.r[0] - q.r[0]) / 2e-6,
+        (p.r[1] - q.r[1]) / 2e-6,
+        (p.theta[0] - q.theta[0]) / 2e-6,
+        (p.theta[1] - q.theta[1]) / 2e-6,
+    ];
+    let de: f64 = list
+        .iter()
+        .map(|k| {
+            let g = gradient(k);
+            k.gap * (0..4).map(|a| g[a] * v[a]).sum::<f64>()
+        })
+        .sum();
+    (e, de, list.len())
+}
+
 /// Along paths on which contacts appear and leave, the harmonic energy
 /// Σ_{h<0} h²/2 changes step by step by no more than its derivative
 /// allows: |E(t + dt) − E(t)| ≤ 1.5 max|dE/dt| dt + 1e-15 at the two ends
@@ -373,8 +325,8 @@ fn contacts_agree_with_fine_polygons() {
 /// a body of size 1 rolled (turned and carried) over a quarter turn of a
 /// body of size 4 along its outline, a tenth of a lobe of the small one
 /// deep; two bodies of size 1 and 1.4 slid past each other, turning, a
-/// tenth of a lobe deep. (Deeper, a path can cross a fold at h < 0, where
-/// the energy does jump: `docs/explanation/gap-models.md`.)
+/// tenth of a lobe deep. (Paths through a fold at h < 0:
+/// [`energy_is_continuous_through_a_fold`].)
 #[test]
 fn energy_is_continuous_as_contacts_come_and_go() {
     for &(n, delta) in &[(8u32, 0.3), (16, 0.2)] {
@@ -399,26 +351,7 @@ fn energy_is_continuous_as_contacts_come_and_go() {
         let paths: [&dyn Fn(f64) -> Config; 2] = [&rolled, &slid];
         let mut two = false;
         for path in paths {
-            let energy = |t: f64| {
-                let c = path(t);
-                let list = contacts(&s, &c, 0.0);
-                let e: f64 = list.iter().map(|k| 0.5 * k.gap * k.gap).sum();
-                let (p, q) = (path(t + 1e-6), path(t - 1e-6));
-                let v = [
-                    (p.r[0] - q.r[0]) / 2e-6,
-                    (p.r[1] - q.r[1]) / 2e-6,
-                    (p.theta[0] - q.theta[0]) / 2e-6,
-                    (p.theta[1] - q.theta[1]) / 2e-6,
-                ];
-                let de: f64 = list
-                    .iter()
-                    .map(|k| {
-                        let g = gradient(k);
-                        k.gap * (0..4).map(|a| g[a] * v[a]).sum::<f64>()
-                    })
-                    .sum();
-                (e, de, list.len())
-            };
+            let energy = |t: f64| harmonic_along(&s, path, t);
             let steps = 4000;
             let dt = 1.0 / steps as f64;
             let mut prev = energy(0.0);
@@ -447,6 +380,119 @@ fn energy_is_continuous_as_contacts_come_and_go() {
     }
 }
 
+/// A step of FIRE in a compressed packing of n = 16, Δ = 0.1 (bodies of
+/// size 0.7), stretched to `t ∈ [−1, 2]` (the step is `t ∈ [0, 1]`): a
+/// tip's flank in the mouth of a valley, six hundredths of a lobe deep,
+/// where the contact of arcs 20 (concave) and 11 (convex) meets the saddle
+/// of the same arcs at `t ≈ 0.14`, `h ≈ −6.1·10⁻⁴`, and leaves (a fold).
+fn fold_path(t: f64) -> Config {
+    let (th0, th1) = ([-1.240604858, -2.812204518], [-1.240686550, -2.812325416]);
+    let (r0, r1) = (
+        [-1.277477671288, 0.557135519072],
+        [-1.277439931465, 0.557253542028],
+    );
+    let at = |a: f64, b: f64| a + t * (b - a);
+    Config {
+        size: [0.7, 0.7],
+        theta: [at(th0[0], th1[0]), at(th0[1], th1[1])],
+        r: [at(r0[0], r1[0]), at(r0[1], r1[1])],
+    }
+}
+
+/// Through the fold of [`fold_path`] the harmonic energy Σ h²/2 changes
+/// step by step (3000 steps) by no more than 1.5 times its largest
+/// derivative at the two ends of the step, plus 10⁻¹⁸ (the energy is
+/// ~4·10⁻⁷, its change per step ~10⁻¹³; the contact leaving with its own
+/// h would jump by h²/2 ≈ 1.9·10⁻⁷). Along the path the pair goes from
+/// two contacts, one with a saddle, to one.
+#[test]
+fn energy_is_continuous_through_a_fold() {
+    let s = fourier(16, 0.1, GapModel::Exact);
+    let energy = |t: f64| {
+        let (e, de, count) = harmonic_along(&s, &fold_path, t);
+        let mut saddles = 0;
+        s.profiled()
+            .arc_contacts(&fold_path(t).pair(), 0.0, None, &mut |e| {
+                saddles += usize::from(e.saddle.is_some());
+            });
+        (e, de, count, saddles)
+    };
+    let steps = 3000;
+    let dt = 3.0 / steps as f64;
+    let mut prev = energy(-1.0);
+    assert_eq!((prev.2, prev.3), (2, 1), "two contacts, one with a saddle");
+    for k in 1..=steps {
+        let t = -1.0 + k as f64 * dt;
+        let cur = energy(t);
+        let bound = 1.5 * prev.1.abs().max(cur.1.abs()) * dt + 1e-18;
+        assert!(
+            (cur.0 - prev.0).abs() <= bound,
+            "t = {t}: E {} → {} ({} → {} contacts), bound {bound}",
+            prev.0,
+            cur.0,
+            prev.2,
+            cur.2
+        );
+        prev = cur;
+    }
+    assert_eq!((prev.2, prev.3), (1, 0), "one contact left");
+}
+
+/// The gradient and the second derivatives of a contact with a saddle
+/// ([`fold_path`] at `t ∈ [−1, 0]`, 2·10⁻⁵ to 2·10⁻⁴ from the fold)
+/// against central differences (step 10⁻⁸: truncation ~10⁻¹⁶ × third
+/// derivatives up to ~10⁶ near the fold, round-off ~10⁻⁸ on the second
+/// derivatives): tolerance 10⁻⁷ on the gradient, 10⁻⁵ relative to the
+/// largest second derivative.
+#[test]
+fn a_contact_with_a_saddle_matches_finite_differences() {
+    let s = fourier(16, 0.1, GapModel::Exact);
+    let mut checked = 0;
+    for k in 0..=10 {
+        let c = fold_path(-1.0 + 0.1 * k as f64);
+        let mut with_saddle = Vec::new();
+        s.profiled().arc_contacts(&c.pair(), 0.0, None, &mut |e| {
+            if e.saddle.is_some() {
+                with_saddle.push(e.hessian());
+            }
+        });
+        assert_eq!(with_saddle.len(), 1, "{c:?}");
+        let h = with_saddle[0];
+        let (g, m) = (gradient(&h.contact), second(&h));
+        let scale = m.iter().flatten().fold(0.0f64, |x, y| x.max(y.abs()));
+        let eps = 1e-8;
+        for a in 0..4 {
+            let (lp, lq) = (
+                contacts(&s, &c.moved(a, eps), 0.0),
+                contacts(&s, &c.moved(a, -eps), 0.0),
+            );
+            let (Some(p), Some(q)) = (
+                matching(&lp, &h.contact, 1e-2),
+                matching(&lq, &h.contact, 1e-2),
+            ) else {
+                panic!("{c:?}: contact lost under a move of {eps} along {a}");
+            };
+            let fd = (p.gap - q.gap) / (2.0 * eps);
+            assert!(
+                (fd - g[a]).abs() < 1e-7,
+                "{c:?}, {a}: {fd} against {}",
+                g[a]
+            );
+            let (gp, gq) = (gradient(p), gradient(q));
+            for b in 0..4 {
+                let fd2 = (gp[b] - gq[b]) / (2.0 * eps);
+                assert!(
+                    (fd2 - m[b][a]).abs() < 1e-5 * scale,
+                    "{c:?}, ∂²h/∂{b}∂{a}: {fd2} against {}",
+                    m[b][a]
+                );
+            }
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 11);
+}
+
 /// On a convex outline (n = 3, Δ = 0.2; n = 16, Δ = 0.04) the arc search,
 /// with the whole outline as its one arc and no cut, finds as its contact
 /// of largest h the convex exact gap's (nested solve), to round-off (any
@@ -471,7 +517,15 @@ fn convex_outlines_give_the_convex_exact_gap() {
                 .exact_solve(&pair, f64::INFINITY, ExactSolve::Nested)
                 .unwrap();
             let mut found = Vec::new();
-            p.arc_contacts(&pair, f64::INFINITY, Some(&whole), &mut |e| found.push(e));
+            let mut saddle = None;
+            p.arc_contacts(&pair, f64::INFINITY, Some(&whole), &mut |e| {
+                if saddle.is_none_or(|(h, _)| e.exact.gap > h) {
+                    saddle = Some((e.exact.gap, e.saddle));
+                }
+                found.push(e.exact)
+            });
+            // The contact of largest h has no saddle.
+            assert_eq!(saddle.map(|s| s.1), Some(None), "{c:?}");
             found.sort_by(|a, b| b.gap.total_cmp(&a.gap));
             // Others are maxima of g on the far sides, through both bodies.
             assert!(found.len() == 1 || found[1].gap < -1.0, "{c:?}: {found:?}");
