@@ -16,6 +16,15 @@ use jamkit_sphere::Sphere;
 mod common;
 use common::compressed;
 
+/// Two packings of 16 disks (seed 3) with `fields` added to the file
+/// (each starting with a comma): the run directories of the resume tests.
+fn old_disks(fields: &str) -> Experiment {
+    let text = format!(
+        r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3{fields})"#
+    );
+    Experiment::from_ron(&text, "inline").unwrap()
+}
+
 fn near_disk() -> NearDisk {
     NearDisk::fourier(&FourierParams {
         n: 2,
@@ -210,12 +219,7 @@ fn adaptive_is_the_default_and_bisection_is_left_out_of_settings() {
 /// search is the one difference, and the forecast has its own test.)
 #[test]
 fn bisection_packings_are_refused_under_the_default_and_resume_as_bisection() {
-    let experiment = |protocol: &str| {
-        let text = format!(
-            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3{protocol})"#
-        );
-        Experiment::from_ron(&text, "inline").unwrap()
-    };
+    let experiment = old_disks;
     common::refused_then_resumed(
         &experiment(", protocol: Jam(search: Bisection)"),
         &experiment(", minimizer: (unjam_forecast: false)"),
@@ -234,12 +238,7 @@ fn bisection_packings_are_refused_under_the_default_and_resume_as_bisection() {
 /// `search: Extrapolated`.
 #[test]
 fn extrapolated_packings_are_refused_under_the_default_and_resume_as_extrapolated() {
-    let experiment = |protocol: &str| {
-        let text = format!(
-            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3{protocol})"#
-        );
-        Experiment::from_ron(&text, "inline").unwrap()
-    };
+    let experiment = old_disks;
     common::refused_then_resumed(
         &experiment(", protocol: Jam(search: Extrapolated)"),
         &experiment(""),
@@ -286,11 +285,7 @@ fn above_jam_packings_without_rejams_are_refused_under_the_default_and_resume_as
 #[test]
 fn packings_without_the_unjamming_forecast_are_refused_where_it_acts_and_resume_as_off() {
     let experiment = |protocol: &str, minimizer: &str| {
-        let text = format!(
-            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3,
-            protocol: {protocol}, minimizer: ({minimizer}))"#
-        );
-        Experiment::from_ron(&text, "inline").unwrap()
+        old_disks(&format!(", protocol: {protocol}, minimizer: ({minimizer})"))
     };
     common::refused_then_resumed(
         &experiment("Jam()", "unjam_forecast: false"),
@@ -326,13 +321,8 @@ fn packings_without_the_unjamming_forecast_are_refused_where_it_acts_and_resume_
 /// escape either, so the paper path's packings keep their settings.
 #[test]
 fn packings_without_the_saddle_escape_are_refused_under_the_default_and_resume_as_off() {
-    let experiment = |protocol: &str, more: &str| {
-        let text = format!(
-            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3,
-            protocol: {protocol}{more})"#
-        );
-        Experiment::from_ron(&text, "inline").unwrap()
-    };
+    let experiment =
+        |protocol: &str, more: &str| old_disks(&format!(", protocol: {protocol}{more}"));
     common::refused_then_resumed(
         &experiment("Jam(escape_saddles: false)", ""),
         &experiment("Jam()", ""),
