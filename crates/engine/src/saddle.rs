@@ -398,6 +398,17 @@ mod tests {
         assert!((quotient - rho).abs() < 1e-12, "{quotient} {rho}");
     }
 
+    /// The mean of the dense Hessian's positive diagonal entries over all
+    /// its rows (the scale `d̄` of the saddle threshold).
+    fn mean_diagonal(h: &Hessian) -> f64 {
+        let d = h.dense();
+        (0..h.size)
+            .map(|a| d[(a, a)])
+            .filter(|&x| x > 0.0)
+            .sum::<f64>()
+            / h.size as f64
+    }
+
     /// The escape pushes the lattice off its saddle and re-jams: at least one
     /// push, the end state in the window and with no eigenvalue below
     /// `−10⁻¹⁰ d̄` (checked by the dense solve, independent of the
@@ -420,11 +431,7 @@ mod tests {
         assert!(e > params.energy_low && e < params.energy_high, "{e}");
         assert_eq!(out.energy_per_particle, e);
         let h = hessian(&mut scene);
-        let mean = (0..h.size)
-            .map(|a| h.dense()[(a, a)])
-            .filter(|&d| d > 0.0)
-            .sum::<f64>()
-            / h.size as f64;
+        let mean = mean_diagonal(&h);
         let lowest = lowest_dense(&h);
         assert!(lowest > -1e-10 * mean, "{lowest} (mean diagonal {mean})");
     }
@@ -442,12 +449,7 @@ mod tests {
         let params = JamParams::default();
         jam(&mut scene, &mut fire, &params).unwrap();
         let h = hessian(&mut scene);
-        let d = h.dense();
-        let mean = (0..h.size)
-            .map(|a| d[(a, a)])
-            .filter(|&x| x > 0.0)
-            .sum::<f64>()
-            / h.size as f64;
+        let mean = mean_diagonal(&h);
         let lowest = lowest_dense(&h);
         assert!(lowest > -1e-10 * mean, "seed 3 is a saddle: {lowest}");
         assert!(negative_mode(&h, 1e-10).unwrap().is_none());
