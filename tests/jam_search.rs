@@ -25,6 +25,22 @@ fn old_disks(fields: &str) -> Experiment {
     Experiment::from_ron(&text, "inline").unwrap()
 }
 
+/// `new`'s run refuses `old`'s packings, made with `key` off where today's
+/// default is on (they record none), naming `key`, both values and the fix
+/// (`--set set=false`), and resumes them with that fix.
+fn refused_then_resumed_as_off(old: &Experiment, new: &Experiment, key: &str, set: &str) {
+    common::refused_then_resumed(
+        old,
+        new,
+        &[
+            key,
+            "true",
+            "false (not written; the default before true",
+            &format!("--set {set}=false"),
+        ],
+    );
+}
+
 fn near_disk() -> NearDisk {
     NearDisk::fourier(&FourierParams {
         n: 2,
@@ -287,15 +303,11 @@ fn packings_without_the_unjamming_forecast_are_refused_where_it_acts_and_resume_
     let experiment = |protocol: &str, minimizer: &str| {
         old_disks(&format!(", protocol: {protocol}, minimizer: ({minimizer})"))
     };
-    common::refused_then_resumed(
+    refused_then_resumed_as_off(
         &experiment("Jam()", "unjam_forecast: false"),
         &experiment("Jam()", ""),
-        &[
-            "minimizer.unjam_forecast",
-            "true",
-            "false (not written; the default before true",
-            "--set minimizer.unjam_forecast=false",
-        ],
+        "minimizer.unjam_forecast",
+        "minimizer.unjam_forecast",
     );
     let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
     for protocol in ["Jam(search: Bisection)", "Phi(phi: 0.5)"] {
@@ -323,15 +335,11 @@ fn packings_without_the_unjamming_forecast_are_refused_where_it_acts_and_resume_
 fn packings_without_the_saddle_escape_are_refused_under_the_default_and_resume_as_off() {
     let experiment =
         |protocol: &str, more: &str| old_disks(&format!(", protocol: {protocol}{more}"));
-    common::refused_then_resumed(
+    refused_then_resumed_as_off(
         &experiment("Jam(escape_saddles: false)", ""),
         &experiment("Jam()", ""),
-        &[
-            "protocol.Jam.escape_saddles",
-            "true",
-            "false (not written; the default before true",
-            "--set protocol.escape_saddles=false",
-        ],
+        "protocol.Jam.escape_saddles",
+        "protocol.escape_saddles",
     );
     let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
     assert_eq!(

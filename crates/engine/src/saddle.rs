@@ -398,6 +398,14 @@ mod tests {
         assert!((quotient - rho).abs() < 1e-12, "{quotient} {rho}");
     }
 
+    /// [`escape_saddles`] with the default settings and no rattlers.
+    fn escape(scene: &mut Scene<2, Sphere>, fire: &mut Fire, params: &JamParams) -> SaddleOutcome {
+        escape_saddles(scene, fire, params, &SaddleParams::default(), |_| {
+            Vec::new()
+        })
+        .unwrap()
+    }
+
     /// The mean of the dense Hessian's positive diagonal entries over all
     /// its rows (the scale `d̄` of the saddle threshold).
     fn mean_diagonal(h: &Hessian) -> f64 {
@@ -418,14 +426,7 @@ mod tests {
         let mut scene = square_lattice();
         let mut fire = Fire::new(FireParams::default());
         let params = JamParams::default();
-        let out = escape_saddles(
-            &mut scene,
-            &mut fire,
-            &params,
-            &SaddleParams::default(),
-            |_| Vec::new(),
-        )
-        .unwrap();
+        let out = escape(&mut scene, &mut fire, &params);
         assert!(out.rounds >= 1 && !out.still_saddle, "{out:?}");
         let e = scene.energy() / 16.0;
         assert!(e > params.energy_low && e < params.energy_high, "{e}");
@@ -454,14 +455,7 @@ mod tests {
         assert!(lowest > -1e-10 * mean, "seed 3 is a saddle: {lowest}");
         assert!(negative_mode(&h, 1e-10).unwrap().is_none());
         let before = scene.packing().positions.clone();
-        let out = escape_saddles(
-            &mut scene,
-            &mut fire,
-            &params,
-            &SaddleParams::default(),
-            |_| Vec::new(),
-        )
-        .unwrap();
+        let out = escape(&mut scene, &mut fire, &params);
         assert_eq!((out.rounds, out.still_saddle), (0, false));
         assert_eq!(scene.packing().positions, before);
     }
