@@ -25,6 +25,11 @@ fn old_disks(fields: &str) -> Experiment {
     Experiment::from_ron(&text, "inline").unwrap()
 }
 
+/// The recorded settings of an experiment's first packing.
+fn settings(e: &Experiment) -> serde_json::Value {
+    Plan::new(e).unwrap().jobs[0].settings.clone()
+}
+
 /// `new`'s run refuses `old`'s packings, made with `key` off where today's
 /// default is on (they record none), naming `key`, both values and the fix
 /// (`--set set=false`), and resumes them with that fix.
@@ -309,7 +314,6 @@ fn packings_without_the_unjamming_forecast_are_refused_where_it_acts_and_resume_
         "minimizer.unjam_forecast",
         "minimizer.unjam_forecast",
     );
-    let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
     for protocol in ["Jam(search: Bisection)", "Phi(phi: 0.5)"] {
         assert_eq!(
             settings(&experiment(protocol, "unjam_forecast: false")),
@@ -341,7 +345,6 @@ fn packings_without_the_saddle_escape_are_refused_under_the_default_and_resume_a
         "protocol.Jam.escape_saddles",
         "protocol.escape_saddles",
     );
-    let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
     assert_eq!(
         settings(&experiment("Jam()", ", paper_path: true")),
         settings(&experiment(
