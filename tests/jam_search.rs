@@ -330,6 +330,47 @@ fn packings_without_the_unjamming_forecast_are_refused_where_it_acts_and_resume_
     );
 }
 
+/// A run directory of packings made without the plateau escape (jamkit's
+/// default before it; they record no `escape_plateaus`) is refused under
+/// the default, with the field named and the fix said, and resumed under
+/// an explicit `escape_plateaus: false`. Without the Newton finish (the
+/// paper's path) it does not act, and the settings are the same with it on
+/// and off.
+#[test]
+fn packings_without_the_plateau_escape_are_refused_where_it_acts_and_resume_as_off() {
+    let experiment = |minimizer: &str, more: &str| {
+        let text = format!(
+            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3,
+            minimizer: ({minimizer}){more})"#
+        );
+        Experiment::from_ron(&text, "inline").unwrap()
+    };
+    common::refused_then_resumed(
+        &experiment("escape_plateaus: false", ""),
+        &experiment("", ""),
+        &[
+            "minimizer.escape_plateaus",
+            "true",
+            "false (not written; the default before true",
+            "--set minimizer.escape_plateaus=false",
+        ],
+    );
+    let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
+    assert_eq!(
+        settings(&experiment("newton: None", "")),
+        settings(&experiment("newton: None, escape_plateaus: false", ""))
+    );
+    assert_eq!(
+        settings(&experiment("", ", paper_path: true")),
+        settings(&experiment("escape_plateaus: false", ", paper_path: true"))
+    );
+    assert!(
+        settings(&experiment("", ""))
+            .to_string()
+            .contains("escape_plateaus")
+    );
+}
+
 /// A run directory of jamming packings made without the saddle escape
 /// (jamkit's default before it; they record no `escape_saddles`) is refused
 /// under the default, with the field named and the fix said, and resumed

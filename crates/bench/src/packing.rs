@@ -25,10 +25,9 @@ use std::io::Write;
 use std::time::Instant;
 
 /// The header of the lines [`run`] prints, one per packing.
-pub const HEADER: &str = "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s,lbfgs_evals,saddle_escapes";
+pub const HEADER: &str = "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s,lbfgs_evals,saddle_escapes,plateau_escapes";
 /// The header of the step trace (`--trace`).
-pub const TRACE_HEADER: &str =
-    "seed,phi,fire_steps,newton_iterations,reason,energy_per_particle,force_sq,lbfgs_evals";
+pub const TRACE_HEADER: &str = "seed,phi,fire_steps,newton_iterations,reason,energy_per_particle,force_sq,lbfgs_evals,plateau_escapes";
 
 /// The gap model of near-disks on the command line.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
@@ -248,8 +247,13 @@ pub struct Options {
     /// `--minimizer paper`, so that it is the paper's path bit for bit].
     #[arg(long)]
     pub no_saddle_escape: bool,
+    /// No plateau escape in the Newton finish (`minimizer.escape_plateaus:
+    /// false`) [default: the escape, as in experiment files; none with
+    /// `--minimizer paper`, which has no Newton finish].
+    #[arg(long)]
+    pub no_plateau_escape: bool,
     /// Write every minimisation (φ, FIRE steps, Newton iterations, why it
-    /// stopped, V/N, Σ g², L-BFGS evaluations) of every packing to this
+    /// stopped, V/N, Σ g², L-BFGS evaluations, plateau escapes) of every packing to this
     /// CSV (a step trace).
     #[arg(long, value_name = "FILE")]
     pub trace: Option<std::path::PathBuf>,
@@ -301,6 +305,9 @@ impl Options {
         fire.dt_max = self.dt_max.or(fire.dt_max);
         if self.no_newton {
             fire.newton = None;
+        }
+        if self.no_plateau_escape {
+            fire.escape_plateaus = false;
         }
         fire.lbfgs = match self.lbfgs_after {
             Some(after) => {
@@ -456,6 +463,7 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         out.fire_steps += s.fire_steps;
         out.newton_iterations += s.newton_iterations;
         out.lbfgs_evaluations += s.lbfgs_evaluations;
+        out.plateau_escapes += s.plateau_escapes;
         escapes = s.rounds.to_string();
     }
     let wall = t.elapsed().as_secs_f64();
@@ -464,20 +472,21 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         for (phi, m) in fire.take_trace() {
             writeln!(
                 f,
-                "{seed},{phi:.15},{},{},{:?},{:e},{:e},{}",
+                "{seed},{phi:.15},{},{},{:?},{:e},{:e},{},{}",
                 m.steps,
                 m.newton_iterations,
                 m.reason,
                 m.energy / n as f64,
                 m.force_sq,
-                m.lbfgs_evaluations
+                m.lbfgs_evaluations,
+                m.plateau_escapes
             )?;
         }
         f.flush()?;
     }
     let s = summarize(&mut scene, threshold);
     Ok(format!(
-        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2},{},{escapes}",
+        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2},{},{escapes},{}",
         out.phi,
         s.z_j,
         s.iso_margin,
@@ -486,7 +495,8 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         wall * 1e6 / (out.fire_steps + out.lbfgs_evaluations).max(1) as f64,
         packing_hash(scene.packing()),
         out.newton_iterations,
-        out.lbfgs_evaluations
+        out.lbfgs_evaluations,
+        out.plateau_escapes
     ))
 }
 

@@ -178,6 +178,15 @@ pub struct FireParams {
     /// settings leave it out when off, and where it does not act, so that
     /// packings made before it existed resume.
     pub unjam_forecast: bool,
+    /// With the Newton finish: where a minimisation sits on a plateau (its
+    /// energy at a Newton attempt above half that at the attempt before)
+    /// and the attempt finds `H + μI` not positive definite, move along the
+    /// Hessian's lowest mode to the lowest `V` of a few amplitudes, then
+    /// FIRE again ([`crate::newton`]). On by default; off in
+    /// [`FireParams::paper`] (which has no Newton finish). A packing's
+    /// recorded settings leave it out when off, and where it does not act
+    /// (no Newton finish), so that packings made before it existed resume.
+    pub escape_plateaus: bool,
 }
 
 /// FIRE steps between two samples of `V` of the unjamming forecast.
@@ -296,6 +305,7 @@ impl Default for FireParams {
             masses: Masses::Family,
             lbfgs: LbfgsChoice::Family,
             unjam_forecast: true,
+            escape_plateaus: true,
         }
     }
 }
@@ -310,7 +320,8 @@ impl FireParams {
     }
 
     /// The paper's FIRE: FIRE (Bitzek et al.) all the way, no Newton
-    /// finish, `Σ (∂V/∂q)² < 10⁻²⁵`, no unjamming forecast. Bit for bit
+    /// finish (nor its plateau escape), `Σ (∂V/∂q)² < 10⁻²⁵`, no unjamming
+    /// forecast. Bit for bit
     /// the packings recorded without the Newton finish.
     pub fn paper() -> Self {
         Self {
@@ -321,18 +332,20 @@ impl FireParams {
             masses: Masses::Plain,
             lbfgs: LbfgsChoice::Off,
             unjam_forecast: false,
+            escape_plateaus: false,
             ..Self::default()
         }
     }
 
-    /// FIRE with the Newton finish at its default settings, the default
-    /// force criterion and the unjamming forecast, with plain masses and no
-    /// L-BFGS.
+    /// FIRE with the Newton finish at its default settings (and its plateau
+    /// escape), the default force criterion and the unjamming forecast,
+    /// with plain masses and no L-BFGS.
     pub fn fire_newton() -> Self {
         Self {
             newton: Some(NewtonParams::default()),
             force_criterion: ForceCriterion::default(),
             unjam_forecast: true,
+            escape_plateaus: true,
             ..Self::paper()
         }
     }
@@ -510,6 +523,8 @@ pub struct MinimizeOutcome {
     /// Energy-and-gradient evaluations of L-BFGS (0 without it), on top of
     /// `steps`.
     pub lbfgs_evaluations: u64,
+    /// Moves of the plateau escape (`escape_plateaus`).
+    pub plateau_escapes: u64,
 }
 
 /// A FIRE minimiser with its work buffers (reused across minimisations).
@@ -702,6 +717,9 @@ impl Fire {
         let mut newton_iterations: u64 = 0;
         let mut newton_interval = p.newton.as_ref().map_or(u64::MAX, |nw| nw.after);
         let mut next_newton = newton_interval;
+        // Energy at the last Newton attempt (the plateau test).
+        let mut attempt_energy = f64::INFINITY;
+        let mut plateau_escapes: u64 = 0;
         let mut lbfgs_evaluations: u64 = 0;
         let mut lbfgs_interval = match p.lbfgs.params() {
             Some(lb) if self.from_jammed || !lb.jammed_only => lb.after,
@@ -718,6 +736,7 @@ impl Fire {
                     reason: $reason,
                     newton_iterations,
                     lbfgs_evaluations,
+                    plateau_escapes,
                 })
             };
         }
@@ -774,6 +793,7 @@ impl Fire {
             if steps >= next_newton
                 && let Some(nw) = &p.newton
             {
+                let before = energy;
                 let run = crate::newton::attempt(
                     obj,
                     g,
@@ -792,8 +812,26 @@ impl Fire {
                     next_newton = u64::MAX;
                     continue;
                 }
+                // On a plateau with negative curvature: along the lowest
+                // mode, and the next attempt soon.
+                let mut pushed = false;
+                if run.end == NewtonEnd::Indefinite
+                    && p.escape_plateaus
+                    && before > crate::newton::PLATEAU_FALL * attempt_energy
+                    && let Some((e, moved)) =
+                        crate::newton::escape_plateau(obj, g, energy, nw, &mut self.newton_work)
+                {
+                    energy = e;
+                    pushed = moved;
+                    plateau_escapes += u64::from(moved);
+                }
+                attempt_energy = before;
                 // Back to FIRE, from rest; the next attempt comes later.
-                newton_interval = newton_interval.saturating_mul(2);
+                newton_interval = if pushed {
+                    nw.after
+                } else {
+                    newton_interval.saturating_mul(2)
+                };
                 next_newton = steps.saturating_add(newton_interval);
                 from_rest!();
             }

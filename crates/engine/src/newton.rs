@@ -116,6 +116,10 @@ pub(crate) enum NewtonEnd {
     Converged(StopReason),
     /// Back to FIRE.
     GaveUp,
+    /// Back to FIRE: `H + μI` is not positive definite at the state the
+    /// attempt leaves (whose Hessian is in the work buffers, for
+    /// [`escape_plateau`]).
+    Indefinite,
     /// The objective has no Hessian: FIRE alone, untouched.
     Unavailable,
 }
@@ -172,7 +176,7 @@ pub(crate) fn attempt<O: Objective>(
         // Not positive definite at the base shift: a saddle or an unjammed
         // state, where FIRE does better than shifted Newton steps.
         if !solve_shifted(n, g, newton.shift, w) {
-            return run(NewtonEnd::GaveUp, iterations + 1, energy, force_sq);
+            return run(NewtonEnd::Indefinite, iterations + 1, energy, force_sq);
         }
         // δ = −(H + μI)⁻¹ g, capped.
         let largest = w.delta.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -237,31 +241,80 @@ pub(crate) fn attempt<O: Objective>(
     run(NewtonEnd::GaveUp, iterations, energy, force_sq)
 }
 
+/// Largest coordinate changes the plateau escape tries along the mode:
+/// `max_step · 2⁻ᵏ`, `k = 0 … PLATEAU_TRIALS − 1` (down to `~5·10⁻⁸` at
+/// the default `max_step`).
+pub const PLATEAU_TRIALS: i32 = 21;
+
+/// A minimisation sits on a plateau when its energy at a Newton attempt is
+/// above this fraction of its energy at the attempt before.
+pub const PLATEAU_FALL: f64 = 0.5;
+
+/// The plateau escape moves this many times as far along the mode as the
+/// lowest `V` of the amplitudes tried (at most `max_step`).
+pub const PLATEAU_KICK: f64 = 16.0;
+
+/// The plateau escape (module documentation): from the state a Newton
+/// attempt left with [`NewtonEnd::Indefinite`], the lowest mode of its
+/// Hessian (still in `w`) by [`crate::saddle::negative_curvature`] at the
+/// shift `newton.shift`, and the move along it, on the side where `V`
+/// falls to first order, to the lowest `V` of the amplitudes tried. `None`
+/// when no mode curves below `−μ` (nothing moved); else `(V, moved)`, `g`
+/// holding the gradient of the state left (moved: the lowest `V` lies
+/// below `energy`; not moved: the state restored).
+pub(crate) fn escape_plateau<O: Objective>(
+    obj: &mut O,
+    g: &mut [f64],
+    energy: f64,
+    newton: &NewtonParams,
+    w: &mut NewtonWork,
+) -> Option<(f64, bool)> {
+    let n = g.len();
+    let Ok(Some((_, _, mode))) = crate::saddle::negative_curvature(n, &w.entries, newton.shift)
+    else {
+        return None;
+    };
+    let biggest = mode.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if !(biggest > 0.0) {
+        return None;
+    }
+    // Unit largest component, on the side where g·d ≤ 0.
+    let slope: f64 = g.iter().zip(&mode).map(|(a, b)| a * b).sum();
+    let scale = if slope > 0.0 { -1.0 } else { 1.0 } / biggest;
+    w.delta.clear();
+    w.delta.extend(mode.iter().map(|x| x * scale));
+    w.trial.resize(n, 0.0);
+    obj.save();
+    let mut best = (0.0, energy);
+    for k in 0..PLATEAU_TRIALS {
+        let amplitude = newton.max_step * 0.5f64.powi(k);
+        w.dq.clear();
+        w.dq.extend(w.delta.iter().map(|d| amplitude * d));
+        obj.displace(&w.dq);
+        let e = obj.energy_gradient(&mut w.trial);
+        obj.restore();
+        if e.is_finite() && e < best.1 {
+            best = (amplitude, e);
+        }
+    }
+    // Beyond the lowest V: off the saddle's neighbourhood, so that FIRE
+    // does not slide back onto it (module documentation).
+    let amplitude = (PLATEAU_KICK * best.0).min(newton.max_step);
+    if best.0 > 0.0 {
+        w.dq.clear();
+        w.dq.extend(w.delta.iter().map(|d| amplitude * d));
+        obj.displace(&w.dq);
+    }
+    Some((obj.energy_gradient(g), best.0 > 0.0))
+}
+
 /// Solve `(H + μI) x = g` into `w.delta` for the Hessian in `w.entries`,
 /// with `μ = shift · mean(diag H)` (the mean over positive diagonal
 /// entries). Returns `false` when the Cholesky factorisation fails (`H + μI`
 /// not positive definite) or the solution is not finite.
 fn solve_shifted(n: usize, g: &[f64], shift: f64, w: &mut NewtonWork) -> bool {
-    w.diag.clear();
-    w.diag.resize(n, 0.0);
-    for &(r, c, v) in &w.entries {
-        if r == c {
-            w.diag[r as usize] += v;
-        }
-    }
-    let (sum, count) = w
-        .diag
-        .iter()
-        .filter(|&&d| d > 0.0)
-        .fold((0.0, 0usize), |(s, k), &d| (s + d, k + 1));
-    let mu = shift * if count == 0 { 1.0 } else { sum / count as f64 };
-    w.triplets.clear();
-    w.triplets.extend(
-        w.entries
-            .iter()
-            .filter(|&&(r, c, _)| r <= c)
-            .map(|&(r, c, v)| Triplet::new(r as usize, c as usize, v)),
-    );
+    let mu = shift * mean_positive_diagonal(n, &w.entries, &mut w.diag).unwrap_or(1.0);
+    upper_triplets(&w.entries, &mut w.triplets);
     w.triplets.extend((0..n).map(|a| Triplet::new(a, a, mu)));
     let Some(llt) = sparse_cholesky(n, &w.triplets) else {
         return false;
@@ -271,6 +324,44 @@ fn solve_shifted(n: usize, g: &[f64], shift: f64, w: &mut NewtonWork) -> bool {
     w.delta.clear();
     w.delta.extend((0..n).map(|a| x[(a, 0)]));
     w.delta.iter().all(|d| d.is_finite())
+}
+
+/// The mean `d̄` of the positive diagonal entries of the `n × n` matrix with
+/// these entries (repeated pairs adding; `diag` is work space), or `None`
+/// when there is none. The shift of the Newton finish and of the saddle
+/// check is relative to it.
+pub(crate) fn mean_positive_diagonal(
+    n: usize,
+    entries: &[(u32, u32, f64)],
+    diag: &mut Vec<f64>,
+) -> Option<f64> {
+    diag.clear();
+    diag.resize(n, 0.0);
+    for &(r, c, v) in entries {
+        if r == c {
+            diag[r as usize] += v;
+        }
+    }
+    let (sum, count) = diag
+        .iter()
+        .filter(|&&d| d > 0.0)
+        .fold((0.0, 0usize), |(s, k), &d| (s + d, k + 1));
+    (count > 0).then(|| sum / count as f64)
+}
+
+/// The upper triangle (`row ≤ column`) of these entries as faer's
+/// triplets, into `upper` (cleared first), for [`sparse_cholesky`].
+pub(crate) fn upper_triplets(
+    entries: &[(u32, u32, f64)],
+    upper: &mut Vec<Triplet<usize, usize, f64>>,
+) {
+    upper.clear();
+    upper.extend(
+        entries
+            .iter()
+            .filter(|&&(r, c, _)| r <= c)
+            .map(|&(r, c, v)| Triplet::new(r as usize, c as usize, v)),
+    );
 }
 
 /// The sparse Cholesky factorisation `L Lᵀ` of the symmetric `n × n`
@@ -417,5 +508,148 @@ pub(crate) mod tests {
         // Indefinite: refused.
         w.entries = vec![(0, 0, 1.0), (1, 1, -1.0)];
         assert!(!solve_shifted(2, &[1.0, 1.0], 1e-12, &mut w));
+    }
+
+    /// `V = Σ_a k_a x_a² / 2 + c²/4b − c y²/2 + b y⁴/4` (`x` the first
+    /// coordinates, `y` the last): a saddle at `y = 0` whose one unstable
+    /// mode, of curvature `−c`, leads to the minima `V = 0` at
+    /// `y = ±√(c/b)`.
+    struct Plateau {
+        q: Vec<f64>,
+        k: Vec<f64>,
+        c: f64,
+        b: f64,
+        inv_m: Vec<f64>,
+        saved: Vec<f64>,
+    }
+
+    impl Objective for Plateau {
+        fn dof(&self) -> usize {
+            self.q.len()
+        }
+        fn bodies(&self) -> usize {
+            1
+        }
+        fn inverse_masses(&self) -> &[f64] {
+            &self.inv_m
+        }
+        fn energy_gradient(&mut self, grad: &mut [f64]) -> f64 {
+            let last = self.q.len() - 1;
+            let mut e = 0.0;
+            for a in 0..last {
+                e += 0.5 * self.k[a] * self.q[a] * self.q[a];
+                grad[a] = self.k[a] * self.q[a];
+            }
+            let y = self.q[last];
+            e +=
+                self.c * self.c / (4.0 * self.b) - 0.5 * self.c * y * y + 0.25 * self.b * y.powi(4);
+            grad[last] = -self.c * y + self.b * y.powi(3);
+            e
+        }
+        fn displace(&mut self, dq: &[f64]) {
+            self.q.iter_mut().zip(dq).for_each(|(x, d)| *x += d);
+        }
+        fn phi(&self) -> f64 {
+            0.0
+        }
+        fn hessian_entries(&mut self, e: &mut Vec<(u32, u32, f64)>) -> Result<bool> {
+            let last = self.q.len() - 1;
+            for a in 0..last {
+                e.push((a as u32, a as u32, self.k[a]));
+            }
+            let y = self.q[last];
+            e.push((last as u32, last as u32, -self.c + 3.0 * self.b * y * y));
+            Ok(true)
+        }
+        fn save(&mut self) {
+            self.saved.clone_from(&self.q);
+        }
+        fn restore(&mut self) {
+            self.q.clone_from(&self.saved);
+        }
+    }
+
+    /// `c = b = 10⁻⁶` (minima at `y = ±1`), started `10⁻⁶` off the saddle
+    /// (its force `10⁻¹²` above the force test's `√10⁻²⁵`):
+    /// FIRE alone leaves it only as fast as the unstable mode grows,
+    /// `∝ exp(√c t)`, about 14 000 time units for the six decades.
+    fn plateau() -> Plateau {
+        Plateau {
+            q: vec![0.3, -0.2, 1e-6],
+            k: vec![1.0, 0.1],
+            c: 1e-6,
+            b: 1e-6,
+            inv_m: vec![1.0; 3],
+            saved: Vec::new(),
+        }
+    }
+
+    /// The escape's mode is the saddle's unstable direction: the lowest
+    /// eigenvector of `H = diag(1, 0.1, −c)` is the `y` axis, found to
+    /// `10⁻⁹` (inverse iteration from a vector with components along every
+    /// axis, converging by `(c − c/2)/(0.1 + c/2)` per iteration at the
+    /// shift that first factorises), with Rayleigh quotient `−c` to
+    /// `10⁻⁶` relative (the iteration's stopping rule).
+    #[test]
+    fn the_plateau_mode_is_the_unstable_direction() {
+        let mut p = plateau();
+        let mut entries = Vec::new();
+        p.hessian_entries(&mut entries).unwrap();
+        let (rho, _, mode) = crate::saddle::negative_curvature(3, &entries, 1e-10)
+            .unwrap()
+            .expect("a saddle");
+        assert!((rho + 1e-6).abs() < 1e-12, "{rho}");
+        assert!(mode[2].abs() > 1.0 - 1e-9, "{mode:?}");
+    }
+
+    /// On the plateau the escape moves along the unstable mode and the
+    /// minimisation ends at a minimum (`|y| = 1` to 10⁻⁴) in under half of
+    /// FIRE's steps with the escape off, which ends at a minimum too
+    /// (measured: 14 000 against 37 008 steps, four pushes of `max_step`);
+    /// on a well whose Hessian is positive definite (where the escape never
+    /// acts) the minimisation is the same with it on and off, bit for bit.
+    #[test]
+    fn the_plateau_escape_leaves_a_saddle_faster_and_changes_nothing_elsewhere() {
+        let run = |escape: bool| {
+            let mut p = plateau();
+            let out = Fire::new(FireParams {
+                escape_plateaus: escape,
+                ..FireParams::fire_newton()
+            })
+            .minimize(&mut p)
+            .unwrap();
+            assert!(
+                (p.q[2].abs() - 1.0).abs() < 1e-4,
+                "{escape}: {:?} {out:?}",
+                p.q
+            );
+            out
+        };
+        let (on, off) = (run(true), run(false));
+        assert!(
+            on.plateau_escapes >= 1 && off.plateau_escapes == 0,
+            "{on:?} {off:?}"
+        );
+        assert!(
+            2 * on.steps < off.steps,
+            "{} against {}",
+            on.steps,
+            off.steps
+        );
+        let well_run = |escape: bool| {
+            let mut w = well();
+            let out = Fire::new(FireParams {
+                energy_tol: 1e-300,
+                force_tol: 1e-24,
+                escape_plateaus: escape,
+                ..FireParams::fire_newton()
+            })
+            .minimize(&mut w)
+            .unwrap();
+            (out, w.x)
+        };
+        let (on, off) = (well_run(true), well_run(false));
+        assert_eq!(on.0.plateau_escapes, 0);
+        assert_eq!(on, off);
     }
 }

@@ -177,16 +177,20 @@ pub struct ProtocolOutcome {
     pub newton_iterations: u64,
     /// L-BFGS evaluations over all minimisations (on top of `fire_steps`).
     pub lbfgs_evaluations: u64,
+    /// Moves of the plateau escape over all minimisations.
+    pub plateau_escapes: u64,
 }
 
 impl ProtocolOutcome {
     /// Adds `other`'s work (FIRE steps, minimisations, Newton iterations,
-    /// L-BFGS evaluations) to this outcome's; φ and `V/N` stay this one's.
+    /// L-BFGS evaluations, plateau escapes) to this outcome's; φ and `V/N`
+    /// stay this one's.
     pub fn add_work(&mut self, other: &ProtocolOutcome) {
         self.fire_steps += other.fire_steps;
         self.minimizations += other.minimizations;
         self.newton_iterations += other.newton_iterations;
         self.lbfgs_evaluations += other.lbfgs_evaluations;
+        self.plateau_escapes += other.plateau_escapes;
     }
 }
 
@@ -197,6 +201,7 @@ struct Tally {
     minimizations: u64,
     newton_iterations: u64,
     lbfgs_evaluations: u64,
+    plateau_escapes: u64,
     /// The last minimisation ended on the unjamming forecast.
     forecast: bool,
 }
@@ -213,6 +218,7 @@ impl Tally {
         self.minimizations += 1;
         self.newton_iterations += out.newton_iterations;
         self.lbfgs_evaluations += out.lbfgs_evaluations;
+        self.plateau_escapes += out.plateau_escapes;
         self.forecast = out.reason == StopReason::Forecast;
         Ok(out.energy / scene.bodies() as f64)
     }
@@ -225,6 +231,7 @@ impl Tally {
             minimizations: self.minimizations,
             newton_iterations: self.newton_iterations,
             lbfgs_evaluations: self.lbfgs_evaluations,
+            plateau_escapes: self.plateau_escapes,
         }
     }
 }

@@ -56,7 +56,7 @@
 //! on the configuration only (not on the thread count).
 
 use crate::hessian::{Hessian, HessianOptions};
-use crate::newton::sparse_cholesky;
+use crate::newton::{mean_positive_diagonal, sparse_cholesky, upper_triplets};
 use crate::{Fire, JamParams, Objective, Scene, jam};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
@@ -134,6 +134,8 @@ pub struct SaddleOutcome {
     pub lbfgs_evaluations: u64,
     /// Minimisations of the re-run searches.
     pub minimizations: u64,
+    /// Plateau escapes of the re-run searches.
+    pub plateau_escapes: u64,
     /// Final packing fraction.
     pub phi: f64,
     /// Final `V/N`.
@@ -146,31 +148,28 @@ pub struct SaddleOutcome {
 /// mode (unit length, in `h`'s rows), as the module documentation
 /// describes.
 pub fn negative_mode(h: &Hessian, threshold: f64) -> Result<Option<(f64, f64, Vec<f64>)>> {
-    let n = h.size;
+    negative_curvature(h.size, &h.entries, threshold)
+}
+
+/// [`negative_mode`] of the symmetric `n × n` matrix with these entries
+/// (`(row, column, value)`, both triangles, repeated pairs adding): the
+/// Hessian of a scene, or of an objective in its flat coordinates (the
+/// Newton finish's plateau escape, [`crate::newton`]).
+pub fn negative_curvature(
+    n: usize,
+    entries: &[(u32, u32, f64)],
+    threshold: f64,
+) -> Result<Option<(f64, f64, Vec<f64>)>> {
     if n == 0 {
         return Ok(None);
     }
-    let mut diag = vec![0.0; n];
-    for &(r, c, v) in &h.entries {
-        if r == c {
-            diag[r as usize] += v;
-        }
-    }
-    let (sum, count) = diag
-        .iter()
-        .filter(|&&d| d > 0.0)
-        .fold((0.0, 0usize), |(s, k), &d| (s + d, k + 1));
-    if count == 0 {
+    let mut diag = Vec::new();
+    let Some(mean) = mean_positive_diagonal(n, entries, &mut diag) else {
         return Ok(None);
-    }
-    let mean = sum / count as f64;
+    };
     let mu = threshold * mean;
-    let upper: Vec<Triplet<usize, usize, f64>> = h
-        .entries
-        .iter()
-        .filter(|&&(r, c, _)| r <= c)
-        .map(|&(r, c, v)| Triplet::new(r as usize, c as usize, v))
-        .collect();
+    let mut upper = Vec::new();
+    upper_triplets(entries, &mut upper);
     let factor = |shift: f64| {
         let mut t = upper.clone();
         t.extend((0..n).map(|a| Triplet::new(a, a, shift)));
@@ -182,7 +181,7 @@ pub fn negative_mode(h: &Hessian, threshold: f64) -> Result<Option<(f64, f64, Ve
     // Every eigenvalue is at least −(largest absolute row sum), so a shift
     // beyond it factorises: the doubling ends.
     let mut row_sum = vec![0.0; n];
-    for &(r, _, v) in &h.entries {
+    for &(r, _, v) in entries {
         row_sum[r as usize] += v.abs();
     }
     let bound = row_sum.iter().fold(0.0f64, |m, &s| m.max(s));
@@ -209,6 +208,7 @@ pub fn negative_mode(h: &Hessian, threshold: f64) -> Result<Option<(f64, f64, Ve
     });
     let mut rho = f64::INFINITY;
     let mut x = vec![0.0; n];
+    let mut hx = vec![0.0; n];
     for _ in 0..MAX_ITERATIONS {
         llt.solve_in_place(v.as_mut());
         let norm = (0..n).map(|a| v[(a, 0)] * v[(a, 0)]).sum::<f64>().sqrt();
@@ -219,7 +219,10 @@ pub fn negative_mode(h: &Hessian, threshold: f64) -> Result<Option<(f64, f64, Ve
             *xa = v[(a, 0)] / norm;
             v[(a, 0)] = *xa;
         }
-        let hx = h.apply(&x);
+        hx.fill(0.0);
+        for &(r, c, value) in entries {
+            hx[r as usize] += value * x[c as usize];
+        }
         let next: f64 = x.iter().zip(&hx).map(|(a, b)| a * b).sum();
         let settled = (next - rho).abs() <= RAYLEIGH_TOL * next.abs();
         rho = next;
@@ -308,6 +311,7 @@ pub fn escape_saddles<const D: usize, S: Shape<D>>(
         out.newton_iterations += o.newton_iterations;
         out.lbfgs_evaluations += o.lbfgs_evaluations;
         out.minimizations += o.minimizations;
+        out.plateau_escapes += o.plateau_escapes;
         out.phi = o.phi;
         out.energy_per_particle = o.energy_per_particle;
     }
@@ -366,6 +370,17 @@ mod tests {
 
     fn hessian(scene: &mut Scene<2, Sphere>) -> Hessian {
         Hessian::of_scene(scene, &[], HessianOptions::default()).unwrap()
+    }
+
+    /// The sum of the positive diagonal entries of the dense `H` over its
+    /// size (the tests' scale of `H`).
+    fn mean_diagonal(h: &Hessian) -> f64 {
+        let d = h.dense();
+        (0..h.size)
+            .map(|a| d[(a, a)])
+            .filter(|&x| x > 0.0)
+            .sum::<f64>()
+            / h.size as f64
     }
 
     fn lowest_dense(h: &Hessian) -> f64 {

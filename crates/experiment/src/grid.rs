@@ -392,12 +392,13 @@ fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
 }
 
 /// The minimiser as a packing records it: as resolved for the family
-/// (`FireParams::for_family`), with three fields left out where packings
+/// (`FireParams::for_family`), with four fields left out where packings
 /// made before they existed hold them, so that those still resume under
 /// an explicit setting: `lbfgs: None` (they ran without L-BFGS),
-/// `masses: Plain`, and `unjam_forecast` where it is off or does not act
+/// `masses: Plain`, `unjam_forecast` where it is off or does not act
 /// (it acts in `Jam` and `AboveJam` with a search other than `Bisection`:
-/// `jamkit_engine::jam`). Where the family's default is L-BFGS it is always
+/// `jamkit_engine::jam`), and `escape_plateaus` where it is off or does
+/// not act (it acts with the Newton finish). Where the family's default is L-BFGS it is always
 /// written, so no packing of one minimiser is ever taken for the other's.
 fn minimizer_settings(minimizer: &FireParams, protocol: &Protocol) -> serde_json::Value {
     let mut value = serde_json::to_value(minimizer).expect("minimizer serialises");
@@ -412,6 +413,11 @@ fn minimizer_settings(minimizer: &FireParams, protocol: &Protocol) -> serde_json
         }
         if !forecast_acts || m.get("unjam_forecast") == Some(&serde_json::Value::Bool(false)) {
             m.remove("unjam_forecast");
+        }
+        if m.get("newton") == Some(&serde_json::Value::Null)
+            || m.get("escape_plateaus") == Some(&serde_json::Value::Bool(false))
+        {
+            m.remove("escape_plateaus");
         }
         if m.get("masses") == Some(&serde_json::json!("Plain")) {
             m.remove("masses");

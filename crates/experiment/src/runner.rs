@@ -350,6 +350,13 @@ fn unwritten_setting(key: &str) -> Option<&'static str> {
              `unjam_forecast: false` to the minimizer, or \
              `--set minimizer.unjam_forecast=false`, to resume them)",
         ),
+        // Packings made without the plateau escape record none
+        // (`grid::minimizer_settings`).
+        "minimizer.escape_plateaus" => Some(
+            "false (not written; the default before true: add \
+             `escape_plateaus: false` to the minimizer, or \
+             `--set minimizer.escape_plateaus=false`, to resume them)",
+        ),
         // Packings without L-BFGS record none (`sample::minimizer_settings`).
         "minimizer.lbfgs" => Some(
             "None (not written; the default before the family's: \

@@ -239,6 +239,7 @@ impl Sample<'_> {
                         outcome.newton_iterations += s.newton_iterations;
                         outcome.lbfgs_evaluations += s.lbfgs_evaluations;
                         outcome.minimizations += s.minimizations;
+                        outcome.plateau_escapes += s.plateau_escapes;
                         saddle_escapes = Some(s.rounds);
                     }
                     Ok(outcome)
