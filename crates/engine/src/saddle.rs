@@ -49,6 +49,11 @@
 //! state: there the third push (kick `4·10⁻⁴`) ended on a minimum with
 //! three more contacts (iso_margin 2).
 //!
+//! **Inside a minimisation.** The Newton finish finds the lowest mode of
+//! a state stalled on a saddle by the same factorisation and iteration
+//! ([`negative_curvature`]) and pushes along it ([`crate::newton`],
+//! plateaus).
+//!
 //! **Bit for bit.** The check reads the configuration and moves nothing,
 //! so on a state that is not a saddle the packing is the search's, bit for
 //! bit. The factorisation, the iteration and the pushes are
