@@ -818,6 +818,7 @@ impl Fire {
                 if run.end == NewtonEnd::Indefinite
                     && p.escape_plateaus
                     && before > crate::newton::PLATEAU_FALL * attempt_energy
+                    && plateau_escapes < crate::newton::PLATEAU_MOVES
                     && let Some((e, moved)) =
                         crate::newton::escape_plateau(obj, g, energy, nw, &mut self.newton_work)
                 {
