@@ -817,6 +817,7 @@ impl Fire {
                 let mut pushed = false;
                 if run.end == NewtonEnd::Indefinite
                     && p.escape_plateaus
+                    && steps >= crate::newton::PLATEAU_AFTER
                     && before > crate::newton::PLATEAU_FALL * attempt_energy
                     && plateau_escapes < crate::newton::PLATEAU_MOVES
                     && let Some((e, moved)) =

@@ -426,17 +426,6 @@ mod tests {
         .unwrap()
     }
 
-    /// The mean of the dense Hessian's positive diagonal entries over all
-    /// its rows (the scale `d̄` of the saddle threshold).
-    fn mean_diagonal(h: &Hessian) -> f64 {
-        let d = h.dense();
-        (0..h.size)
-            .map(|a| d[(a, a)])
-            .filter(|&x| x > 0.0)
-            .sum::<f64>()
-            / h.size as f64
-    }
-
     /// The escape pushes the lattice off its saddle and re-jams: at least one
     /// push, the end state in the window and with no eigenvalue below
     /// `−10⁻¹⁰ d̄` (checked by the dense solve, independent of the
