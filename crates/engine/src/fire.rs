@@ -178,10 +178,11 @@ pub struct FireParams {
     /// settings leave it out when off, and where it does not act, so that
     /// packings made before it existed resume.
     pub unjam_forecast: bool,
-    /// With the Newton finish: where a minimisation sits on a plateau (its
+    /// With the Newton finish: where a minimisation of at least
+    /// [`crate::newton::PLATEAU_AFTER`] FIRE steps sits on a plateau (its
     /// energy at a Newton attempt above half that at the attempt before)
     /// and the attempt finds `H + μI` not positive definite, move along the
-    /// Hessian's lowest mode to the lowest `V` of a few amplitudes, then
+    /// Hessian's lowest mode, beyond the lowest `V` of a few amplitudes, then
     /// FIRE again ([`crate::newton`]). On by default; off in
     /// [`FireParams::paper`] (which has no Newton finish). A packing's
     /// recorded settings leave it out when off, and where it does not act
