@@ -241,3 +241,84 @@ fn jammed_non_convex_packings_agree_with_fine_polygons() {
         assert!(touching >= 12, "n = {n}: {touching} contacts");
     }
 }
+
+/// Counting on the jammed packings of
+/// [`jammed_non_convex_packings_agree_with_fine_polygons`]: every contact
+/// is a constraint of its own, so a pair touching at k points counts k in
+/// `N_c`, `z_J` and the isostatic margin. The observable's network holds
+/// exactly the model's contacts (each pair's `h < 0` contacts), and
+/// some pairs touch at two points. The contacts are independent but for
+/// one state of self-stress, the contact forces: the `N_c × 3N` matrix `J`
+/// of their gap gradients (each body's `x, y, θ`) satisfies `Jᵀ h ≈ 0`
+/// (force balance: `∂V/∂q = Jᵀ h`, below the force test at a jammed
+/// state), so `J Jᵀ` has one eigenvalue near zero, `|Jᵀ ĥ|² ~ 10⁻¹¹` of
+/// the largest, with eigenvector `ĥ = h/|h|` (to 10⁻⁶ in the cosine), and
+/// every other eigenvalue above 10⁻⁵ of the largest (measured 5.7·10⁻⁴ at
+/// n = 8, 6.9·10⁻⁵ at n = 16; the near-zero one 3.5·10⁻¹³ and 1.8·10⁻¹³).
+/// A contact counted twice would add a second eigenvalue at round-off,
+/// with an eigenvector of mixed signs; a contact missed would leave the
+/// forces out of balance.
+#[test]
+fn the_contacts_of_non_convex_pairs_carry_one_state_of_self_stress() {
+    use jamkit_observe::contacts::{ContactNetwork, contact_rows};
+    for &(n, delta, file) in &[
+        (8u32, 0.15, "n8_d0.15_N12.txt"),
+        (16, 0.1, "n16_d0.1_N32.txt"),
+    ] {
+        let mut scene = jammed(n, delta, file);
+        let network = ContactNetwork::of_scene(&mut scene);
+        let rows = contact_rows(&mut scene);
+        let mut gaps = Vec::new();
+        scene.for_each_contact(0.0, |_, _, _, c| {
+            if c.gap < 0.0 {
+                gaps.push(c.gap);
+            }
+        });
+        let s = scene.packing().shape.clone();
+        let p = scene.packing();
+        // The model's contacts pair by pair.
+        let (mut model, mut several) = (0, 0);
+        for (i, j, pair, _, _) in near_pairs(p) {
+            let mut k = 0;
+            s.profiled().arc_contacts(&pair, 0.0, None, &mut |c| {
+                k += usize::from(c.exact.gap < 0.0);
+            });
+            let counted = network
+                .contacts
+                .iter()
+                .filter(|&&(a, b)| (a as usize, b as usize) == (i, j))
+                .count();
+            assert_eq!(counted, k, "n = {n}, bodies {i} and {j}");
+            model += k;
+            several += usize::from(k > 1);
+        }
+        assert_eq!(network.contacts.len(), model, "n = {n}");
+        assert!(several >= 1, "n = {n}: no pair with several contacts");
+        // J Jᵀ from the rows (body i's 3 coordinates, then body j's).
+        let m = rows.len();
+        let mut jjt = faer::Mat::<f64>::zeros(m, m);
+        for (a, (&(ia, ja), ra)) in network.contacts.iter().zip(&rows).enumerate() {
+            for (b, (&(ib, jb), rb)) in network.contacts.iter().zip(&rows).enumerate() {
+                let mut dot = 0.0;
+                for (ba, xa) in [(ia, &ra[0]), (ja, &ra[1])] {
+                    for (bb, xb) in [(ib, &rb[0]), (jb, &rb[1])] {
+                        if ba == bb {
+                            dot += xa.iter().zip(xb.iter()).map(|(u, v)| u * v).sum::<f64>();
+                        }
+                    }
+                }
+                jjt[(a, b)] = dot;
+            }
+        }
+        let evd = jjt.self_adjoint_eigen(faer::Side::Lower).unwrap();
+        let (low, next, high) = (evd.S()[0], evd.S()[1], evd.S()[m - 1]);
+        let norm = gaps.iter().map(|h| h * h).sum::<f64>().sqrt();
+        let cos: f64 = (0..m).map(|a| evd.U()[(a, 0)] * gaps[a] / norm).sum();
+        eprintln!(
+            "n = {n}: {m} contacts, {several} pairs with several; J Jᵀ: {low:.3e}, {next:.3e} … {high:.3e}; cosine with the forces {cos}"
+        );
+        assert!(low < 1e-9 * high, "n = {n}: {low:e} against {high:e}");
+        assert!(next > 1e-5 * high, "n = {n}: {next:e} against {high:e}");
+        assert!(cos.abs() > 1.0 - 1e-6, "n = {n}: {cos}");
+    }
+}
