@@ -187,6 +187,17 @@ fn jammed(n: u32, delta: f64, file: &str) -> Scene<2, NearDisk> {
     Scene::new(packing, Potential::Harmonic, skin)
 }
 
+/// The jammed packings of `tests/inputs/rough/` with their mode number:
+/// n = 8, Δ = 0.15 (12 bodies) and n = 16, Δ = 0.1 (32 bodies).
+fn jammed_inputs() -> impl Iterator<Item = (u32, Scene<2, NearDisk>)> {
+    [
+        (8u32, 0.15, "n8_d0.15_N12.txt"),
+        (16, 0.1, "n16_d0.1_N32.txt"),
+    ]
+    .into_iter()
+    .map(|(n, delta, file)| (n, jammed(n, delta, file)))
+}
+
 /// Jammed packings, n = 8 at Δ = 0.15 (12 bodies) and n = 16 at Δ = 0.1
 /// (32 bodies) (Δ(n + 1/n) = 1.22 and 1.6, beyond the convex limit 1): the
 /// energy is in the jamming window, 10⁻¹⁶ < V/N < 2·10⁻¹⁶ (a change of the
@@ -201,11 +212,7 @@ fn jammed(n: u32, delta: f64, file: &str) -> Scene<2, NearDisk> {
 /// contacts are checked for each.
 #[test]
 fn jammed_non_convex_packings_agree_with_fine_polygons() {
-    for &(n, delta, file) in &[
-        (8u32, 0.15, "n8_d0.15_N12.txt"),
-        (16, 0.1, "n16_d0.1_N32.txt"),
-    ] {
-        let mut scene = jammed(n, delta, file);
+    for (n, mut scene) in jammed_inputs() {
         let mut g = vec![0.0; Objective::dof(&scene)];
         let particles = scene.packing().len();
         let e = scene.energy_gradient(&mut g) / particles as f64;
@@ -261,11 +268,7 @@ fn jammed_non_convex_packings_agree_with_fine_polygons() {
 #[test]
 fn the_contacts_of_non_convex_pairs_carry_one_state_of_self_stress() {
     use jamkit_observe::contacts::{ContactNetwork, contact_rows};
-    for &(n, delta, file) in &[
-        (8u32, 0.15, "n8_d0.15_N12.txt"),
-        (16, 0.1, "n16_d0.1_N32.txt"),
-    ] {
-        let mut scene = jammed(n, delta, file);
+    for (n, mut scene) in jammed_inputs() {
         let network = ContactNetwork::of_scene(&mut scene);
         let rows = contact_rows(&mut scene);
         let mut gaps = Vec::new();
