@@ -316,7 +316,16 @@ pub fn arc_support_unit<F: PolarOutline>(
     }
     let (r, r1, _) = o;
     let q = r * r + r1 * r1;
-    let rho = q * q.sqrt() / curvature_numerator(o);
+    // At an end of the arc (an inflection point) `N` is zero to round-off,
+    // of either sign: it takes the arc's, so that `ρ` is the limit from
+    // inside the arc (±∞ at the ends: as large as round-off in `N` allows).
+    let n = curvature_numerator(o);
+    let n = if sign * n > 0.0 {
+        n
+    } else {
+        sign * f64::EPSILON * q
+    };
+    let rho = q * q.sqrt() / n;
     let h = r * d.0;
     (
         phi,
