@@ -491,18 +491,23 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
         )
     };
     // First each arc against the other body's bounding circle (its
-    // arcs' farthest reach), then the pairs of arcs that pass.
+    // arcs' farthest reach), then the pairs of arcs that pass: body j's
+    // arcs that pass, with their placed centres, once.
     let (bound_i, bound_j) = (bound_of(i), bound_of(j));
+    let near_j: Vec<(&OutlineArc, (f64, f64))> = j
+        .arcs
+        .iter()
+        .map(|arc_b| (arc_b, place(zj, arc_b.centre, j.size)))
+        .filter(|(arc_b, cb)| {
+            norm(r_ij[0] + cb.0, r_ij[1] + cb.1) - j.size * arc_b.radius <= bound_i + cut
+        })
+        .collect();
     for arc_a in i.arcs {
         let ca = place(zi, arc_a.centre, i.size);
         if norm(r_ij[0] - ca.0, r_ij[1] - ca.1) - i.size * arc_a.radius > bound_j + cut {
             continue;
         }
-        for arc_b in j.arcs {
-            let cb = place(zj, arc_b.centre, j.size);
-            if norm(r_ij[0] + cb.0, r_ij[1] + cb.1) - j.size * arc_b.radius > bound_i + cut {
-                continue;
-            }
+        for &(arc_b, cb) in &near_j {
             let apart = norm(r_ij[0] + cb.0 - ca.0, r_ij[1] + cb.1 - ca.1)
                 - i.size * arc_a.radius
                 - j.size * arc_b.radius;
