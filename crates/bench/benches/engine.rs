@@ -16,6 +16,11 @@
 //!   the first-order guesses, `Shape::contacts`) and warm (from the memo
 //!   of the same pair before a move of 1e-6, `Shape::contacts_warm`;
 //!   `warm_unmoved`: from the memo of the same configuration).
+//! * `nonconvex_pair/{convex_exact,arcs}`: one pair evaluation (gap and
+//!   gradient, `Shape::contacts`) of `fourier` near-disks with n = 16 near
+//!   contact, by the exact gap of a convex outline (Δ = 0.05, below the
+//!   convex limit 1/(n + 1/n) ≈ 0.062) and by the arcs of a non-convex one
+//!   (Δ = 0.1, `jamkit_planar::arcs`).
 //!
 //! The N = 1024 packing benchmark is `jamkit bench packing` (one packing is
 //! seconds long, too long for criterion's repetitions).
@@ -204,11 +209,69 @@ fn exact_pair(c: &mut Criterion) {
     group.finish();
 }
 
+fn nonconvex_pair(c: &mut Criterion) {
+    use jamkit_core::{Pair, Rotation2, Shape, Vector};
+    use jamkit_planar::gap2d::GapModel;
+    use rand::RngExt;
+    let pi = std::f64::consts::PI;
+    let mut group = c.benchmark_group("nonconvex_pair");
+    for (delta, name) in [(0.05, "convex_exact"), (0.1, "arcs")] {
+        let shape = NearDisk::fourier(&FourierParams {
+            n: 16,
+            delta,
+            inertia: None,
+            gap: GapModel::Exact,
+        })
+        .unwrap();
+        assert_eq!(shape.is_convex(), delta < 0.06, "Δ = {delta}");
+        // Random pairs whose centres are within ±Δ/n of the disks' contact
+        // distance (relative), kept if they touch or overlap.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut pairs = Vec::new();
+        while pairs.len() < 1024 {
+            let (si, sj) = (
+                0.5 + 0.2 * rng.random::<f64>(),
+                0.5 + 0.2 * rng.random::<f64>(),
+            );
+            let (ti, tj, dir) = (
+                2.0 * pi * rng.random::<f64>(),
+                2.0 * pi * rng.random::<f64>(),
+                2.0 * pi * rng.random::<f64>(),
+            );
+            let r = (si + sj) * (1.0 + delta / 16.0 * (2.0 * rng.random::<f64>() - 1.0));
+            let pair = Pair::new(
+                si,
+                Rotation2::new(ti),
+                sj,
+                Rotation2::new(tj),
+                Vector::<2>::new(r * dir.cos(), r * dir.sin()),
+            );
+            let mut found = false;
+            shape.contacts(&pair, 0.0, |_| found = true);
+            if found {
+                pairs.push(pair);
+            }
+        }
+        group.throughput(Throughput::Elements(pairs.len() as u64));
+        let mut sum = 0.0;
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                for p in &pairs {
+                    shape.contacts(black_box(p), 0.0, |c| sum += c.gap + c.grad_rot_i[0]);
+                }
+            })
+        });
+        black_box(sum);
+    }
+    group.finish();
+}
+
 criterion_group!(
     name = benches;
     // NOTE: no plots: criterion's plotters backend panicked on a machine
     // without system fonts (the numbers are what docs/reports/performance.md uses).
     config = Criterion::default().without_plots();
-    targets = energy_gradient, energy_gradient_near_disks, jam_disks, energy_gradient_harmonic, exact_pair
+    targets = energy_gradient, energy_gradient_near_disks, jam_disks, energy_gradient_harmonic, exact_pair,
+        nonconvex_pair
 );
 criterion_main!(benches);

@@ -6,7 +6,10 @@
 //!   forces (a force that is the energy's gradient leaves `O(|Δq|³)`);
 //! * the contacts of every pair, by count and gap: a pair whose number of
 //!   overlapping contacts changes, or whose deepest gap jumps, between two
-//!   evaluations.
+//!   evaluations;
+//! * in the `jam` mode, on a step that misses the trapezoid by more than
+//!   a tenth of its `ΔV`: the two pairs whose own `ΔV` misses the
+//!   trapezoid of their own gradient most, with their contacts.
 //!
 //! ```sh
 //! cargo run --release --example trace_fire -- out/x/packings/ID.failed.json [STEPS]
@@ -34,12 +37,15 @@ type Last<const D: usize, O> = (f64, Vec<f64>, Gaps, Pairs<D, O>);
 type Worst = Vec<(f64, u64, String)>;
 /// A pair's contacts described in detail (for the steps that jump).
 type Explain<'a, const D: usize, O> = &'a dyn Fn(&Pair<D, O>) -> String;
+/// A pair's own `ΔV − trapezoid` between two states of it.
+type PairErr<'a, const D: usize, O> = &'a dyn Fn(&Pair<D, O>, &Pair<D, O>) -> f64;
 
 struct Traced<'a, const D: usize, S: Shape<D>> {
     scene: &'a mut Scene<D, S>,
     last: Option<Last<D, S::Orientation>>,
     dq: Vec<f64>,
     explain: Option<Explain<'a, D, S::Orientation>>,
+    pair_err: Option<PairErr<'a, D, S::Orientation>>,
     explained: u64,
     calls: u64,
     worst: Worst,
@@ -147,7 +153,23 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
                         self.calls,
                         e - e0
                     );
-                    for k in &changed {
+                    // With a pair's own trapezoid, the pairs that miss it
+                    // most (contacts changing or not).
+                    let mut shown = changed.clone();
+                    if let Some(pair_err) = self.pair_err {
+                        let mut errs: Vec<(f64, (usize, usize))> = pairs
+                            .iter()
+                            .filter_map(|(k, b)| pairs0.get(k).map(|a| (pair_err(a, b), *k)))
+                            .collect();
+                        errs.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+                        for (e, k) in errs.iter().take(2) {
+                            println!("  pair {k:?} misses its trapezoid by {e:.3e}");
+                            if !shown.contains(k) {
+                                shown.push(*k);
+                            }
+                        }
+                    }
+                    for k in &shown {
                         if let (Some(a), Some(b)) = (pairs0.get(k), pairs.get(k)) {
                             println!("  pair {k:?} before: {}", explain(a));
                             println!("  pair {k:?} after:  {}", explain(b));
@@ -210,6 +232,7 @@ fn traced<const D: usize, S: Shape<D>>(
     scene: &mut Scene<D, S>,
     verbose: bool,
     explain: Option<Explain<'_, D, S::Orientation>>,
+    pair_err: Option<PairErr<'_, D, S::Orientation>>,
 ) -> (jamkit_core::Result<MinimizeOutcome>, u64, u64, Worst) {
     let dof = Objective::dof(&*scene);
     let mut t = Traced {
@@ -221,6 +244,7 @@ fn traced<const D: usize, S: Shape<D>>(
         events: 0,
         verbose,
         explain,
+        pair_err,
         explained: 0,
     };
     let out = fire.minimize(&mut t);
@@ -255,7 +279,7 @@ impl PackingVisitor for Trace {
             max_steps: self.steps,
             ..self.settings.for_family(&scene.packing().shape)
         });
-        let (out, calls, events, worst) = traced(&mut fire, &mut scene, true, None);
+        let (out, calls, events, worst) = traced(&mut fire, &mut scene, true, None, None);
         println!("{calls} evaluations, {events} with contact changes; largest |ΔV − trapezoid|:");
         for (err, k, s) in worst.iter().take(10) {
             println!("  eval {k}: {err:.3e} ({s})");
@@ -304,12 +328,22 @@ fn jam_mode(n: u32, delta: f64, particles: usize, seed: u64, max_steps: u64, bud
     let mut fire = Fire::new(params);
     let profiled = s_explain.profiled().clone();
     let explain = move |p: &Pair<2, jamkit_fourier::Angle>| describe(&profiled, p);
+    let s_err = s_explain.clone();
+    let pair_err = move |a: &Pair<2, jamkit_fourier::Angle>, b: &Pair<2, jamkit_fourier::Angle>| {
+        trapezoid_miss(&s_err, a, b)
+    };
     let mut eps = 1e-3;
     let start = std::time::Instant::now();
     let dof = Objective::dof(&scene);
     for round in 0..2000 {
         let t0 = std::time::Instant::now();
-        let (out, calls, events, worst) = traced(&mut fire, &mut scene, false, Some(&explain));
+        let (out, calls, events, worst) = traced(
+            &mut fire,
+            &mut scene,
+            false,
+            Some(&explain),
+            Some(&pair_err),
+        );
         let mut g = vec![0.0; dof];
         let e = scene.energy_gradient(&mut g) / particles as f64;
         let gaps = gaps_of(&mut scene);
@@ -356,6 +390,38 @@ fn jam_mode(n: u32, delta: f64, particles: usize, seed: u64, max_steps: u64, bud
         let phi = scene.phi();
         scene.set_phi(phi + eps);
     }
+}
+
+/// A pair's harmonic energy `Σ ½h²` (overlapping contacts) at `b` minus
+/// that at `a`, less the trapezoid of its gradients in `(r_ij, θ_i, θ_j)`.
+fn trapezoid_miss(
+    s: &jamkit_fourier::NearDisk,
+    a: &Pair<2, jamkit_fourier::Angle>,
+    b: &Pair<2, jamkit_fourier::Angle>,
+) -> f64 {
+    let energy = |p: &Pair<2, jamkit_fourier::Angle>| {
+        let (mut v, mut g) = (0.0, [0.0; 4]);
+        s.contacts(p, 0.0, |c| {
+            let h = c.gap.min(0.0);
+            v += 0.5 * h * h;
+            for (x, d) in
+                g.iter_mut()
+                    .zip([c.grad_r[0], c.grad_r[1], c.grad_rot_i[0], c.grad_rot_j[0]])
+            {
+                *x += h * d;
+            }
+        });
+        (v, g)
+    };
+    let ((va, ga), (vb, gb)) = (energy(a), energy(b));
+    let dq = [
+        b.r_ij[0] - a.r_ij[0],
+        b.r_ij[1] - a.r_ij[1],
+        b.o_i.theta() - a.o_i.theta(),
+        b.o_j.theta() - a.o_j.theta(),
+    ];
+    let pred: f64 = (0..4).map(|k| 0.5 * (ga[k] + gb[k]) * dq[k]).sum();
+    (vb - va) - pred
 }
 
 /// Every contact of a pair: the arcs' (arc indices, convex or concave,

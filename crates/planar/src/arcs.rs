@@ -99,11 +99,11 @@ pub struct OutlineArc {
     pub centre: (f64, f64),
     /// Its radius.
     pub radius: f64,
-    /// The polar angles `φ_k` (with `e^{iφ_k}`) where the normal angle is
-    /// `ν₀ + (ν₁ − ν₀) k/K`, `k = 0 … K` ([`TABLE_CELLS`] = K): each
-    /// normal's support point lies between two of them, where
-    /// [`arc_support`] starts.
-    pub table: Vec<(f64, Unit)>,
+    /// The polar angles `φ_k` (with `e^{iφ_k}` and the slope `dφ/dν =
+    /// (R² + R'²)/N` there) where the normal angle is `ν₀ + (ν₁ − ν₀) k/K`,
+    /// `k = 0 … K` ([`TABLE_CELLS`] = K): each normal's support point lies
+    /// between two of them, where [`arc_support`] starts.
+    pub table: Vec<(f64, Unit, f64)>,
 }
 
 /// The cells of an arc's table of support points ([`OutlineArc::table`]).
@@ -227,7 +227,9 @@ pub fn split_arcs<F: PolarOutline>(outline: &F, samples: usize) -> Vec<OutlineAr
                         }
                         0.5 * (lo + hi)
                     };
-                    (phi, unit_of_angle(phi))
+                    let (r, r1, r2) = at(phi);
+                    let slope = (r * r + r1 * r1) / curvature_numerator((r, r1, r2));
+                    (phi, unit_of_angle(phi), slope)
                 })
                 .collect();
             OutlineArc {
@@ -254,8 +256,9 @@ pub fn arc_support<F: PolarOutline>(arc: &OutlineArc, beta: f64, outline: &F) ->
 /// `q(φ) = R sin δ − R' cos δ = |p| sin(ν(φ) − β)` (`δ = φ − β`,
 /// `q' = N cos δ / R`) between the two entries of the arc's table whose
 /// normals enclose `β`, by Newton's method safeguarded by bisection, from
-/// the linear interpolation of the table (from the square root's in the
-/// end cells, where `ν − ν₀` grows as `(φ − φ₀)²` at an inflection point),
+/// the cubic Hermite interpolation of `φ(ν)` in the table (values and
+/// slopes; from the square root's in the end cells, where `ν − ν₀` grows
+/// as `(φ − φ₀)²` at an inflection point and the slope is infinite),
 /// stopped after a Newton step below 10⁻⁹ rad (what is left is ~C·10⁻¹⁸)
 /// or a bracket below 10⁻¹⁴ rad. `e^{iφ}` follows the steps by
 /// [`turn_unit`]: no trigonometric call.
@@ -272,18 +275,25 @@ pub fn arc_support_unit<F: PolarOutline>(
     let (lo0, hi0) = (arc.table[k].0, arc.table[k + 1].0);
     let frac = t - k as f64;
     let (mut phi, mut e) = if frac <= 0.0 {
-        arc.table[k]
+        (arc.table[k].0, arc.table[k].1)
     } else if frac >= 1.0 {
-        arc.table[k + 1]
+        (arc.table[k + 1].0, arc.table[k + 1].1)
     } else {
-        let w = if k == 0 {
-            frac.sqrt()
+        let phi = if k == 0 {
+            lo0 + (hi0 - lo0) * frac.sqrt()
         } else if k + 1 == m {
-            1.0 - (1.0 - frac).sqrt()
+            lo0 + (hi0 - lo0) * (1.0 - (1.0 - frac).sqrt())
         } else {
-            frac
+            // Hermite basis on the cell, whose width in ν is `dnu`.
+            let dnu = (arc.nu.1 - arc.nu.0) / m as f64;
+            let (t, t2) = (frac, frac * frac);
+            let t3 = t2 * t;
+            let cubic = (2.0 * t3 - 3.0 * t2 + 1.0) * lo0
+                + (t3 - 2.0 * t2 + t) * dnu * arc.table[k].2
+                + (3.0 * t2 - 2.0 * t3) * hi0
+                + (t3 - t2) * dnu * arc.table[k + 1].2;
+            cubic.clamp(lo0, hi0)
         };
-        let phi = lo0 + (hi0 - lo0) * w;
         (phi, turn_unit(arc.table[k].1, phi - lo0))
     };
     let (mut lo, mut hi) = (lo0, hi0);
@@ -301,7 +311,9 @@ pub fn arc_support_unit<F: PolarOutline>(
             }
             let dq = sign * (2.0 * r1 * d.1 + (r - r2) * d.0);
             let newton = phi - q / dq;
-            let is_newton = dq > 0.0 && newton > lo && newton < hi;
+            // Closed: a step below the spacing of floats lands on `phi`,
+            // which is an end of the bracket.
+            let is_newton = dq > 0.0 && newton >= lo && newton <= hi;
             let next = if is_newton { newton } else { 0.5 * (lo + hi) };
             let step = next - phi;
             phi = next;
@@ -316,7 +328,16 @@ pub fn arc_support_unit<F: PolarOutline>(
     }
     let (r, r1, _) = o;
     let q = r * r + r1 * r1;
-    let rho = q * q.sqrt() / curvature_numerator(o);
+    // At an end of the arc (an inflection point) `N` is zero to round-off,
+    // of either sign: it takes the arc's, so that `ρ` is the limit from
+    // inside the arc (±∞ at the ends: as large as round-off in `N` allows).
+    let n = curvature_numerator(o);
+    let n = if sign * n > 0.0 {
+        n
+    } else {
+        sign * f64::EPSILON * q
+    };
+    let rho = q * q.sqrt() / n;
     let h = r * d.0;
     (
         phi,
@@ -470,18 +491,23 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
         )
     };
     // First each arc against the other body's bounding circle (its
-    // arcs' farthest reach), then the pairs of arcs that pass.
+    // arcs' farthest reach), then the pairs of arcs that pass: body j's
+    // arcs that pass, with their placed centres, once.
     let (bound_i, bound_j) = (bound_of(i), bound_of(j));
+    let near_j: Vec<(&OutlineArc, (f64, f64))> = j
+        .arcs
+        .iter()
+        .map(|arc_b| (arc_b, place(zj, arc_b.centre, j.size)))
+        .filter(|(arc_b, cb)| {
+            norm(r_ij[0] + cb.0, r_ij[1] + cb.1) - j.size * arc_b.radius <= bound_i + cut
+        })
+        .collect();
     for arc_a in i.arcs {
         let ca = place(zi, arc_a.centre, i.size);
         if norm(r_ij[0] - ca.0, r_ij[1] - ca.1) - i.size * arc_a.radius > bound_j + cut {
             continue;
         }
-        for arc_b in j.arcs {
-            let cb = place(zj, arc_b.centre, j.size);
-            if norm(r_ij[0] + cb.0, r_ij[1] + cb.1) - j.size * arc_b.radius > bound_i + cut {
-                continue;
-            }
+        for &(arc_b, cb) in &near_j {
             let apart = norm(r_ij[0] + cb.0 - ca.0, r_ij[1] + cb.1 - ca.1)
                 - i.size * arc_a.radius
                 - j.size * arc_b.radius;
@@ -751,7 +777,9 @@ fn refine<E: Fn(f64) -> Eval>(
             hi = x;
         }
         let newton = x - e.g1 / e.g2;
-        let is_newton = newton.is_finite() && newton > lo && newton < hi;
+        // Closed: a step below the spacing of floats lands on `x`, which is
+        // an end of the bracket.
+        let is_newton = newton.is_finite() && newton >= lo && newton <= hi;
         let next = if is_newton { newton } else { 0.5 * (lo + hi) };
         let step = (next - x).abs();
         x = next;
