@@ -45,14 +45,20 @@
 //! local minima of the depth along the overlap. A contact is born or dies
 //! where it merges with one of them: inside an arc pair at `k = 0` (a
 //! fold), or at an end of the normal range shared by two arc pairs (an
-//! inflection point). At `h < 0` its energy would go with it. So each
-//! overlapping saddle (`h_s < 0`) goes to the shallower of its neighbours
-//! among all stationary points of the pair, in order of the support
-//! point's polar angle on body `i`, that are contacts deeper than it; a
-//! contact with a saddle (the deepest, if given two) reports its
-//! prominence `h = h_c − h_s²/h_c` ([`ArcContact`]): `h_c` with its first
-//! derivatives when the saddle reaches `h_s = 0`, and 0 where the two
-//! merge.
+//! inflection point). At `h < 0` its energy would go with it. So the
+//! overlapping saddles (`h_s < 0`) are paired with contacts by the elder
+//! rule of persistence: along body `i`'s outline (the stationary points
+//! of the pair in order of the support point's polar angle), each contact
+//! starts a component of the overlap; the saddles, deepest first, join
+//! the components of their two neighbours (contacts deeper than them),
+//! and the component whose deepest contact is the shallower ends there,
+//! that contact taking the saddle. A contact with a saddle reports
+//! `h = −√(h_c² − h_s²)` ([`ArcContact`]), so that with the harmonic
+//! potential the pair's energy is `Σ h_c²/2 − Σ h_s²/2` over its contacts
+//! and paired saddles, whichever contact a saddle goes to: smooth where
+//! two contacts of one saddle change order in depth, continuous where a
+//! contact merges with its saddle (`h = 0`) and where a saddle leaves the
+//! overlap (`h_s = 0`, where `h = h_c`).
 //!
 //! ## The search
 //!
@@ -353,16 +359,16 @@ pub fn arc_support_unit<F: PolarOutline>(
 /// depth of the overlap is locally largest (`exact`), and the saddle it
 /// meets, if any: the neighbouring stationary point of the same arc pair
 /// where the depth is locally smallest, overlapping (`h_s < 0`) and
-/// shallower than the contact. With a saddle the contact's gap is its
-/// prominence
+/// shallower than the contact. With a saddle the contact's gap is
 ///
 /// ```text
-/// h = h_c − h_s²/h_c   (h_c ≤ h_s < 0),
+/// h = −√(h_c² − h_s²)   (h_c ≤ h_s < 0),
 /// ```
 ///
 /// which is `h_c` when the saddle reaches `h_s = 0` (first derivatives
 /// too) and 0 where the two merge (a fold, `h_s = h_c`), so that a contact
-/// leaving at a fold takes no energy with it.
+/// leaving at a fold takes no energy with it; with the harmonic potential
+/// its energy is `h_c²/2 − h_s²/2`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArcContact {
     /// The contact's common normal and support jets (sizes included).
@@ -372,15 +378,24 @@ pub struct ArcContact {
 }
 
 impl ArcContact {
-    /// The gap: `h_c`, or with a saddle `h_c − h_s²/h_c`.
+    /// The gap: `h_c`, or with a saddle `−√(h_c² − h_s²)` (0 where
+    /// rounding puts the saddle deeper).
     pub fn gap(&self) -> f64 {
         match self.saddle {
             None => self.exact.gap,
             Some(s) => {
                 let (c, a) = (self.exact.gap, s.gap);
-                c - a * a / c
+                -(c * c - a * a).max(0.0).sqrt()
             }
         }
+    }
+
+    /// `√(h_c² − h_s²)` of a contact with a saddle, or `None` where the two
+    /// have merged to rounding (gap 0, and so no force: the derivatives of
+    /// `h_c` stand in for the gap's).
+    fn merged(c: f64, a: f64) -> Option<f64> {
+        let q = c * c - a * a;
+        (q > 0.0).then(|| q.sqrt())
     }
 
     /// The gap and its first derivatives.
@@ -391,7 +406,10 @@ impl ArcContact {
         };
         let a = s.contact();
         let (hc, ha) = (c.gap, a.gap);
-        let (fc, fa) = (1.0 + ha * ha / (hc * hc), -2.0 * ha / hc);
+        let Some(root) = Self::merged(hc, ha) else {
+            return Contact { gap: 0.0, ..c };
+        };
+        let (fc, fa) = (-hc / root, ha / root);
         Contact {
             gap: self.gap(),
             grad_r: c.grad_r * fc + a.grad_r * fa,
@@ -409,8 +427,14 @@ impl ArcContact {
         };
         let ha = s.hessian_signed();
         let (c, a) = (hc.contact.gap, ha.contact.gap);
-        let (fc, fa) = (1.0 + a * a / (c * c), -2.0 * a / c);
-        let (fcc, faa, fca) = (-2.0 * a * a / (c * c * c), -2.0 / c, 2.0 * a / (c * c));
+        let Some(root) = Self::merged(c, a) else {
+            let mut g = hc;
+            g.contact.gap = 0.0;
+            return g;
+        };
+        let cube = root * root * root;
+        let (fc, fa) = (-c / root, a / root);
+        let (fcc, faa, fca) = (a * a / cube, c * c / cube, -c * a / cube);
         let (mc, ma) = (as_matrix(&hc), as_matrix(&ha));
         let (gc, ga) = (as_gradient(&hc.contact), as_gradient(&ha.contact));
         let mut m = [[0.0; 4]; 4];
@@ -517,26 +541,56 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
             pair_of_arcs(i, arc_a, j, arc_b, r_ij, &mut found);
         }
     }
-    // Each saddle goes to the shallower of its neighbours along body i's
-    // outline (by the polar angle of the support point, around the circle)
-    // that are contacts deeper than it; each contact keeps the deepest
-    // saddle it is given.
+    // The elder rule (module documentation): along body i's outline (by
+    // the polar angle of the support point, around the circle) each
+    // contact starts a component; the saddles, deepest first, join the
+    // components of their neighbours that are contacts deeper than them,
+    // and the deepest contact of the one whose deepest is the shallower
+    // takes the saddle. A saddle with one such neighbour goes to it if it
+    // has none; one whose neighbours are already joined goes to none.
     found.sort_by(|a, b| a.phi_i.total_cmp(&b.phi_i));
     let m = found.len();
+    let gap = |k: usize| found[k].exact.gap;
     let mut saddle: Vec<Option<usize>> = vec![None; m];
-    for s in 0..m {
-        if found[s].contact {
-            continue;
+    // Union-find over the stationary points, with each root's deepest contact.
+    let (mut parent, mut deepest): (Vec<usize>, Vec<usize>) = ((0..m).collect(), (0..m).collect());
+    fn root(parent: &mut [usize], mut k: usize) -> usize {
+        while parent[k] != k {
+            parent[k] = parent[parent[k]];
+            k = parent[k];
         }
-        let h_s = found[s].exact.gap;
-        let partner = [(s + m - 1) % m, (s + 1) % m]
+        k
+    }
+    let mut saddles: Vec<usize> = (0..m).filter(|&k| !found[k].contact).collect();
+    saddles.sort_by(|&a, &b| gap(a).total_cmp(&gap(b)));
+    for s in saddles {
+        let sides: Vec<usize> = [(s + m - 1) % m, (s + 1) % m]
             .into_iter()
-            .filter(|&c| found[c].contact && found[c].exact.gap < h_s)
-            .max_by(|&a, &b| found[a].exact.gap.total_cmp(&found[b].exact.gap));
-        if let Some(c) = partner
-            && saddle[c].is_none_or(|t| found[t].exact.gap > h_s)
-        {
-            saddle[c] = Some(s);
+            .filter(|&c| found[c].contact && gap(c) < gap(s))
+            .collect();
+        match sides[..] {
+            [l, r] if l != r => {
+                let (rl, rr) = (root(&mut parent, l), root(&mut parent, r));
+                if rl == rr {
+                    continue;
+                }
+                let (young, old) = if gap(deepest[rl]) > gap(deepest[rr]) {
+                    (rl, rr)
+                } else {
+                    (rr, rl)
+                };
+                let c = deepest[young];
+                if saddle[c].is_none() {
+                    saddle[c] = Some(s);
+                }
+                parent[young] = old;
+            }
+            [c] | [c, _] => {
+                if saddle[c].is_none() {
+                    saddle[c] = Some(s);
+                }
+            }
+            _ => {}
         }
     }
     for (c, f) in found.iter().enumerate() {
