@@ -552,8 +552,9 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
     let m = found.len();
     let gap = |k: usize| found[k].exact.gap;
     let mut saddle: Vec<Option<usize>> = vec![None; m];
-    // Union-find over the stationary points, with each root's deepest contact.
-    let (mut parent, mut deepest): (Vec<usize>, Vec<usize>) = ((0..m).collect(), (0..m).collect());
+    // Union-find over the stationary points; a component's root is its
+    // deepest contact (the older root stays the root).
+    let mut parent: Vec<usize> = (0..m).collect();
     fn root(parent: &mut [usize], mut k: usize) -> usize {
         while parent[k] != k {
             parent[k] = parent[parent[k]];
@@ -574,22 +575,17 @@ pub fn arc_contacts<F: PolarOutline, G: PolarOutline, V: FnMut(ArcContact)>(
                 if rl == rr {
                     continue;
                 }
-                let (young, old) = if gap(deepest[rl]) > gap(deepest[rr]) {
+                let (young, old) = if gap(rl) > gap(rr) {
                     (rl, rr)
                 } else {
                     (rr, rl)
                 };
-                let c = deepest[young];
-                if saddle[c].is_none() {
-                    saddle[c] = Some(s);
+                if saddle[young].is_none() {
+                    saddle[young] = Some(s);
                 }
                 parent[young] = old;
             }
-            [c] | [c, _] => {
-                if saddle[c].is_none() {
-                    saddle[c] = Some(s);
-                }
-            }
+            [c] | [c, _] if saddle[c].is_none() => saddle[c] = Some(s),
             _ => {}
         }
     }
