@@ -386,16 +386,25 @@ fn energy_is_continuous_as_contacts_come_and_go() {
 /// where the contact of arcs 20 (concave) and 11 (convex) meets the saddle
 /// of the same arcs at `t ≈ 0.14`, `h ≈ −6.1·10⁻⁴`, and leaves (a fold).
 fn fold_path(t: f64) -> Config {
-    let (th0, th1) = ([-1.240604858, -2.812204518], [-1.240686550, -2.812325416]);
-    let (r0, r1) = (
-        [-1.277477671288, 0.557135519072],
-        [-1.277439931465, 0.557253542028],
-    );
-    let at = |a: f64, b: f64| a + t * (b - a);
+    segment(
+        [[-1.240604858, -2.812204518], [-1.240686550, -2.812325416]],
+        [
+            [-1.277477671288, 0.557135519072],
+            [-1.277439931465, 0.557253542028],
+        ],
+        t,
+    )
+}
+
+/// Two bodies of size 0.7 moved along a straight segment of their
+/// coordinates, from `theta[0]`, `r[0]` at `t = 0` to `theta[1]`, `r[1]`
+/// at `t = 1`.
+fn segment(theta: [[f64; 2]; 2], r: [[f64; 2]; 2], t: f64) -> Config {
+    let at = |k: usize, v: &[[f64; 2]; 2]| v[0][k] + t * (v[1][k] - v[0][k]);
     Config {
         size: [0.7, 0.7],
-        theta: [at(th0[0], th1[0]), at(th0[1], th1[1])],
-        r: [at(r0[0], r1[0]), at(r0[1], r1[1])],
+        theta: [at(0, &theta), at(1, &theta)],
+        r: [at(0, &r), at(1, &r)],
     }
 }
 
@@ -444,17 +453,14 @@ fn energy_is_continuous_through_a_fold() {
 /// the ends, with a saddle ~1.2·10⁻³ deep between them, become equally
 /// deep (their order in depth changes).
 fn crossing_path(t: f64) -> Config {
-    let (th0, th1) = ([-1.344702222, 1.404168162], [-1.344737662, 1.404581621]);
-    let (r0, r1) = (
-        [-0.676838869520, -1.216811736086],
-        [-0.676914106312, -1.216800208051],
-    );
-    let at = |a: f64, b: f64| a + t * (b - a);
-    Config {
-        size: [0.7, 0.7],
-        theta: [at(th0[0], th1[0]), at(th0[1], th1[1])],
-        r: [at(r0[0], r1[0]), at(r0[1], r1[1])],
-    }
+    segment(
+        [[-1.344702222, 1.404168162], [-1.344737662, 1.404581621]],
+        [
+            [-0.676838869520, -1.216811736086],
+            [-0.676914106312, -1.216800208051],
+        ],
+        t,
+    )
 }
 
 /// Along [`crossing_path`] (1000 steps) the harmonic energy Σ h²/2
