@@ -383,10 +383,7 @@ impl ArcContact {
     pub fn gap(&self) -> f64 {
         match self.saddle {
             None => self.exact.gap,
-            Some(s) => {
-                let (c, a) = (self.exact.gap, s.gap);
-                -(c * c - a * a).max(0.0).sqrt()
-            }
+            Some(s) => Self::merged(self.exact.gap, s.gap).map_or(0.0, |root| -root),
         }
     }
 
@@ -411,7 +408,7 @@ impl ArcContact {
         };
         let (fc, fa) = (-hc / root, ha / root);
         Contact {
-            gap: self.gap(),
+            gap: -root,
             grad_r: c.grad_r * fc + a.grad_r * fa,
             grad_rot_i: [fc * c.grad_rot_i[0] + fa * a.grad_rot_i[0], 0.0, 0.0],
             grad_rot_j: [fc * c.grad_rot_j[0] + fa * a.grad_rot_j[0], 0.0, 0.0],
