@@ -7,9 +7,11 @@
 //! * the contacts of every pair, by count and gap: a pair whose number of
 //!   overlapping contacts changes, or whose deepest gap jumps, between two
 //!   evaluations;
-//! * in the `jam` mode, on a step that misses the trapezoid by more than
-//!   a tenth of its `ΔV`: the two pairs whose own `ΔV` misses the
-//!   trapezoid of their own gradient most, with their contacts.
+//! * on a step that misses the trapezoid by more than a tenth of its `ΔV`
+//!   (`fourier` near-disks): the pairs whose contacts changed, with their
+//!   contacts and, from a file, every stationary point of their arcs by
+//!   brute force; in the `jam` mode also the two pairs whose own `ΔV`
+//!   misses the trapezoid of their own gradient most.
 //!
 //! ```sh
 //! cargo run --release --example trace_fire -- out/x/packings/ID.failed.json [STEPS]
@@ -279,7 +281,21 @@ impl PackingVisitor for Trace {
             max_steps: self.steps,
             ..self.settings.for_family(&scene.packing().shape)
         });
-        let (out, calls, events, worst) = traced(&mut fire, &mut scene, true, None, None);
+        // Fourier near-disks: the contacts of a pair that jumps, and its
+        // stationary points by a dense scan.
+        let fourier = (&scene.packing().shape as &dyn std::any::Any)
+            .downcast_ref::<jamkit_fourier::NearDisk>()
+            .map(|s| s.profiled().clone());
+        let explain = move |p: &Pair<D, S::Orientation>| -> String {
+            match (
+                &fourier,
+                (p as &dyn std::any::Any).downcast_ref::<Pair<2, jamkit_fourier::Angle>>(),
+            ) {
+                (Some(s), Some(p)) => format!("{}\n    scan:{}", describe(s, p), scan(s, p)),
+                _ => String::new(),
+            }
+        };
+        let (out, calls, events, worst) = traced(&mut fire, &mut scene, true, Some(&explain), None);
         println!("{calls} evaluations, {events} with contact changes; largest |ΔV − trapezoid|:");
         for (err, k, s) in worst.iter().take(10) {
             println!("  eval {k}: {err:.3e} ({s})");
@@ -422,6 +438,48 @@ fn trapezoid_miss(
     ];
     let pred: f64 = (0..4).map(|k| 0.5 * (ga[k] + gb[k]) * dq[k]).sum();
     (vb - va) - pred
+}
+
+/// Every stationary point with `h < 0` of every pair of arcs, by brute
+/// force ([`jamkit_planar::arcs::scan_stationary`], 2·10⁵ cells around the
+/// circle): `C` a contact, `S` a saddle; arc indices, gap and ψ.
+fn scan(
+    s: &jamkit_planar::profiled::Profiled<jamkit_fourier::FourierProfile, jamkit_fourier::Angle>,
+    p: &Pair<2, jamkit_fourier::Angle>,
+) -> String {
+    let arcs = s.arcs().unwrap_or(&[]);
+    let outline = |u: (f64, f64)| s.unit_outline(u);
+    let body = |size: f64, o: &jamkit_fourier::Angle| {
+        let (c, si) = o.unit();
+        jamkit_planar::arcs::ArcBody {
+            arcs,
+            outline: &outline,
+            size,
+            theta: si.atan2(c),
+        }
+    };
+    let sign = |arc: usize| if arcs[arc].convex { "+" } else { "-" };
+    jamkit_planar::arcs::scan_stationary(
+        &body(p.size_i, &p.o_i),
+        &body(p.size_j, &p.o_j),
+        &p.r_ij,
+        (0.0, std::f64::consts::TAU),
+        200_000,
+    )
+    .iter()
+    .map(|q| {
+        format!(
+            " [{} {}{}|{}{} h {:.4e} ψ {:.6}]",
+            if q.contact { "C" } else { "S" },
+            q.arc_i,
+            sign(q.arc_i),
+            q.arc_j,
+            sign(q.arc_j),
+            q.gap,
+            q.psi
+        )
+    })
+    .collect()
 }
 
 /// Every contact of a pair: the arcs' (arc indices, convex or concave,

@@ -77,9 +77,14 @@
 //! turns it towards zero (a tip touching both flanks of a valley puts two
 //! stationary points in one cell) is searched for the extremum of `g_AB'`;
 //! where `g_AB'` changes sign there, both stationary points are refined.
-//! Three stationary points within one cell (`g_AB''` changing sign twice)
-//! can lose two. Each support point starts from the arc's table
-//! ([`OutlineArc::table`], computed once per shape).
+//! A cell where both keep their signs but the cubic through `g_AB'` and
+//! `g_AB''` at its ends turns twice inside and comes near zero there
+//! (within a quarter of the smaller end value: two extrema of `g_AB'`,
+//! which may hide two stationary points, as when three lie within
+//! 0.1 rad) is halved, down to cells of 10⁻⁶ rad. Each support point starts from the
+//! arc's table ([`OutlineArc::table`], computed once per shape).
+//! [`scan_stationary`] finds the stationary points by brute force, the
+//! check of this search.
 
 use crate::gap2d::{ExactGap, SupportJet};
 use jamkit_core::math::{Unit, Vector, cmul, turn_unit, unit_of_angle};
@@ -698,14 +703,15 @@ fn piece<F: PolarOutline, G: PolarOutline>(
     // stationary at an inflection point): the grid is uniform in u with
     // ψ = lo + (hi − lo)(3u² − 2u³), in which it moves smoothly.
     let cells = ((hi - lo) / 0.1).ceil().max(4.0) as usize;
-    let at = |k: usize| {
-        let u = k as f64 / cells as f64;
-        if k == cells {
+    let at = |u: f64| {
+        if u >= 1.0 {
             hi
         } else {
             lo + (hi - lo) * u * u * (3.0 - 2.0 * u)
         }
     };
+    // dψ/du.
+    let rate = |u: f64| (hi - lo) * 6.0 * u * (1.0 - u);
     let inside = |phi: f64, arc: &OutlineArc| phi >= arc.phi.0 && phi < arc.phi.1;
     // The contacts (those above `max_gap` too: they are neighbours in the
     // pairing of saddles) and the saddles (`k ρ_A ρ_B < 0`) with `h < 0`.
@@ -739,25 +745,80 @@ fn piece<F: PolarOutline, G: PolarOutline>(
             }
         }
     };
+    // A cell: a root of `g'` where it changes sign; two where it has the
+    // same sign at both ends and one extremum inside turns it towards the
+    // other sign (then `g''` changes sign); and where `g''` keeps its sign
+    // too but the cubic through `g'` and its slope in `u` at the ends turns
+    // twice inside and comes near zero, two extrema may hide two roots: the
+    // cell is halved in `u` (down to [`MIN_CELL`] in ψ).
+    let mut stack = Vec::new();
     let mut left = eval(lo);
-    let mut x0 = lo;
     for k in 1..=cells {
-        let x1 = at(k);
-        let right = eval(x1);
-        if (left.g1 > 0.0) != (right.g1 > 0.0) {
-            root(x0, left.g1, x1, right.g1);
-        } else if (left.g2 > 0.0) != (right.g2 > 0.0) && (left.g2 > 0.0) != (left.g1 > 0.0) {
-            // `g'` has the same sign at both ends and an extremum inside
-            // that turns it towards the other sign: where it crosses, two
-            // stationary points share the cell.
-            if let Some((xm, fm)) = crossing(&eval, (x0, left.g2), (x1, right.g2), left.g1 > 0.0) {
-                root(x0, left.g1, xm, fm);
-                root(xm, fm, x1, right.g1);
+        let u1 = k as f64 / cells as f64;
+        stack.push(((k - 1) as f64 / cells as f64, u1, eval(at(u1))));
+        while let Some((ua, ub, end)) = stack.pop() {
+            let (a, b, start) = (at(ua), at(ub), &left);
+            if (start.g1 > 0.0) != (end.g1 > 0.0) {
+                root(a, start.g1, b, end.g1);
+            } else if (start.g2 > 0.0) != (end.g2 > 0.0) {
+                if (start.g2 > 0.0) != (start.g1 > 0.0)
+                    && let Some((xm, fm)) =
+                        crossing(&eval, (a, start.g2), (b, end.g2), start.g1 > 0.0)
+                {
+                    root(a, start.g1, xm, fm);
+                    root(xm, fm, b, end.g1);
+                }
+            } else if b - a > MIN_CELL
+                && may_cross(
+                    ub - ua,
+                    (start.g1, start.g2 * rate(ua)),
+                    (end.g1, end.g2 * rate(ub)),
+                )
+            {
+                let um = 0.5 * (ua + ub);
+                stack.push((um, ub, end));
+                stack.push((ua, um, eval(at(um))));
+                continue;
             }
+            left = end;
         }
-        left = right;
-        x0 = x1;
     }
+}
+
+/// The narrowest cell [`piece`] halves, in radians of ψ.
+const MIN_CELL: f64 = 1e-6;
+
+/// Whether the cubic through `g'` and its slope at the two ends of a cell
+/// of width `w` in `u` (`(g', dg'/du)` at each end, both of one sign at
+/// the two ends) comes near the other sign of `g'` inside: at one of its
+/// two turns (the roots in `(0, 1)` of its slope, a quadratic in `t`), it
+/// has the other sign or lies within a quarter of the smaller end value of
+/// zero. In `u` the slope stays finite at a piece's ends, where `g''` of
+/// `ψ` does not.
+fn may_cross(w: f64, (p0, d0): (f64, f64), (p1, d1): (f64, f64)) -> bool {
+    let (m0, m1) = (w * d0, w * d1);
+    let a = 6.0 * (p0 - p1) + 3.0 * (m0 + m1);
+    let b = 6.0 * (p1 - p0) - 4.0 * m0 - 2.0 * m1;
+    let disc = b * b - 4.0 * a * m0;
+    if a == 0.0 || !(disc > 0.0) {
+        return false;
+    }
+    let near = 0.25 * p0.abs().min(p1.abs());
+    let cubic = |t: f64| {
+        let (t2, t3) = (t * t, t * t * t);
+        (2.0 * t3 - 3.0 * t2 + 1.0) * p0
+            + (t3 - 2.0 * t2 + t) * m0
+            + (3.0 * t2 - 2.0 * t3) * p1
+            + (t3 - t2) * m1
+    };
+    let root = disc.sqrt();
+    [(-b - root) / (2.0 * a), (-b + root) / (2.0 * a)]
+        .into_iter()
+        .filter(|t| *t > 0.0 && *t < 1.0)
+        .any(|t| {
+            let c = cubic(t);
+            (c > 0.0) != (p0 > 0.0) || c.abs() < near
+        })
 }
 
 /// In a cell where `g'` has the sign `positive` at both ends and `g''`
@@ -836,4 +897,108 @@ fn refine<E: Fn(f64) -> Eval>(
         }
     }
     None
+}
+
+/// A stationary point found by [`scan_stationary`]: the arcs (indices in
+/// each body's list), the normal angle `ψ`, the signed distance `h` and
+/// whether it is a contact (`k ρ_A ρ_B > 0`) or a saddle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scanned {
+    /// Body `i`'s arc.
+    pub arc_i: usize,
+    /// Body `j`'s arc.
+    pub arc_j: usize,
+    /// `ψ`.
+    pub psi: f64,
+    /// `g_AB(ψ)`.
+    pub gap: f64,
+    /// A contact, else a saddle.
+    pub contact: bool,
+}
+
+/// Every stationary point with `h < 0` of every pair of arcs of bodies `i`
+/// and `j` with `ψ` in `[from, to]`, by brute force: `g_AB'` on `cells`
+/// equal cells of `ψ` (each arc's support point by [`arc_support`]), every
+/// sign change bisected to the spacing of floats. Slow (`cells` times the
+/// arcs that reach each `ψ`), and independent of [`arc_contacts`]' grid,
+/// cubic test and pairing: the check of its search, for tests and
+/// diagnostics. Deep stationary points of arcs facing away from each other
+/// (`h` below `−reach` of [`arc_contacts`]) are listed too.
+pub fn scan_stationary<F: PolarOutline, G: PolarOutline>(
+    i: &ArcBody<'_, F>,
+    j: &ArcBody<'_, G>,
+    r_ij: &Vector<2>,
+    (from, to): (f64, f64),
+    cells: usize,
+) -> Vec<Scanned> {
+    // β within an arc's normal range (mod 2π), if it is.
+    let within = |arc: &OutlineArc, beta: f64| {
+        let (lo, hi) = arc.normal_range();
+        let b = lo + (beta - lo).rem_euclid(TAU);
+        (b <= hi).then_some(b)
+    };
+    // (g, g', g'', sign of ρ_A ρ_B) of arcs a, b at ψ, where both reach it.
+    let eval = |a: usize, b: usize, psi: f64| {
+        let (a, b) = (&i.arcs[a], &j.arcs[b]);
+        let (_, ja) = arc_support(a, within(a, psi - i.theta)?, i.outline);
+        let (_, jb) = arc_support(b, within(b, psi + PI - j.theta)?, j.outline);
+        let (s, c) = psi.sin_cos();
+        let along = r_ij[0] * c + r_ij[1] * s;
+        Some((
+            along - i.size * ja.h - j.size * jb.h,
+            -r_ij[0] * s + r_ij[1] * c - i.size * ja.d1 - j.size * jb.d1,
+            -along - i.size * ja.d2 - j.size * jb.d2,
+            (ja.h + ja.d2).signum() * (jb.h + jb.d2).signum(),
+        ))
+    };
+    let nj = j.arcs.len();
+    // `(ψ, g')` of each arc pair at the last cell edge it reached.
+    let mut last: Vec<Option<(f64, f64)>> = vec![None; i.arcs.len() * nj];
+    let mut out = Vec::new();
+    for k in 0..=cells {
+        let psi = from + (to - from) * k as f64 / cells as f64;
+        let reach_i: Vec<usize> = (0..i.arcs.len())
+            .filter(|&a| within(&i.arcs[a], psi - i.theta).is_some())
+            .collect();
+        let reach_j: Vec<usize> = (0..nj)
+            .filter(|&b| within(&j.arcs[b], psi + PI - j.theta).is_some())
+            .collect();
+        let mut now = vec![None; last.len()];
+        for &a in &reach_i {
+            for &b in &reach_j {
+                let Some((_, g1, _, _)) = eval(a, b, psi) else {
+                    continue;
+                };
+                now[a * nj + b] = Some((psi, g1));
+                let Some((x0, f0)) = last[a * nj + b] else {
+                    continue;
+                };
+                if (f0 > 0.0) == (g1 > 0.0) {
+                    continue;
+                }
+                let (mut lo, mut hi) = (x0, psi);
+                for _ in 0..64 {
+                    let m = 0.5 * (lo + hi);
+                    match eval(a, b, m) {
+                        Some((_, fm, _, _)) if (fm > 0.0) == (f0 > 0.0) => lo = m,
+                        _ => hi = m,
+                    }
+                }
+                let psi = 0.5 * (lo + hi);
+                if let Some((gap, _, g2, rho)) = eval(a, b, psi)
+                    && gap < 0.0
+                {
+                    out.push(Scanned {
+                        arc_i: a,
+                        arc_j: b,
+                        psi,
+                        gap,
+                        contact: -g2 * rho > 0.0,
+                    });
+                }
+            }
+        }
+        last = now;
+    }
+    out
 }

@@ -728,3 +728,155 @@ fn deep_overlaps_keep_a_contact() {
     }
     assert!(cores > 200, "{cores} pairs with overlapping cores");
 }
+
+/// A step of FIRE in a compressed packing of n = 16, Δ = 0.2 (bodies of
+/// sizes 0.5 and 0.7, N = 64 at φ = 0.834), stretched to `t ∈ [−1, 2]`:
+/// arcs 0 (concave) and 31 (convex) meet at three stationary points within
+/// 0.11 rad of the normal, a contact (h = −5.309·10⁻⁴), a saddle
+/// (−5.288·10⁻⁴) and a deeper contact (−5.325·10⁻⁴), a dense scan of
+/// `g'(ψ)` finds them all along the path.
+fn three_points_path(t: f64) -> Config {
+    let at = |a: f64, b: f64| a + t * (b - a);
+    Config {
+        size: [0.5, 0.7],
+        theta: [at(-1.585540141, -1.585540236), at(1.923808048, 1.923807993)],
+        r: [
+            at(0.189019904292, 0.189019971946),
+            at(-1.182520975070, -1.182520977815),
+        ],
+    }
+}
+
+/// Where three stationary points of one pair of arcs lie closer together
+/// than the search's cells ([`three_points_path`]), all three are found
+/// at every point of the path: two overlapping contacts throughout (the
+/// shallower with the saddle) and the harmonic energy within the
+/// trapezoid rule, step by step (3000 steps; the energy is ~1.4·10⁻⁷,
+/// its change per step ~10⁻¹⁴, a missed contact and saddle jump by
+/// ≈ 2·10⁻⁹), to 10⁻¹⁵.
+#[test]
+fn close_stationary_points_of_one_arc_pair_are_all_found() {
+    let s = fourier(16, 0.2, GapModel::Exact);
+    let steps = 3000;
+    let dt = 3.0 / steps as f64;
+    let mut prev = harmonic_along(&s, &three_points_path, -1.0);
+    let mut worst: f64 = 0.0;
+    for k in 0..=steps {
+        let t = -1.0 + k as f64 * dt;
+        let cur = harmonic_along(&s, &three_points_path, t);
+        assert_eq!(cur.2, 2, "two overlapping contacts at t = {t}");
+        if k > 0 {
+            let miss = (cur.0 - prev.0) - 0.5 * (cur.1 + prev.1) * dt;
+            worst = worst.max(miss.abs());
+        }
+        prev = cur;
+    }
+    eprintln!("largest miss of the trapezoid rule: {worst:e}");
+    assert!(
+        worst < 1e-15,
+        "largest miss of the trapezoid rule {worst:e}"
+    );
+}
+
+/// The search of `arc_contacts` against brute force
+/// ([`jamkit_planar::arcs::scan_stationary`] within 1.2 rad of the line
+/// of centres, 6000 cells of ψ, each sign change of `g'` bisected to the
+/// spacing of floats) on random pairs of n = 16, Δ = 0.2 and n = 8,
+/// Δ = 0.3, lobes interlocked up to a lobe and a half deep, and a small
+/// body in the valley of a large one: the same overlapping contacts, gap for gap to 10⁻⁹
+/// (both refine to ~10⁻¹⁶), and every saddle it pairs is one the scan
+/// finds. Stationary points deeper than half the search's reach (arcs
+/// facing away) are left out of the comparison, and so are pairs where
+/// the scan's cells cannot separate two stationary points of one arc pair
+/// (closer than 10 cells in ψ: a contact at its fold).
+#[test]
+fn contacts_agree_with_a_brute_force_scan() {
+    let mut rng = Uniform(17);
+    for &(n, delta) in &[(16u32, 0.2), (8, 0.3)] {
+        let s = fourier(n, delta, GapModel::Exact);
+        let profiled = s.profiled();
+        let arcs = profiled.arcs().expect("a non-convex outline");
+        let outline = |u: (f64, f64)| profiled.unit_outline(u);
+        let (cells, wide) = (6000, 1.2);
+        let (mut compared, mut several, mut with_saddle) = (0, 0, 0);
+        for k in 0..40 {
+            let c = if k % 2 == 0 {
+                Config::random(&mut rng, n, delta, 1.5)
+            } else {
+                Config::in_valley(&mut rng, n, delta)
+            };
+            let body = |k: usize| jamkit_planar::arcs::ArcBody {
+                arcs,
+                outline: &outline,
+                size: c.size[k],
+                theta: c.theta[k],
+            };
+            let reach = delta * (2.0 / n as f64) * (c.size[0] + c.size[1]);
+            let r = Vector::<2>::new(c.r[0], c.r[1]);
+            let line = c.r[1].atan2(c.r[0]);
+            let scanned: Vec<_> = jamkit_planar::arcs::scan_stationary(
+                &body(0),
+                &body(1),
+                &r,
+                (line - wide, line + wide),
+                cells,
+            )
+            .into_iter()
+            .filter(|p| p.gap > -0.5 * reach)
+            .collect();
+            let unresolved = scanned.iter().enumerate().any(|(a, p)| {
+                scanned[a + 1..].iter().any(|q| {
+                    (p.arc_i, p.arc_j) == (q.arc_i, q.arc_j)
+                        && (p.psi - q.psi).abs() < 10.0 * 2.0 * wide / cells as f64
+                })
+            });
+            if unresolved {
+                continue;
+            }
+            let mut found = Vec::new();
+            let mut saddles = Vec::new();
+            profiled.arc_contacts(&c.pair(), 0.0, None, &mut |ac| {
+                if ac.exact.gap > -0.5 * reach {
+                    found.push(ac.exact.gap);
+                }
+                saddles.extend(ac.saddle.map(|sd| sd.gap));
+            });
+            let mut want: Vec<f64> = scanned
+                .iter()
+                .filter(|p| p.contact)
+                .map(|p| p.gap)
+                .collect();
+            found.sort_by(f64::total_cmp);
+            want.sort_by(f64::total_cmp);
+            assert_eq!(
+                found.len(),
+                want.len(),
+                "n = {n}, {c:?}: {found:?} against {want:?}"
+            );
+            for (a, b) in found.iter().zip(&want) {
+                assert!(
+                    (a - b).abs() < 1e-9,
+                    "n = {n}, {c:?}: {found:?} against {want:?}"
+                );
+            }
+            for sd in &saddles {
+                assert!(
+                    scanned
+                        .iter()
+                        .any(|p| !p.contact && (p.gap - sd).abs() < 1e-9),
+                    "n = {n}, {c:?}: saddle {sd} not among {scanned:?}"
+                );
+            }
+            compared += 1;
+            several += usize::from(found.len() > 1);
+            with_saddle += usize::from(!saddles.is_empty());
+        }
+        eprintln!(
+            "n = {n}: {compared} pairs compared, {several} with several contacts, {with_saddle} with saddles"
+        );
+        assert!(
+            compared >= 30 && several >= 5,
+            "n = {n}: {compared} pairs, {several} with several contacts"
+        );
+    }
+}
