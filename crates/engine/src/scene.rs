@@ -356,10 +356,10 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     /// order, `V += v(h)`, `g_j += v' ∂h/∂q_j`, and `g_i += v' ∂h/∂q_i` in
     /// registers until `i`'s partners end (added to `g_i` then). Each pair's
     /// contacts come from [`Shape::contacts_warm`] with its memo in `memos`
-    /// (one per listed pair); with `lanes`, the pairs of a chunk whose
-    /// bounding balls overlap go to the family together, with their memos
-    /// ([`FastContacts::contacts_warm_lanes`], the same contacts bit for
-    /// bit, in the same order).
+    /// (one per listed pair); with `lanes` (the family's scratch), the
+    /// pairs whose bounding balls overlap go to the family a chunk of them
+    /// at a time, with their memos ([`FastContacts::contacts_warm_lanes`]:
+    /// the same contacts bit for bit, summed in the same order).
     ///
     /// NOTE: one pass that summed inside the family's callback kept `V` and
     /// `g_i` on the stack (a store-to-load latency per pair) and made the
@@ -373,7 +373,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         grad: &mut [f64],
         found: &mut Vec<(u32, Contact<D>)>,
         memos: &mut [PairMemo],
-        mut lanes: Option<&mut Vec<[f64; CHUNK]>>,
+        lanes: Option<&mut Vec<[f64; CHUNK]>>,
     ) -> f64 {
         grad.fill(0.0);
         let p = &self.packing;
@@ -392,8 +392,8 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         let mut owner = usize::MAX;
         let mut gi_r = Vector::<D>::zeros();
         let mut gi_q = [0.0; jamkit_core::MAX_ROT];
-        // The chunk's pairs within reach and their places in the list, for
-        // `lanes`.
+        // With `lanes`: a batch of pairs within reach and their places in
+        // the list.
         let o = S::Orientation::reference();
         let mut batch = PairLanes::<D, S::Orientation, CHUNK> {
             size_i: [0.0; CHUNK],
@@ -407,11 +407,15 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         };
         let mut batch_at = [0u32; CHUNK];
         let mut batch_out = ContactLanes::<D, CHUNK>::default();
-        for start in (0..partners.len()).step_by(CHUNK) {
-            let end = (start + CHUNK).min(partners.len());
-            if let Some(scratch) = lanes.as_deref_mut() {
+        if let Some(scratch) = lanes {
+            // Batches of `CHUNK` pairs within reach (the last one shorter),
+            // in list order.
+            let mut next = 0;
+            while next < partners.len() {
                 let mut len = 0;
-                for pair in start..end {
+                while next < partners.len() && len < CHUNK {
+                    let pair = next;
+                    next += 1;
                     let (i, j) = (owners[pair] as usize, partners[pair] as usize);
                     let d = p.bbox.minimum_image(positions[j] - positions[i]);
                     let cut = reach[i] + reach[j];
@@ -446,8 +450,14 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
                     (k, grad),
                     (energy, owner, gi_r, gi_q),
                 );
-                continue;
             }
+            if owner != usize::MAX {
+                add_body(grad, owner, stride, &gi_r, &gi_q);
+            }
+            return energy;
+        }
+        for start in (0..partners.len()).step_by(CHUNK) {
+            let end = (start + CHUNK).min(partners.len());
             found.clear();
             for pair in start..end {
                 let (i, j) = (owners[pair] as usize, partners[pair] as usize);

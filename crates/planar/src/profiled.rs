@@ -706,23 +706,39 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             for k in 0..6 {
                 s[M + k][l] = kept[k];
             }
-            // Where the pair stands after the step, and the pair.
+            // Where the pair stands after the step.
             let now = [
                 w0.0, w0.1, e_i.0, e_i.1, e_j.0, e_j.1, js.step[0], js.step[1], js.step[2], js.len,
-                u.0, u.1, x, y, r, size_i, size_j, z_i.0, z_i.1, z_j.0, z_j.1,
+                u.0, u.1,
             ];
             for (k, x) in now.into_iter().enumerate() {
                 s[GO + k][l] = x;
             }
         }
         // The going-on lanes, gathered into the first `count` (their
-        // lanes in `origin`).
+        // lanes in `origin`), with their pairs: `GO + 12..` hold `x`, `y`,
+        // `r`, `R⁰_i`, `R⁰_j`, `e^{iθ_i}`, `e^{iθ_j}`.
         let mut origin = [0usize; W];
         let mut count = 0;
         for l in 0..len {
             if state[l] == 3 {
-                for a in &mut s[GO..FOUND] {
+                for a in &mut s[GO..GO + 12] {
                     a[count] = a[l];
+                }
+                let (z_i, z_j) = (pairs.o_i[l].unit(), pairs.o_j[l].unit());
+                let pair = [
+                    pairs.r_ij[0][l],
+                    pairs.r_ij[1][l],
+                    pairs.r2[l].sqrt(),
+                    pairs.size_i[l],
+                    pairs.size_j[l],
+                    z_i.0,
+                    z_i.1,
+                    z_j.0,
+                    z_j.1,
+                ];
+                for (k, x) in pair.into_iter().enumerate() {
+                    s[GO + 12 + k][count] = x;
                 }
                 origin[count] = l;
                 count += 1;
