@@ -561,11 +561,11 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
     /// `memos[at[l]]` and leaves in it what that call leaves, bit for bit.
     /// `value_slope` maps `e^{iA}` to `(P, P')` and `jet` to
     /// `[P, P', P'', P‴]`, bit for bit the profile's; `scratch` is any
-    /// vector (it grows to [`SCRATCH`] arrays).
+    /// vector (it grows to 38 arrays).
     ///
     /// A pass over the lanes with no branch computes the bounding test, the
     /// first-order screen and the joint iteration's first step from the
-    /// memo ([`gap2d::joint_step`]), each the same operations in the same
+    /// memo (`gap2d::joint_step`), each the same operations in the same
     /// order as [`Profiled::exact_solve_warm`]; the pairs that go on take
     /// their further steps side by side, gathered into the first lanes, up
     /// to [`WARM_LANE_STEPS`] steps in all. The pairs that these steps do
