@@ -64,5 +64,8 @@ pub use policy::Policy;
 pub use potential::Potential;
 pub use quaternion::Quaternion;
 pub use rotation::{Angle, Rotation2};
-pub use shape::{FastContacts, Kernel, NoFastPath, Shape, ShapeExt, contacts_one_by_one};
+pub use shape::{
+    FastContacts, Kernel, NoFastPath, Shape, ShapeExt, contacts_one_by_one,
+    contacts_warm_one_by_one,
+};
 pub use sizes::SizeDistribution;

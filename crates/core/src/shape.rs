@@ -335,6 +335,67 @@ pub trait FastContacts<const D: usize, S: Shape<D>> {
             slots.found = [false; W];
         }
     }
+
+    /// Whether the generic pass (the one that keeps a [`PairMemo`] per
+    /// listed pair, [`Shape::contacts_warm`]) should ask for its contacts a
+    /// chunk of pairs at a time through [`FastContacts::contacts_warm_lanes`]
+    /// (default false: one pair at a time).
+    fn use_warm_lanes(_shape: &S) -> bool {
+        false
+    }
+
+    /// The warm contacts of the first `len` of `W` pairs whose bounding
+    /// balls overlap, with `max_gap`: lane `l < len` gets the contact
+    /// [`Shape::contacts_warm`] visits for pair `l` with memo
+    /// `memos[at[l]]`, bit for bit, or none, and that memo what that call
+    /// leaves in it (the lanes' places `at` differ from each other). Lanes
+    /// from `len` on hold arbitrary pairs and places, and are ignored. At
+    /// most one contact per pair (a pair with more keeps the last).
+    /// `scratch` is the family's to use as it likes (the engine keeps it
+    /// between calls, with whatever the last call left in it). The default
+    /// calls [`Shape::contacts_warm`] for one pair after the other.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn contacts_warm_lanes<const W: usize>(
+        shape: &S,
+        pairs: &PairLanes<D, S::Orientation, W>,
+        len: usize,
+        max_gap: f64,
+        memos: &mut [PairMemo],
+        at: &[u32; W],
+        _scratch: &mut Vec<[f64; W]>,
+        out: &mut ContactLanes<D, W>,
+    ) {
+        contacts_warm_one_by_one(shape, pairs, len, max_gap, memos, at, out);
+    }
+}
+
+/// [`FastContacts::contacts_warm_lanes`] one pair at a time through
+/// [`Shape::contacts_warm`], for lanes `0..len` with memos `memos[at[l]]` (its default; a family
+/// that overrides it for some parameters calls this for the others).
+#[inline(always)]
+pub fn contacts_warm_one_by_one<const D: usize, S: Shape<D>, const W: usize>(
+    shape: &S,
+    pairs: &PairLanes<D, S::Orientation, W>,
+    len: usize,
+    max_gap: f64,
+    memos: &mut [PairMemo],
+    at: &[u32; W],
+    out: &mut ContactLanes<D, W>,
+) {
+    for l in 0..len.min(W) {
+        out.found[l] = false;
+        let pair = Pair {
+            size_i: pairs.size_i[l],
+            o_i: pairs.o_i[l],
+            size_j: pairs.size_j[l],
+            o_j: pairs.o_j[l],
+            r_ij: pairs.separation(l),
+        };
+        shape.contacts_warm(&pair, max_gap, &mut memos[at[l] as usize], |c| {
+            out.set(l, &c)
+        });
+    }
 }
 
 /// No fast path: every pair goes through [`Shape::contacts`].

@@ -20,9 +20,12 @@
 
 use crate::neighbors::NeighborList;
 use jamkit_core::{
-    Contact, FastContacts, GapHessian, Kernel, Packing, Pair, PairMemo, Potential, Shape, ShapeExt,
-    Vector,
+    BodyOrientation, Contact, ContactLanes, FastContacts, GapHessian, Kernel, Packing, Pair,
+    PairLanes, PairMemo, Potential, Shape, ShapeExt, Vector,
 };
+
+/// Pairs per chunk of the generic pass ([`Scene::pair_sum`]).
+const CHUNK: usize = 64;
 
 /// A packing ready to be relaxed.
 #[derive(Clone, Debug)]
@@ -44,6 +47,8 @@ pub struct Scene<const D: usize, S: Shape<D>> {
     memos: Vec<PairMemo>,
     /// Scratch: the memos of the list before a rebuild.
     memos_before: Vec<PairMemo>,
+    /// Scratch: the family's, for [`FastContacts::contacts_warm_lanes`].
+    warm_scratch: Vec<[f64; CHUNK]>,
     /// Centres and orientations of the last [`Objective::save`](crate::Objective::save).
     pub(crate) saved: (Vec<Vector<D>>, Vec<S::Orientation>),
 }
@@ -70,6 +75,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
             slot_scratch: Default::default(),
             memos: Vec::new(),
             memos_before: Vec::new(),
+            warm_scratch: Vec::new(),
             saved: (Vec::new(), Vec::new()),
         };
         scene.rebuild_neighbors();
@@ -296,10 +302,19 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         }
         let mut found = std::mem::take(&mut self.found);
         let mut memos = std::mem::take(&mut self.memos);
-        let e = self.pair_sum(grad, &mut found, &mut memos);
+        let mut scratch = std::mem::take(&mut self.warm_scratch);
+        let lanes = self.warm_lanes().then_some(&mut scratch);
+        let e = self.pair_sum(grad, &mut found, &mut memos, lanes);
         self.found = found;
         self.memos = memos;
+        self.warm_scratch = scratch;
         e
+    }
+
+    /// Whether the generic pass asks the family for its warm contacts a
+    /// chunk at a time ([`FastContacts::use_warm_lanes`]).
+    fn warm_lanes(&self) -> bool {
+        S::Fast::use_warm_lanes(&self.packing.shape)
     }
 
     /// The energy and gradient by the generic pass (one pair at a time
@@ -311,7 +326,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         let mut found = Vec::new();
         let mut memos = std::mem::take(&mut self.memos);
         memos.resize(self.neighbors.pair_count(), None);
-        let e = self.pair_sum(grad, &mut found, &mut memos);
+        let e = self.pair_sum(grad, &mut found, &mut memos, None);
         if self.packing.shape.kernel() == Kernel::Pairs {
             self.memos = memos;
         }
@@ -324,9 +339,12 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     unsafe fn pair_sum_avx2(&mut self, grad: &mut [f64]) -> f64 {
         let mut found = std::mem::take(&mut self.found);
         let mut memos = std::mem::take(&mut self.memos);
-        let e = self.pair_sum(grad, &mut found, &mut memos);
+        let mut scratch = std::mem::take(&mut self.warm_scratch);
+        let lanes = self.warm_lanes().then_some(&mut scratch);
+        let e = self.pair_sum(grad, &mut found, &mut memos, lanes);
         self.found = found;
         self.memos = memos;
+        self.warm_scratch = scratch;
         e
     }
 
@@ -338,7 +356,10 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
     /// order, `V += v(h)`, `g_j += v' ∂h/∂q_j`, and `g_i += v' ∂h/∂q_i` in
     /// registers until `i`'s partners end (added to `g_i` then). Each pair's
     /// contacts come from [`Shape::contacts_warm`] with its memo in `memos`
-    /// (one per listed pair).
+    /// (one per listed pair); with `lanes` (the family's scratch), the
+    /// pairs whose bounding balls overlap go to the family a chunk of them
+    /// at a time, with their memos ([`FastContacts::contacts_warm_lanes`]:
+    /// the same contacts bit for bit, summed in the same order).
     ///
     /// NOTE: one pass that summed inside the family's callback kept `V` and
     /// `g_i` on the stack (a store-to-load latency per pair) and made the
@@ -352,8 +373,8 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         grad: &mut [f64],
         found: &mut Vec<(u32, Contact<D>)>,
         memos: &mut [PairMemo],
+        lanes: Option<&mut Vec<[f64; CHUNK]>>,
     ) -> f64 {
-        const CHUNK: usize = 64;
         grad.fill(0.0);
         let p = &self.packing;
         let (positions, sizes, orientations, reach) = (
@@ -371,6 +392,70 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         let mut owner = usize::MAX;
         let mut gi_r = Vector::<D>::zeros();
         let mut gi_q = [0.0; jamkit_core::MAX_ROT];
+        // With `lanes`: a batch of pairs within reach and their places in
+        // the list.
+        let o = S::Orientation::reference();
+        let mut batch = PairLanes::<D, S::Orientation, CHUNK> {
+            size_i: [0.0; CHUNK],
+            size_j: [0.0; CHUNK],
+            reach_i: [0.0; CHUNK],
+            reach_j: [0.0; CHUNK],
+            o_i: [o; CHUNK],
+            o_j: [o; CHUNK],
+            r_ij: [[0.0; CHUNK]; D],
+            r2: [0.0; CHUNK],
+        };
+        let mut batch_at = [0u32; CHUNK];
+        let mut batch_out = ContactLanes::<D, CHUNK>::default();
+        if let Some(scratch) = lanes {
+            // Batches of `CHUNK` pairs within reach (the last one shorter),
+            // in list order.
+            let mut next = 0;
+            while next < partners.len() {
+                let mut len = 0;
+                while next < partners.len() && len < CHUNK {
+                    let pair = next;
+                    next += 1;
+                    let (i, j) = (owners[pair] as usize, partners[pair] as usize);
+                    let d = p.bbox.minimum_image(positions[j] - positions[i]);
+                    let cut = reach[i] + reach[j];
+                    let r2 = d.norm_squared();
+                    if r2 >= cut * cut {
+                        continue;
+                    }
+                    (batch.size_i[len], batch.size_j[len]) = (sizes[i], sizes[j]);
+                    (batch.reach_i[len], batch.reach_j[len]) = (reach[i], reach[j]);
+                    (batch.o_i[len], batch.o_j[len]) = (orientations[i], orientations[j]);
+                    for a in 0..D {
+                        batch.r_ij[a][len] = d[a];
+                    }
+                    batch.r2[len] = r2;
+                    batch_at[len] = pair as u32;
+                    len += 1;
+                }
+                S::Fast::contacts_warm_lanes(
+                    &p.shape,
+                    &batch,
+                    len,
+                    0.0,
+                    memos,
+                    &batch_at,
+                    scratch,
+                    &mut batch_out,
+                );
+                (energy, owner, gi_r, gi_q) = sum_contacts(
+                    (0..len).filter_map(|l| batch_out.get(l).map(|c| (batch_at[l], c))),
+                    (owners, partners),
+                    potential,
+                    (k, grad),
+                    (energy, owner, gi_r, gi_q),
+                );
+            }
+            if owner != usize::MAX {
+                add_body(grad, owner, stride, &gi_r, &gi_q);
+            }
+            return energy;
+        }
         for start in (0..partners.len()).step_by(CHUNK) {
             let end = (start + CHUNK).min(partners.len());
             found.clear();
@@ -390,7 +475,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
                 );
             }
             (energy, owner, gi_r, gi_q) = sum_contacts(
-                found,
+                found.iter().copied(),
                 (owners, partners),
                 potential,
                 (k, grad),
@@ -433,14 +518,14 @@ type PairSums<const D: usize> = (f64, usize, Vector<D>, jamkit_core::RotVec);
 /// through the stack again.
 #[inline(never)]
 fn sum_contacts<const D: usize>(
-    found: &[(u32, Contact<D>)],
+    found: impl Iterator<Item = (u32, Contact<D>)>,
     (owners, partners): (&[u32], &[u32]),
     potential: Potential,
     (k, grad): (usize, &mut [f64]),
     (mut energy, mut owner, mut gi_r, mut gi_q): PairSums<D>,
 ) -> PairSums<D> {
     let stride = D + k;
-    for &(pair, ref c) in found {
+    for (pair, c) in found {
         let (i, j) = (
             owners[pair as usize] as usize,
             partners[pair as usize] as usize,

@@ -484,35 +484,63 @@ pub fn exact_unit<S: Fn(Unit) -> SupportJet, T: Fn(Unit) -> SupportJet>(
 #[inline(always)]
 pub fn turn_step(z: Unit, theta: f64) -> Unit {
     let e = if theta.abs() < 1e-2 {
-        let x2 = theta * theta;
-        let s = theta
-            * (1.0 - x2 * (1.0 / 6.0) * (1.0 - x2 * (1.0 / 20.0) * (1.0 - x2 * (1.0 / 42.0))));
-        let c = 1.0
-            - x2 * 0.5
-                * (1.0 - x2 * (1.0 / 12.0) * (1.0 - x2 * (1.0 / 30.0) * (1.0 - x2 * (1.0 / 56.0))));
-        (c, s)
+        small_turn(theta)
     } else {
-        let x = 0.125 * theta;
-        let x2 = x * x;
-        let s = x
-            * (1.0
-                - x2 * (1.0 / 6.0)
-                    * (1.0
-                        - x2 * (1.0 / 20.0)
-                            * (1.0 - x2 * (1.0 / 42.0) * (1.0 - x2 * (1.0 / 72.0)))));
-        let c = 1.0
-            - x2 * 0.5
-                * (1.0
-                    - x2 * (1.0 / 12.0)
-                        * (1.0
-                            - x2 * (1.0 / 30.0)
-                                * (1.0 - x2 * (1.0 / 56.0) * (1.0 - x2 * (1.0 / 90.0)))));
-        let mut e = (c, s);
-        for _ in 0..3 {
-            e = cmul(e, e);
-        }
-        e
+        large_turn(theta)
     };
+    renormalised(z, e)
+}
+
+/// [`turn_step`] with both branches computed and one chosen: the same
+/// bits, with no branch (for many turns side by side).
+#[inline(always)]
+pub(crate) fn turn_select(z: Unit, theta: f64) -> Unit {
+    let (small, large) = (small_turn(theta), large_turn(theta));
+    let e = if theta.abs() < 1e-2 { small } else { large };
+    renormalised(z, e)
+}
+
+/// `e^{iθ}` as `e^{iθ/8}` by its series to `(θ/8)¹⁰` squared three
+/// times, [`turn_step`]'s branch from 10⁻² rad on.
+#[inline(always)]
+fn large_turn(theta: f64) -> Unit {
+    let x = 0.125 * theta;
+    let x2 = x * x;
+    let s = x
+        * (1.0
+            - x2 * (1.0 / 6.0)
+                * (1.0
+                    - x2 * (1.0 / 20.0) * (1.0 - x2 * (1.0 / 42.0) * (1.0 - x2 * (1.0 / 72.0)))));
+    let c = 1.0
+        - x2 * 0.5
+            * (1.0
+                - x2 * (1.0 / 12.0)
+                    * (1.0
+                        - x2 * (1.0 / 30.0)
+                            * (1.0 - x2 * (1.0 / 56.0) * (1.0 - x2 * (1.0 / 90.0)))));
+    let mut e = (c, s);
+    for _ in 0..3 {
+        e = cmul(e, e);
+    }
+    e
+}
+
+/// `e^{iθ}` by its Taylor series to `θ⁸`, [`turn_step`]'s branch below
+/// 10⁻² rad.
+#[inline(always)]
+fn small_turn(theta: f64) -> Unit {
+    let x2 = theta * theta;
+    let s =
+        theta * (1.0 - x2 * (1.0 / 6.0) * (1.0 - x2 * (1.0 / 20.0) * (1.0 - x2 * (1.0 / 42.0))));
+    let c = 1.0
+        - x2 * 0.5
+            * (1.0 - x2 * (1.0 / 12.0) * (1.0 - x2 * (1.0 / 30.0) * (1.0 - x2 * (1.0 / 56.0))));
+    (c, s)
+}
+
+/// `z e`, renormalised to the unit circle by one Newton step ([`turn_step`]).
+#[inline(always)]
+fn renormalised(z: Unit, e: Unit) -> Unit {
     let (c, s) = cmul(z, e);
     let fix = 1.5 - 0.5 * (c * c + s * s);
     (c * fix, s * fix)
@@ -692,7 +720,19 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64, f64), G: Fn(Unit) -> (f64, f64
         }
         if !second && len < JOINT_FINISH {
             let step = [dpsi, dphi_i, dphi_j];
-            return Some(finish(r_ij, w, [&bi, &bj], [ai, aj], k, step, iterations));
+            return Some(
+                finish(
+                    r_ij,
+                    w,
+                    [&bi, &bj],
+                    [ai, aj],
+                    k,
+                    step,
+                    iterations,
+                    turn_step,
+                )
+                .0,
+            );
         }
         w = turn_step(w, dpsi);
         pi = turn_step(pi, dphi_i);
@@ -734,7 +774,10 @@ pub fn exact_joint<F: Fn(Unit) -> (f64, f64, f64, f64), G: Fn(Unit) -> (f64, f64
 /// `k`), which leaves `~C²|δ₁|³` rad; then the normal turned by `δψ`, and
 /// `H = h` and `H' = h_β` of each body moved along `δ` to second order
 /// (their derivatives in `φ` and `β` from `R … R‴`; what is left,
-/// `O(|δ|³)`, is round-off). No outline evaluation; `H''` is NaN.
+/// `O(|δ|³)`, is round-off). No outline evaluation; `H''` is NaN. The
+/// normal turns by `turn` ([`turn_step`]); the turn's angle is returned
+/// with the result.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn finish(
     r_ij: &Vector<2>,
@@ -744,7 +787,8 @@ fn finish(
     k: f64,
     [dpsi, dphi_i, dphi_j]: [f64; 3],
     iterations: u32,
-) -> ExactGap {
+    turn: impl Fn(Unit, f64) -> Unit,
+) -> (ExactGap, f64) {
     let dphi = [dphi_i, dphi_j];
     let rt = -r_ij[0] * w.1 + r_ij[1] * w.0;
     // ½ F''[δ₁, δ₁]: ψ's condition `r·e'(ψ) − Σ h_β`, each body's `q`.
@@ -764,7 +808,7 @@ fn finish(
         dphi_i + (a[0] * dpsi2 - half[1] / b[0].q_phi),
         dphi_j + (a[1] * dpsi2 - half[2] / b[1].q_phi),
     ];
-    let normal = turn_step(w, step[0]);
+    let normal = turn(w, step[0]);
     let x = step[0];
     let moved = |s: usize| {
         let (bs, y, hb_pp) = (b[s], step[1 + s], seconds[s].2);
@@ -778,13 +822,87 @@ fn finish(
         }
     };
     let (jet_i, jet_j) = (moved(0), moved(1));
-    ExactGap {
+    let e = ExactGap {
         normal,
         gap: r_ij[0] * normal.0 + r_ij[1] * normal.1 - jet_i.h - jet_j.h,
         jet_i,
         jet_j,
         iterations,
         converged: true,
+    };
+    (e, x)
+}
+
+/// One step of [`exact_joint`] without `second` from the normal `w` and
+/// the support points `p_i`, `p_j`, after a step of length `last` (∞ for
+/// the first), with no branch (for many pairs side by side,
+/// [`crate::profiled::Profiled`]'s warm lanes).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointStep {
+    /// The result of [`exact_joint`]'s finish after this step (arbitrary
+    /// unless `finished`).
+    pub gap: ExactGap,
+    /// [`exact_joint`] returns `gap` after this step, bit for bit: its
+    /// safeguards pass, the step is below [`JOINT_FINISH`], and the
+    /// normal turns by less than 10⁻² ([`turn_step`]'s Taylor branch).
+    pub finished: bool,
+    /// [`exact_joint`] takes this step and goes on: its safeguards pass,
+    /// and the step is not below [`JOINT_FINISH`].
+    pub go_on: bool,
+    /// The Newton step on the normal and the two support points.
+    pub step: [f64; 3],
+    /// Its length (the largest of the three).
+    pub len: f64,
+}
+
+/// [`JointStep`] (the same operations in the same order as
+/// [`exact_joint`]'s step).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn joint_step<
+    F: Fn(Unit) -> (f64, f64, f64, f64),
+    G: Fn(Unit) -> (f64, f64, f64, f64),
+>(
+    r_ij: &Vector<2>,
+    w: Unit,
+    z_i: Unit,
+    p_i: Unit,
+    outline_i: F,
+    z_j: Unit,
+    p_j: Unit,
+    outline_j: G,
+    last: f64,
+) -> JointStep {
+    let (zi_bar, zj_bar_neg) = ((z_i.0, -z_i.1), (-z_j.0, z_j.1));
+    let (ei, ej) = (cmul(w, zi_bar), cmul(w, zj_bar_neg));
+    let bi = joint_body(ei, p_i, &outline_i);
+    let bj = joint_body(ej, p_j, &outline_j);
+    let (inv_i, inv_j) = (1.0 / bi.q_phi, 1.0 / bj.q_phi);
+    let (ai, aj) = (bi.m * inv_i, bj.m * inv_j);
+    let along = r_ij[0] * w.0 + r_ij[1] * w.1;
+    let l_psi = -r_ij[0] * w.1 + r_ij[1] * w.0 - bi.h_beta - bj.h_beta;
+    let k = along - bi.h - bj.h + ai * bi.m + aj * bj.m;
+    let dpsi = (l_psi + ai * bi.q + aj * bj.q) / k;
+    let dphi_i = ai * dpsi - bi.q * inv_i;
+    let dphi_j = aj * dpsi - bj.q * inv_j;
+    let len = dpsi.abs().max(dphi_i.abs()).max(dphi_j.abs());
+    let step = [dpsi, dphi_i, dphi_j];
+    let (gap, turn) = finish(r_ij, w, [&bi, &bj], [ai, aj], k, step, 1, |z, t| {
+        renormalised(z, small_turn(t))
+    });
+    let safe = (bi.q_phi > 0.0)
+        & (bj.q_phi > 0.0)
+        & (k > 0.0)
+        & len.is_finite()
+        & !(len > last)
+        & !(len > JOINT_MAX_STEP);
+    let below = len < JOINT_FINISH;
+    JointStep {
+        gap,
+        finished: safe & below & (turn.abs() < 1e-2),
+        go_on: safe & !below,
+        step,
+        len,
     }
 }
 

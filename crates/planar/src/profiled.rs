@@ -52,8 +52,9 @@ use crate::first_order::{Profile, gap_hessian};
 use crate::gap2d::{self, GapModel, Jet3, SupportJet, direction};
 use jamkit_core::math::{Unit, cmul, turn_unit};
 use jamkit_core::{
-    Angle, BodyOrientation, Contact, Error, GapHessian, Look, MEMO_LEN, NoFastPath, Outline, Pair,
-    PairMemo, Policy, RotVec, Rotation2, Shape, Vector, Warm,
+    Angle, BodyOrientation, Contact, ContactLanes, Error, GapHessian, Look, MAX_ROT, MEMO_LEN,
+    NoFastPath, Outline, Pair, PairLanes, PairMemo, Policy, RotVec, Rotation2, Shape, Vector, Warm,
+    contacts_warm_one_by_one,
 };
 use std::f64::consts::PI;
 use std::fmt::Debug;
@@ -554,6 +555,318 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
             .map(|e| e.contact())
     }
 
+    /// The warm exact contacts of the first `len` of `W` pairs
+    /// ([`FastContacts::contacts_warm_lanes`](jamkit_core::FastContacts::contacts_warm_lanes)):
+    /// lane `l` gets [`Shape::contacts_warm`]'s contact with memo
+    /// `memos[at[l]]` and leaves in it what that call leaves, bit for bit.
+    /// `value_slope` maps `e^{iA}` to `(P, P')` and `jet` to
+    /// `[P, P', P'', P‴]`, bit for bit the profile's; `scratch` is any
+    /// vector (it grows to 38 arrays).
+    ///
+    /// A pass over the lanes with no branch computes the bounding test, the
+    /// first-order screen and the joint iteration's first step from the
+    /// memo (`gap2d::joint_step`), each the same operations in the same
+    /// order as [`Profiled::exact_solve_warm`]; the pairs that go on take
+    /// their further steps side by side, gathered into the first lanes, up
+    /// to [`WARM_LANE_STEPS`] steps in all. The pairs that these steps do
+    /// not settle (no memo, a failed safeguard, pairs within the joint
+    /// iteration's reach, a normal out of its cone) go through
+    /// [`Profiled::exact_solve_warm`] one at a time, from the start.
+    ///
+    /// NOTE: each pass is straight-line code over plain arrays, so that the
+    /// compiler vectorises it (four lanes per AVX2 instruction, square
+    /// roots and divisions included); the scalar solve of a pair is a
+    /// chain of dependent operations that leaves most of the core idle.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub fn exact_warm_lanes<const W: usize>(
+        &self,
+        pairs: &PairLanes<2, O, W>,
+        (len, max_gap): (usize, f64),
+        (memos, at): (&mut [PairMemo], &[u32; W]),
+        scratch: &mut Vec<[f64; W]>,
+        out: &mut ContactLanes<2, W>,
+        value_slope: impl Fn(Unit) -> (f64, f64),
+        jet: impl Fn(Unit) -> Jet3,
+    ) {
+        if self.gap != GapModel::Exact || self.arcs.is_some() {
+            return contacts_warm_one_by_one(self, pairs, len, max_gap, memos, at, out);
+        }
+        let len = len.min(W);
+        // Per lane: the memo's first six numbers, then those of the
+        // result (`M..`); where a going-on pair stands and the pair
+        // (`GO..`, see below); the results of the further steps (`FOUND..`).
+        const M: usize = 0;
+        const GO: usize = 6;
+        const FOUND: usize = 27;
+        if scratch.len() < SCRATCH {
+            scratch.resize(SCRATCH, [0.0; W]);
+        }
+        let s: &mut [[f64; W]; SCRATCH] = (&mut scratch[..SCRATCH])
+            .try_into()
+            .expect("SCRATCH arrays make an array of SCRATCH");
+        let mut has = [false; W];
+        for l in 0..len {
+            has[l] = match &memos[at[l] as usize] {
+                Some(v) => {
+                    for k in 0..6 {
+                        s[M + k][l] = v[k];
+                    }
+                    true
+                }
+                None => false,
+            };
+        }
+        let (d, slack, reach) = (self.delta, self.exact_slack, self.joint_reach);
+        // (R, R', R'', R‴) of a body of size `size`, as `exact_in`'s.
+        let sized = |size: f64| {
+            let jet = &jet;
+            move |p: Unit| {
+                let [f, df, ddf, dddf] = jet((p.0, -p.1));
+                (
+                    size * (1.0 + d * f),
+                    size * (-d * df),
+                    size * (d * ddf),
+                    size * (-d * dddf),
+                )
+            }
+        };
+        // Per lane: 0 no contact, 1 solved here, 2 to the scalar solve,
+        // 3 going on.
+        let mut state = [0u8; W];
+        for l in 0..W {
+            let (x, y) = (pairs.r_ij[0][l], pairs.r_ij[1][l]);
+            let (size_i, size_j) = (pairs.size_i[l], pairs.size_j[l]);
+            let r = pairs.r2[l].sqrt();
+            // `contact_warm`'s bounding test.
+            let apart = r - pairs.reach_i[l] - pairs.reach_j[l] > max_gap;
+            // `exact_in`: the line of centres and the first-order screen
+            // (`first_order_at` and `phases`).
+            let positive = r > 0.0;
+            let inv = 1.0 / r;
+            let inv_r = if positive { inv } else { 0.0 };
+            let (lx, ly) = if positive {
+                (x * inv_r, y * inv_r)
+            } else {
+                (1.0, 0.0)
+            };
+            let (z_i, z_j) = (pairs.o_i[l].unit(), pairs.o_j[l].unit());
+            let phase = |(c, s): Unit| (c * lx + s * ly, s * lx - c * ly);
+            let (cj, sj) = phase(z_j);
+            let a_j = if P::HALF_TURN_SYMMETRIC {
+                (cj, sj)
+            } else {
+                (-cj, -sj)
+            };
+            let ((p_i, _), (p_j, _)) = (value_slope(phase(z_i)), value_slope(a_j));
+            let gap1 = r - size_i - size_j - d * (size_i * p_i + size_j * p_j);
+            let far = gap1 - slack * (size_i + size_j) > max_gap;
+            // The warm joint iteration's start and first step.
+            let u = if positive { (x / r, y / r) } else { (1.0, 0.0) };
+            let within = r > reach * (size_i + size_j);
+            let w0 = cmul(u, (s[M][l], s[M + 1][l]));
+            let (zi_bar, zj_bar_neg) = ((z_i.0, -z_i.1), (-z_j.0, z_j.1));
+            let e_i = cmul(cmul(w0, zi_bar), (s[M + 2][l], s[M + 3][l]));
+            let e_j = cmul(cmul(w0, zj_bar_neg), (s[M + 4][l], s[M + 5][l]));
+            let js = gap2d::joint_step(
+                &Vector::<2>::new(x, y),
+                w0,
+                z_i,
+                e_i,
+                sized(size_i),
+                z_j,
+                e_j,
+                sized(size_j),
+                f64::INFINITY,
+            );
+            let e = js.gap;
+            let cone = e.normal.0 * x + e.normal.1 * y >= 0.5 * r;
+            let warm = within & has[l];
+            let solved = !(apart | far) & warm & js.finished & cone;
+            state[l] = if apart | far {
+                0
+            } else if solved {
+                1
+            } else if warm & js.go_on {
+                3
+            } else {
+                2
+            };
+            out.found[l] = solved;
+            out.gap[l] = e.gap;
+            out.grad_r[0][l] = e.normal.0;
+            out.grad_r[1][l] = e.normal.1;
+            out.grad_rot_i[0][l] = e.jet_i.d1;
+            out.grad_rot_j[0][l] = e.jet_j.d1;
+            for a in 1..MAX_ROT {
+                out.grad_rot_i[a][l] = 0.0;
+                out.grad_rot_j[a][l] = 0.0;
+            }
+            let kept = remember(&e, u);
+            for k in 0..6 {
+                s[M + k][l] = kept[k];
+            }
+            // Where the pair stands after the step.
+            let now = [
+                w0.0, w0.1, e_i.0, e_i.1, e_j.0, e_j.1, js.step[0], js.step[1], js.step[2], js.len,
+                u.0, u.1,
+            ];
+            for (k, x) in now.into_iter().enumerate() {
+                s[GO + k][l] = x;
+            }
+        }
+        // The going-on lanes, gathered into the first `count` (their
+        // lanes in `origin`), with their pairs: `GO + 12..` hold `x`, `y`,
+        // `r`, `R⁰_i`, `R⁰_j`, `e^{iθ_i}`, `e^{iθ_j}`.
+        let mut origin = [0usize; W];
+        let mut count = 0;
+        for l in 0..len {
+            if state[l] == 3 {
+                for a in &mut s[GO..GO + 12] {
+                    a[count] = a[l];
+                }
+                let (z_i, z_j) = (pairs.o_i[l].unit(), pairs.o_j[l].unit());
+                let pair = [
+                    pairs.r_ij[0][l],
+                    pairs.r_ij[1][l],
+                    pairs.r2[l].sqrt(),
+                    pairs.size_i[l],
+                    pairs.size_j[l],
+                    z_i.0,
+                    z_i.1,
+                    z_j.0,
+                    z_j.1,
+                ];
+                for (k, x) in pair.into_iter().enumerate() {
+                    s[GO + 12 + k][count] = x;
+                }
+                origin[count] = l;
+                count += 1;
+            }
+        }
+        let mut steps = 1;
+        while count > 0 && steps < WARM_LANE_STEPS {
+            steps += 1;
+            let mut now = [0u8; W];
+            // Blocks of `B` lanes, copied out so that the pass over a block
+            // has a constant length (whole vectors, no bounds).
+            const B: usize = 8;
+            for base in (0..count.min(W)).step_by(B) {
+                let g: [[f64; B]; 21] = std::array::from_fn(|k| {
+                    std::array::from_fn(|t| s[GO + k][(base + t).min(W - 1)])
+                });
+                let mut stands = [[0.0; B]; 10];
+                let mut found = [[0.0; B]; 11];
+                let mut settled = [0u8; B];
+                for t in 0..B {
+                    let g = |k: usize| g[k][t];
+                    let w = gap2d::turn_select((g(0), g(1)), g(6));
+                    let p_i = gap2d::turn_select((g(2), g(3)), g(7));
+                    let p_j = gap2d::turn_select((g(4), g(5)), g(8));
+                    let (x, y, r) = (g(12), g(13), g(14));
+                    let js = gap2d::joint_step(
+                        &Vector::<2>::new(x, y),
+                        w,
+                        (g(17), g(18)),
+                        p_i,
+                        sized(g(15)),
+                        (g(19), g(20)),
+                        p_j,
+                        sized(g(16)),
+                        g(9),
+                    );
+                    let e = js.gap;
+                    let cone = e.normal.0 * x + e.normal.1 * y >= 0.5 * r;
+                    let kept = remember(&e, (g(10), g(11)));
+                    settled[t] = if js.finished & cone {
+                        1
+                    } else if js.go_on {
+                        3
+                    } else {
+                        2
+                    };
+                    let now = [
+                        w.0, w.1, p_i.0, p_i.1, p_j.0, p_j.1, js.step[0], js.step[1], js.step[2],
+                        js.len,
+                    ];
+                    for (a, x) in stands.iter_mut().zip(now) {
+                        a[t] = x;
+                    }
+                    let result = [e.gap, e.normal.0, e.normal.1, e.jet_i.d1, e.jet_j.d1];
+                    for (a, x) in found.iter_mut().zip(result.into_iter().chain(kept)) {
+                        a[t] = x;
+                    }
+                }
+                for t in 0..B.min(count - base) {
+                    for (k, a) in stands.iter().enumerate() {
+                        s[GO + k][base + t] = a[t];
+                    }
+                    for (k, a) in found.iter().enumerate() {
+                        s[FOUND + k][base + t] = a[t];
+                    }
+                    now[base + t] = settled[t];
+                }
+            }
+            let mut next_count = 0;
+            for t in 0..count.min(W) {
+                let l = origin[t];
+                state[l] = now[t];
+                match now[t] {
+                    1 => {
+                        out.found[l] = true;
+                        out.gap[l] = s[FOUND][t];
+                        out.grad_r[0][l] = s[FOUND + 1][t];
+                        out.grad_r[1][l] = s[FOUND + 2][t];
+                        out.grad_rot_i[0][l] = s[FOUND + 3][t];
+                        out.grad_rot_j[0][l] = s[FOUND + 4][t];
+                        for k in 0..6 {
+                            s[M + k][l] = s[FOUND + 5 + k][t];
+                        }
+                    }
+                    3 => {
+                        for a in &mut s[GO..FOUND] {
+                            a[next_count] = a[t];
+                        }
+                        origin[next_count] = l;
+                        next_count += 1;
+                    }
+                    _ => {}
+                }
+            }
+            count = next_count;
+        }
+        for &l in &origin[..count] {
+            state[l] = 2;
+        }
+        for l in 0..len {
+            let memo = &mut memos[at[l] as usize];
+            match state[l] {
+                1 => {
+                    *memo = Some(std::array::from_fn(
+                        |k| {
+                            if k < 6 { s[M + k][l] } else { 0.0 }
+                        },
+                    ));
+                }
+                2 => {
+                    out.found[l] = false;
+                    let pair = Pair::new(
+                        pairs.size_i[l],
+                        pairs.o_i[l],
+                        pairs.size_j[l],
+                        pairs.o_j[l],
+                        pairs.separation(l),
+                    );
+                    let r = pairs.r2[l].sqrt();
+                    if let Some(c) = self.exact_warm(&pair, r, max_gap, memo) {
+                        out.set(l, &c);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
     /// The second-order gap's partials (see [`crate::gap2d`]).
     fn second_order(&self, pair: &Pair<2, O>) -> gap2d::Partials {
         let (r, u, _) = direction(&pair.r_ij);
@@ -792,6 +1105,15 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
         )
     }
 }
+
+/// The most joint steps [`Profiled::exact_warm_lanes`] takes side by side
+/// (a pair that needs more goes through the scalar solve); from a memo
+/// most pairs take one step, and almost all of the rest two or three.
+pub const WARM_LANE_STEPS: u32 = 6;
+
+/// The arrays of `W` numbers [`Profiled::exact_warm_lanes`] keeps in its
+/// scratch.
+const SCRATCH: usize = 38;
 
 /// The memo of a solve that ended at `e` ([`Profiled::exact_solve_warm`]):
 /// the normal relative to the line of centres, `n ū`, and each support

@@ -47,6 +47,7 @@ use jamkit_core::math::{Unit, cmul};
 use jamkit_core::{
     Contact, ContactLanes, Dims, Family, FamilyInfo, FastContacts, GapHessian, Look, Outline, Pair,
     PairLanes, PairMemo, ParamSpec, Policy, Shape, ShapeVisitor, Warm, contacts_one_by_one,
+    contacts_warm_one_by_one,
 };
 use jamkit_planar::gap2d::{GapModel, Jet3};
 use jamkit_planar::profiled::{NearDiskProfile, Profiled};
@@ -337,6 +338,18 @@ impl FourierProfile {
             .sum()
     }
 
+    /// `[F, F', F'', F‴]` of one mode with no phase from `e^{inA}`.
+    #[inline(always)]
+    fn single_jet(m: Mode, p: Unit) -> Jet3 {
+        let n = m.n as f64;
+        [
+            m.a * p.1,
+            m.a * n * p.0,
+            -(m.a * n * n * p.1),
+            -(m.a * n * n * n * p.0),
+        ]
+    }
+
     /// `F` and `F'` of one mode with no phase from `e^{inA}`.
     #[inline(always)]
     fn single(m: Mode, p: Unit) -> (f64, f64) {
@@ -420,13 +433,7 @@ impl FourierProfile {
         if let [m] = self.modes[..]
             && m.b == 0.0
         {
-            let (n, p) = (m.n as f64, cpow((cos, sin), m.n));
-            return [
-                m.a * p.1,
-                m.a * n * p.0,
-                -(m.a * n * n * p.1),
-                -(m.a * n * n * n * p.0),
-            ];
+            return Self::single_jet(m, cpow((cos, sin), m.n));
         }
         let mut o = [0.0; 4];
         for (m, &phase) in self.modes.iter().zip(&self.phases) {
@@ -609,6 +616,29 @@ impl NearDisk {
     ) {
         self.first_order_lanes(pairs, out, |e| FourierProfile::single(m, cpow(e, N)));
     }
+
+    /// [`Profiled::exact_warm_lanes`] for one mode `m` with `m.n = N`, a
+    /// constant.
+    #[inline(always)]
+    fn single_mode_warm_lanes<const N: u32, const W: usize>(
+        &self,
+        m: Mode,
+        pairs: &PairLanes<2, Angle, W>,
+        lm: (usize, f64),
+        memos: (&mut [PairMemo], &[u32; W]),
+        scratch: &mut Vec<[f64; W]>,
+        out: &mut ContactLanes<2, W>,
+    ) {
+        self.shape.exact_warm_lanes(
+            pairs,
+            lm,
+            memos,
+            scratch,
+            out,
+            |e| FourierProfile::single(m, cpow(e, N)),
+            |e| FourierProfile::single_jet(m, cpow(e, N)),
+        );
+    }
 }
 
 impl Outline for NearDisk {
@@ -724,6 +754,63 @@ impl FastContacts<2, NearDisk> for NearDisk {
             }
         } else {
             shape.first_order_lanes(pairs, out, |e| profile.value_slope(e.0, e.1));
+        }
+    }
+
+    /// The convex exact gap's warm contacts go a chunk at a time to
+    /// [`Profiled::exact_warm_lanes`].
+    fn use_warm_lanes(shape: &NearDisk) -> bool {
+        shape.gap_model() == GapModel::Exact && shape.shape.arcs().is_none()
+    }
+
+    /// [`Profiled::exact_warm_lanes`], with one copy per mode number
+    /// n ≤ 6 of the paper's family as in [`NearDisk::contacts_lanes`].
+    #[inline(always)]
+    fn contacts_warm_lanes<const W: usize>(
+        shape: &NearDisk,
+        pairs: &PairLanes<2, Angle, W>,
+        len: usize,
+        max_gap: f64,
+        memos: &mut [PairMemo],
+        at: &[u32; W],
+        scratch: &mut Vec<[f64; W]>,
+        out: &mut ContactLanes<2, W>,
+    ) {
+        if !Self::use_warm_lanes(shape) {
+            return contacts_warm_one_by_one(shape, pairs, len, max_gap, memos, at, out);
+        }
+        let profile = shape.shape.profile();
+        let lm = (len, max_gap);
+        if let [m] = profile.modes[..]
+            && m.b == 0.0
+        {
+            match m.n {
+                1 => shape.single_mode_warm_lanes::<1, W>(m, pairs, lm, (memos, at), scratch, out),
+                2 => shape.single_mode_warm_lanes::<2, W>(m, pairs, lm, (memos, at), scratch, out),
+                3 => shape.single_mode_warm_lanes::<3, W>(m, pairs, lm, (memos, at), scratch, out),
+                4 => shape.single_mode_warm_lanes::<4, W>(m, pairs, lm, (memos, at), scratch, out),
+                5 => shape.single_mode_warm_lanes::<5, W>(m, pairs, lm, (memos, at), scratch, out),
+                6 => shape.single_mode_warm_lanes::<6, W>(m, pairs, lm, (memos, at), scratch, out),
+                n => shape.shape.exact_warm_lanes(
+                    pairs,
+                    lm,
+                    (memos, at),
+                    scratch,
+                    out,
+                    |e| FourierProfile::single(m, cpow(e, n)),
+                    |e| FourierProfile::single_jet(m, cpow(e, n)),
+                ),
+            }
+        } else {
+            shape.shape.exact_warm_lanes(
+                pairs,
+                lm,
+                (memos, at),
+                scratch,
+                out,
+                |e| profile.value_slope(e.0, e.1),
+                |e| profile.jet(e.0, e.1),
+            );
         }
     }
 }
