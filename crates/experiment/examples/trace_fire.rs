@@ -145,7 +145,7 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
                 // A step whose energy misses the trapezoid by more than a
                 // tenth of its change: each changed pair before and after.
                 if let Some(explain) = self.explain
-                    && err.abs() > 1e-10
+                    && err.abs() > 1e-13
                     && err.abs() > 0.1 * (e - e0).abs()
                     && self.explained < 12
                 {

@@ -745,12 +745,12 @@ fn piece<F: PolarOutline, G: PolarOutline>(
             }
         }
     };
-    // A cell: a root of `g'` where it changes sign; two where it has the
-    // same sign at both ends and one extremum inside turns it towards the
-    // other sign (then `g''` changes sign); and where `g''` keeps its sign
-    // too but the cubic through `g'` and its slope in `u` at the ends turns
-    // twice inside and comes near zero, two extrema may hide two roots: the
-    // cell is halved in `u` (down to [`MIN_CELL`] in ψ).
+    // A cell: where the cubic through `g'` and its slope in `u` at the ends
+    // turns twice inside, near zero at both turns, two extrema may hide two
+    // roots besides those the ends show: the cell is halved in `u` (down to
+    // [`MIN_CELL`] in ψ). Else a root of `g'` where it changes sign; two
+    // where it has the same sign at both ends and one extremum inside turns
+    // it towards the other sign (then `g''` changes sign).
     let mut stack = Vec::new();
     let mut left = eval(lo);
     for k in 1..=cells {
@@ -758,17 +758,7 @@ fn piece<F: PolarOutline, G: PolarOutline>(
         stack.push(((k - 1) as f64 / cells as f64, u1, eval(at(u1))));
         while let Some((ua, ub, end)) = stack.pop() {
             let (a, b, start) = (at(ua), at(ub), &left);
-            if (start.g1 > 0.0) != (end.g1 > 0.0) {
-                root(a, start.g1, b, end.g1);
-            } else if (start.g2 > 0.0) != (end.g2 > 0.0) {
-                if (start.g2 > 0.0) != (start.g1 > 0.0)
-                    && let Some((xm, fm)) =
-                        crossing(&eval, (a, start.g2), (b, end.g2), start.g1 > 0.0)
-                {
-                    root(a, start.g1, xm, fm);
-                    root(xm, fm, b, end.g1);
-                }
-            } else if b - a > MIN_CELL
+            if b - a > MIN_CELL
                 && may_cross(
                     ub - ua,
                     (start.g1, start.g2 * rate(ua)),
@@ -780,6 +770,17 @@ fn piece<F: PolarOutline, G: PolarOutline>(
                 stack.push((ua, um, eval(at(um))));
                 continue;
             }
+            if (start.g1 > 0.0) != (end.g1 > 0.0) {
+                root(a, start.g1, b, end.g1);
+            } else if (start.g2 > 0.0) != (end.g2 > 0.0) {
+                if (start.g2 > 0.0) != (start.g1 > 0.0)
+                    && let Some((xm, fm)) =
+                        crossing(&eval, (a, start.g2), (b, end.g2), start.g1 > 0.0)
+                {
+                    root(a, start.g1, xm, fm);
+                    root(xm, fm, b, end.g1);
+                }
+            }
             left = end;
         }
     }
@@ -789,18 +790,30 @@ fn piece<F: PolarOutline, G: PolarOutline>(
 const MIN_CELL: f64 = 1e-6;
 
 /// Whether the cubic through `g'` and its slope at the two ends of a cell
-/// of width `w` in `u` (`(g', dg'/du)` at each end, both of one sign at
-/// the two ends) comes near the other sign of `g'` inside: at one of its
-/// two turns (the roots in `(0, 1)` of its slope, a quadratic in `t`), it
-/// has the other sign or lies within a quarter of the smaller end value of
-/// zero. In `u` the slope stays finite at a piece's ends, where `g''` of
-/// `ψ` does not.
+/// of width `w` in `u` (`(g', dg'/du)` at each end) may hide two roots of
+/// `g'` besides those its end values show: it turns twice inside (its
+/// slope, a quadratic in `t ∈ (0, 1)`, has two roots there), and at both
+/// turns it lies on the side of zero that two more roots need or within a
+/// quarter of the smaller end value of it. With `g'` of one sign at both
+/// ends that is one turn (either, the one towards zero) near or past
+/// zero; with a sign change, the first turn past the far end's sign or
+/// near zero, and the second back on the near end's side or near zero (a
+/// contact beside a fold). In `u` the slope stays finite at a piece's
+/// ends, where `g''` of `ψ` does not.
 fn may_cross(w: f64, (p0, d0): (f64, f64), (p1, d1): (f64, f64)) -> bool {
     let (m0, m1) = (w * d0, w * d1);
     let a = 6.0 * (p0 - p1) + 3.0 * (m0 + m1);
     let b = 6.0 * (p1 - p0) - 4.0 * m0 - 2.0 * m1;
     let disc = b * b - 4.0 * a * m0;
     if a == 0.0 || !(disc > 0.0) {
+        return false;
+    }
+    let root = disc.sqrt();
+    let (t1, t2) = {
+        let (x, y) = ((-b - root) / (2.0 * a), (-b + root) / (2.0 * a));
+        (x.min(y), x.max(y))
+    };
+    if !(t1 > 0.0 && t2 < 1.0) {
         return false;
     }
     let near = 0.25 * p0.abs().min(p1.abs());
@@ -811,14 +824,14 @@ fn may_cross(w: f64, (p0, d0): (f64, f64), (p1, d1): (f64, f64)) -> bool {
             + (3.0 * t2 - 2.0 * t3) * p1
             + (t3 - t2) * m1
     };
-    let root = disc.sqrt();
-    [(-b - root) / (2.0 * a), (-b + root) / (2.0 * a)]
-        .into_iter()
-        .filter(|t| *t > 0.0 && *t < 1.0)
-        .any(|t| {
-            let c = cubic(t);
-            (c > 0.0) != (p0 > 0.0) || c.abs() < near
-        })
+    // How far `c` lies on the side of `p`'s sign (negative: past zero).
+    let beyond = |c: f64, p: f64| if p > 0.0 { c } else { -c };
+    let (c1, c2) = (cubic(t1), cubic(t2));
+    if (p0 > 0.0) == (p1 > 0.0) {
+        beyond(c1, p0) < near || beyond(c2, p0) < near
+    } else {
+        beyond(c1, p0) < near && beyond(c2, p1) < near
+    }
 }
 
 /// In a cell where `g'` has the sign `positive` at both ends and `g''`
