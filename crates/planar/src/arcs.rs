@@ -71,17 +71,19 @@
 //! range, where `ν` is stationary (an inflection point) and the support
 //! point moves as the square root of the distance in `ψ`, so the grid is
 //! uniform in `u` with `ψ = lo + (hi − lo)(3u² − 2u³)`, in which it moves
-//! smoothly (at least 4 cells, and one per 0.1 rad). Every sign change is
+//! smoothly (at least 4 cells, and one per 0.1 rad; one per 0.025 rad for
+//! a concave arc against a convex one). Every sign change is
 //! refined by Newton's method safeguarded by bisection, stopped after a
 //! step below 10⁻⁹ rad. A cell where `g_AB'` keeps its sign while `g_AB''`
 //! turns it towards zero (a tip touching both flanks of a valley puts two
 //! stationary points in one cell) is searched for the extremum of `g_AB'`;
 //! where `g_AB'` changes sign there, both stationary points are refined.
-//! A cell where both keep their signs but the cubic through `g_AB'` and
-//! `g_AB''` at its ends turns twice inside and comes near zero there
-//! (within a quarter of the smaller end value: two extrema of `g_AB'`,
-//! which may hide two stationary points, as when three lie within
-//! 0.1 rad) is halved, down to cells of 10⁻⁶ rad. Each support point starts from the
+//! Before that, a cell where the cubic through `g_AB'` and its slope at
+//! the ends turns twice inside, near zero at both turns (within a quarter
+//! of the smaller end value, or past it), is halved, down to cells of
+//! 10⁻⁶ rad: two extrema of `g_AB'` there may hide two stationary points
+//! besides those the ends show (three within 0.1 rad, or a contact beside
+//! a fold where a contact and a saddle are born). Each support point starts from the
 //! arc's table ([`OutlineArc::table`], computed once per shape).
 //! [`scan_stationary`] finds the stationary points by brute force, the
 //! check of this search.
@@ -702,7 +704,15 @@ fn piece<F: PolarOutline, G: PolarOutline>(
     // support point moves as the square root of the distance in ψ (ν is
     // stationary at an inflection point): the grid is uniform in u with
     // ψ = lo + (hi − lo)(3u² − 2u³), in which it moves smoothly.
-    let cells = ((hi - lo) / 0.1).ceil().max(4.0) as usize;
+    // A concave arc against a convex one: a tip in a valley of about its
+    // own curvature has `g''` near zero over a range of ψ, and several
+    // stationary points close together; finer cells there.
+    let width = if arc_a.convex == arc_b.convex {
+        0.1
+    } else {
+        CONCAVE_CELL
+    };
+    let cells = ((hi - lo) / width).ceil().max(4.0) as usize;
     let at = |u: f64| {
         if u >= 1.0 {
             hi
@@ -785,6 +795,10 @@ fn piece<F: PolarOutline, G: PolarOutline>(
         }
     }
 }
+
+/// The widest cell of ψ on a concave arc against a convex one (0.1 rad
+/// on the other pairs), in radians.
+const CONCAVE_CELL: f64 = 0.025;
 
 /// The narrowest cell [`piece`] halves, in radians of ψ.
 const MIN_CELL: f64 = 1e-6;
