@@ -782,14 +782,12 @@ fn piece<F: PolarOutline, G: PolarOutline>(
             }
             if (start.g1 > 0.0) != (end.g1 > 0.0) {
                 root(a, start.g1, b, end.g1);
-            } else if (start.g2 > 0.0) != (end.g2 > 0.0) {
-                if (start.g2 > 0.0) != (start.g1 > 0.0)
-                    && let Some((xm, fm)) =
-                        crossing(&eval, (a, start.g2), (b, end.g2), start.g1 > 0.0)
-                {
-                    root(a, start.g1, xm, fm);
-                    root(xm, fm, b, end.g1);
-                }
+            } else if (start.g2 > 0.0) != (end.g2 > 0.0)
+                && (start.g2 > 0.0) != (start.g1 > 0.0)
+                && let Some((xm, fm)) = crossing(&eval, (a, start.g2), (b, end.g2), start.g1 > 0.0)
+            {
+                root(a, start.g1, xm, fm);
+                root(xm, fm, b, end.g1);
             }
             left = end;
         }
