@@ -9,18 +9,9 @@ use jamkit_core::{
 use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
 use jamkit_planar::profiled::Profiled;
 
-/// A small deterministic generator (splitmix64), uniform in `[0, 1)`.
-struct Uniform(u64);
-
-impl Uniform {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+#[path = "support/random.rs"]
+mod random;
+use random::Uniform;
 
 /// The numbers of a contact.
 fn contact_numbers(c: &Contact<2>) -> Vec<f64> {
