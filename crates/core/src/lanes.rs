@@ -28,6 +28,21 @@ pub struct PairLanes<const D: usize, O, const W: usize> {
 }
 
 impl<const D: usize, O: Copy, const W: usize> PairLanes<D, O, W> {
+    /// Every lane zero, with both orientations `o`: a batch to fill.
+    #[inline]
+    pub fn filled(o: O) -> Self {
+        Self {
+            size_i: [0.0; W],
+            size_j: [0.0; W],
+            reach_i: [0.0; W],
+            reach_j: [0.0; W],
+            o_i: [o; W],
+            o_j: [o; W],
+            r_ij: [[0.0; W]; D],
+            r2: [0.0; W],
+        }
+    }
+
     /// Lane `l`'s separation as a vector.
     #[inline(always)]
     pub fn separation(&self, l: usize) -> Vector<D> {

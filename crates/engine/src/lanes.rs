@@ -101,17 +101,7 @@ impl<const D: usize, S: Shape<D>> Lanes<'_, D, S> {
             torque_j: [[0.0; CHUNK]; MAX_ROT],
         };
         // The chunk's pairs and contacts: every call fills them anew.
-        let o = S::Orientation::reference();
-        let mut lanes = PairLanes::<D, S::Orientation, CHUNK> {
-            size_i: [0.0; CHUNK],
-            size_j: [0.0; CHUNK],
-            reach_i: [0.0; CHUNK],
-            reach_j: [0.0; CHUNK],
-            o_i: [o; CHUNK],
-            o_j: [o; CHUNK],
-            r_ij: [[0.0; CHUNK]; D],
-            r2: [0.0; CHUNK],
-        };
+        let mut lanes = PairLanes::<D, S::Orientation, CHUNK>::filled(S::Orientation::reference());
         let mut contacts = ContactLanes::<D, CHUNK>::default();
         let mut energy = 0.0;
         // Body i's own gradient, kept until its last partner is done.

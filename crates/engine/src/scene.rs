@@ -394,17 +394,7 @@ impl<const D: usize, S: Shape<D>> Scene<D, S> {
         let mut gi_q = [0.0; jamkit_core::MAX_ROT];
         // With `lanes`: a batch of pairs within reach and their places in
         // the list.
-        let o = S::Orientation::reference();
-        let mut batch = PairLanes::<D, S::Orientation, CHUNK> {
-            size_i: [0.0; CHUNK],
-            size_j: [0.0; CHUNK],
-            reach_i: [0.0; CHUNK],
-            reach_j: [0.0; CHUNK],
-            o_i: [o; CHUNK],
-            o_j: [o; CHUNK],
-            r_ij: [[0.0; CHUNK]; D],
-            r2: [0.0; CHUNK],
-        };
+        let mut batch = PairLanes::<D, S::Orientation, CHUNK>::filled(S::Orientation::reference());
         let mut batch_at = [0u32; CHUNK];
         let mut batch_out = ContactLanes::<D, CHUNK>::default();
         if let Some(scratch) = lanes {

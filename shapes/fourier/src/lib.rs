@@ -1055,16 +1055,7 @@ mod tests {
         ];
         const W: usize = 16;
         for s in &shapes {
-            let mut lanes = PairLanes::<2, Angle, W> {
-                size_i: [0.0; W],
-                size_j: [0.0; W],
-                reach_i: [0.0; W],
-                reach_j: [0.0; W],
-                o_i: [Angle::new(0.0); W],
-                o_j: [Angle::new(0.0); W],
-                r_ij: [[0.0; W]; 2],
-                r2: [0.0; W],
-            };
+            let mut lanes = PairLanes::<2, Angle, W>::filled(Angle::new(0.0));
             for (l, &(size_i, t_i, size_j, t_j, (x, y))) in pairs.iter().enumerate() {
                 let d = Vector::<2>::new(x, y);
                 lanes.size_i[l] = size_i;

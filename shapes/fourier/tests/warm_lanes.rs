@@ -80,17 +80,7 @@ const W: usize = 64;
 
 /// The lanes of `pairs` (at most `W`).
 fn lanes(shape: &NearDisk, pairs: &[Pair<2, Rotation2>]) -> PairLanes<2, Rotation2, W> {
-    let o = Rotation2::new(0.0);
-    let mut p = PairLanes {
-        size_i: [0.0; W],
-        size_j: [0.0; W],
-        reach_i: [0.0; W],
-        reach_j: [0.0; W],
-        o_i: [o; W],
-        o_j: [o; W],
-        r_ij: [[0.0; W]; 2],
-        r2: [0.0; W],
-    };
+    let mut p = PairLanes::filled(Rotation2::new(0.0));
     for (l, q) in pairs.iter().enumerate() {
         p.size_i[l] = q.size_i;
         p.size_j[l] = q.size_j;
