@@ -2,6 +2,7 @@
 //! engine's fast paths ([`FastContacts`](crate::FastContacts)).
 
 use crate::contact::Contact;
+use crate::contact::Pair;
 use crate::math::{MAX_ROT, Vector};
 
 /// `W` pairs side by side, for [`FastContacts::contacts_lanes`](crate::FastContacts::contacts_lanes): each field holds
@@ -47,6 +48,18 @@ impl<const D: usize, O: Copy, const W: usize> PairLanes<D, O, W> {
     #[inline(always)]
     pub fn separation(&self, l: usize) -> Vector<D> {
         Vector::<D>::from_fn(|a, _| self.r_ij[a][l])
+    }
+
+    /// Lane `l` as one [`Pair`].
+    #[inline(always)]
+    pub fn pair(&self, l: usize) -> Pair<D, O> {
+        Pair {
+            size_i: self.size_i[l],
+            o_i: self.o_i[l],
+            size_j: self.size_j[l],
+            o_j: self.o_j[l],
+            r_ij: self.separation(l),
+        }
     }
 }
 

@@ -224,13 +224,7 @@ pub fn contacts_one_by_one<const D: usize, S: Shape<D>, const W: usize>(
 ) {
     for l in 0..W {
         out.found[l] = false;
-        let pair = Pair {
-            size_i: pairs.size_i[l],
-            o_i: pairs.o_i[l],
-            size_j: pairs.size_j[l],
-            o_j: pairs.o_j[l],
-            r_ij: pairs.separation(l),
-        };
+        let pair = pairs.pair(l);
         shape.contacts(&pair, 0.0, |c| out.set(l, &c));
     }
 }
@@ -385,13 +379,7 @@ pub fn contacts_warm_one_by_one<const D: usize, S: Shape<D>, const W: usize>(
 ) {
     for l in 0..len.min(W) {
         out.found[l] = false;
-        let pair = Pair {
-            size_i: pairs.size_i[l],
-            o_i: pairs.o_i[l],
-            size_j: pairs.size_j[l],
-            o_j: pairs.o_j[l],
-            r_ij: pairs.separation(l),
-        };
+        let pair = pairs.pair(l);
         shape.contacts_warm(&pair, max_gap, &mut memos[at[l] as usize], |c| {
             out.set(l, &c)
         });

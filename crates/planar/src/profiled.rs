@@ -850,13 +850,7 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Profiled<P, O> {
                 }
                 2 => {
                     out.found[l] = false;
-                    let pair = Pair::new(
-                        pairs.size_i[l],
-                        pairs.o_i[l],
-                        pairs.size_j[l],
-                        pairs.o_j[l],
-                        pairs.separation(l),
-                    );
+                    let pair = pairs.pair(l);
                     let r = pairs.r2[l].sqrt();
                     if let Some(c) = self.exact_warm(&pair, r, max_gap, memo) {
                         out.set(l, &c);

@@ -1090,18 +1090,7 @@ mod tests {
             };
             let mut found = 0;
             for l in 0..W {
-                let expected = s
-                    .pair_contacts(
-                        &Pair::new(
-                            lanes.size_i[l],
-                            lanes.o_i[l],
-                            lanes.size_j[l],
-                            lanes.o_j[l],
-                            lanes.separation(l),
-                        ),
-                        0.0,
-                    )
-                    .pop();
+                let expected = s.pair_contacts(&lanes.pair(l), 0.0).pop();
                 found += usize::from(expected.is_some());
                 assert_eq!(
                     bits(out.get(l)),
