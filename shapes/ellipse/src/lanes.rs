@@ -6,7 +6,7 @@
 //! [`screened_out`], [`remember`]), so each lane gets the same bits.
 
 use super::{
-    Axis, Ellipse, HALLEY_CAP, HALLEY_TOL, TAYLOR_FINISH, evaluate, halley_step, overshoots,
+    Axis, Ellipse, Form, HALLEY_CAP, HALLEY_TOL, TAYLOR_FINISH, evaluate, halley_step, overshoots,
     remember, screened_out, square, taylor, unit,
 };
 use jamkit_core::{
@@ -33,11 +33,16 @@ const GOING: u8 = 3;
 /// iterate before it, whether the step ended the iteration (1) or another
 /// follows (0), the separation (2), and both bodies' quadratic forms
 /// (`p`, `m`, `cos 2θ`, `sin 2θ`, 8).
-const GO: usize = 14;
+const GO: usize = 16;
 
-/// Numbers per pair found in a further step: the gap, the normal (2),
-/// `H_i'`, `H_j'`.
-const FOUND: usize = 5;
+/// Numbers per pair of a further step: the gap, the normal (2), `H_i'`,
+/// `H_j'`, the memo's first two numbers, and where the pair stands (the
+/// first six of `GO`).
+const FOUND: usize = 13;
+
+/// The arrays of `W` numbers [`Ellipse::exact_warm_lanes`] keeps in its
+/// scratch: `GO`, the memo's normal (2) and the memo of a solved pair (2).
+const SCRATCH: usize = GO + 4;
 
 impl Ellipse {
     /// The warm contacts of the first `len` of `W` pairs
@@ -68,12 +73,23 @@ impl Ellipse {
         max_gap: f64,
         memos: &mut [PairMemo],
         at: &[u32; W],
+        scratch: &mut Vec<[f64; W]>,
         out: &mut ContactLanes<2, W>,
     ) {
         let len = len.min(W);
+        if scratch.len() < SCRATCH {
+            scratch.resize(SCRATCH, [0.0; W]);
+        }
+        // Per lane: where the pair stands (`GO` numbers), the memo's
+        // normal (`START..`) and the memo a solved pair leaves (`KEPT..`),
+        // its first two numbers.
+        let s: &mut [[f64; W]; SCRATCH] = (&mut scratch[..SCRATCH])
+            .try_into()
+            .expect("SCRATCH arrays make an array of SCRATCH");
+        let (go, rest) = s.split_at_mut(GO);
+        let (start, kept) = rest.split_at_mut(2);
         // The memo's normal relative to the line of centres (times a
         // length), and whether there is one.
-        let mut start = [[0.0; W]; 2];
         let mut has = [false; W];
         for l in 0..len {
             if let Some(m) = &memos[at[l] as usize] {
@@ -82,10 +98,6 @@ impl Ellipse {
             }
         }
         let mut state = [NONE; W];
-        // The memo a solved lane leaves (its first two numbers).
-        let mut kept = [[0.0; W]; 2];
-        // Where each lane stands after its first step (gathered below).
-        let mut go = [[0.0; W]; GO];
         for l in 0..W {
             let (x, y) = (pairs.r_ij[0][l], pairs.r_ij[1][l]);
             let r = pairs.r2[l].sqrt();
@@ -142,23 +154,18 @@ impl Ellipse {
                 fi.s2,
                 fj.p,
                 fj.m,
+                fj.c2,
+                fj.s2,
             ];
             for (k, x) in now.into_iter().enumerate() {
                 go[k][l] = x;
             }
         }
-        // The going-on lanes, gathered into the first `count` (their lanes
-        // in `origin`); `fj`'s `cos 2θ`, `sin 2θ` in `tail`.
-        let mut tail = [[0.0; W]; 2];
+        // The going-on lanes, the first `count` of `origin`.
         let mut origin = [0usize; W];
         let mut count = 0;
         for l in 0..len {
             if state[l] == GOING {
-                for a in &mut go {
-                    a[count] = a[l];
-                }
-                let z = pairs.o_j[l].unit();
-                (tail[0][count], tail[1][count]) = (z.0, z.1);
                 origin[count] = l;
                 count += 1;
             }
@@ -170,33 +177,32 @@ impl Ellipse {
             // `WARM_LANE_STEPS`.
             steps += 1;
             let last_step = steps == WARM_LANE_STEPS;
-            let mut now = [NONE; W];
-            let mut found = [[0.0; W]; FOUND];
-            let mut memo = [[0.0; W]; 2];
-            // Blocks of `B` lanes, so that a pass has a constant length.
+            let mut next_count = 0;
+            // Blocks of `B` going-on lanes, copied out so that the pass over
+            // a block has a constant length (whole vectors, no bounds).
             const B: usize = 8;
             for base in (0..count).step_by(B) {
-                let mut block = [[0.0; B]; GO + 2];
-                let mut settled = [NONE; B];
-                let mut results = [[0.0; B]; FOUND + 2];
+                let mut block = [[0.0; B]; GO];
                 for t in 0..B {
-                    let i = (base + t).min(W - 1);
-                    for (k, a) in go.iter().chain(&tail).enumerate() {
-                        block[k][t] = a[i];
+                    let l = origin[(base + t).min(count - 1)];
+                    for (k, a) in go.iter().enumerate() {
+                        block[k][t] = a[l];
                     }
                 }
+                let mut settled = [NONE; B];
+                let mut results = [[0.0; B]; FOUND];
                 for t in 0..B {
                     let g = |k: usize| block[k][t];
                     let v = (g(0), g(1));
                     let (len, cur_g, len_v, ends) = (g(2), g(3), g(4), g(5) != 0.0);
                     let (x, y) = (g(6), g(7));
-                    let fi = super::Form {
+                    let fi = Form {
                         p: g(8),
                         m: g(9),
                         c2: g(10),
                         s2: g(11),
                     };
-                    let fj = super::Form {
+                    let fj = Form {
                         p: g(12),
                         m: g(13),
                         c2: g(14),
@@ -236,12 +242,6 @@ impl Ellipse {
                     };
                     settled[t] = state;
                     let kept = remember((result[1], result[2]), (x, y));
-                    for (a, x) in results
-                        .iter_mut()
-                        .zip(result.into_iter().chain([kept[0], kept[1]]))
-                    {
-                        a[t] = x;
-                    }
                     // Where the pair stands for the next pass.
                     let stands = [
                         s.v.0,
@@ -251,44 +251,38 @@ impl Ellipse {
                         len_next,
                         if s.len < HALLEY_TOL { 1.0 } else { 0.0 },
                     ];
-                    for (k, x) in stands.into_iter().enumerate() {
-                        block[k][t] = x;
+                    for (a, x) in results
+                        .iter_mut()
+                        .zip(result.into_iter().chain([kept[0], kept[1]]).chain(stands))
+                    {
+                        a[t] = x;
                     }
                 }
+                // The block's lanes, in order: their results, and the
+                // lanes that go on at the front of `origin` (at or before
+                // the places read so far).
                 for t in 0..B.min(count - base) {
-                    for (k, a) in go.iter_mut().take(6).enumerate() {
-                        a[base + t] = block[k][t];
-                    }
-                    for (k, a) in found.iter_mut().enumerate() {
-                        a[base + t] = results[k][t];
-                    }
-                    (memo[0][base + t], memo[1][base + t]) =
-                        (results[FOUND][t], results[FOUND + 1][t]);
-                    now[base + t] = settled[t];
-                }
-            }
-            let mut next_count = 0;
-            for t in 0..count {
-                let l = origin[t];
-                state[l] = now[t];
-                match now[t] {
-                    SOLVED => {
-                        out.found[l] = true;
-                        out.gap[l] = found[0][t];
-                        out.grad_r[0][l] = found[1][t];
-                        out.grad_r[1][l] = found[2][t];
-                        out.grad_rot_i[0][l] = found[3][t];
-                        out.grad_rot_j[0][l] = found[4][t];
-                        (kept[0][l], kept[1][l]) = (memo[0][t], memo[1][t]);
-                    }
-                    GOING => {
-                        for a in go.iter_mut().chain(&mut tail) {
-                            a[next_count] = a[t];
+                    let l = origin[base + t];
+                    state[l] = settled[t];
+                    match settled[t] {
+                        SOLVED => {
+                            out.found[l] = true;
+                            out.gap[l] = results[0][t];
+                            out.grad_r[0][l] = results[1][t];
+                            out.grad_r[1][l] = results[2][t];
+                            out.grad_rot_i[0][l] = results[3][t];
+                            out.grad_rot_j[0][l] = results[4][t];
+                            (kept[0][l], kept[1][l]) = (results[5][t], results[6][t]);
                         }
-                        origin[next_count] = l;
-                        next_count += 1;
+                        GOING => {
+                            for (k, a) in go.iter_mut().take(6).enumerate() {
+                                a[l] = results[7 + k][t];
+                            }
+                            origin[next_count] = l;
+                            next_count += 1;
+                        }
+                        _ => {}
                     }
-                    _ => {}
                 }
             }
             count = next_count;
@@ -336,9 +330,9 @@ impl FastContacts<2, Ellipse> for Ellipse {
         max_gap: f64,
         memos: &mut [PairMemo],
         at: &[u32; W],
-        _scratch: &mut Vec<[f64; W]>,
+        scratch: &mut Vec<[f64; W]>,
         out: &mut ContactLanes<2, W>,
     ) {
-        shape.exact_warm_lanes(pairs, len, max_gap, memos, at, out);
+        shape.exact_warm_lanes(pairs, len, max_gap, memos, at, scratch, out);
     }
 }
