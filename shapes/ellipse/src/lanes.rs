@@ -180,7 +180,7 @@ impl Ellipse {
             let mut next_count = 0;
             // Blocks of `B` going-on lanes, copied out so that the pass over
             // a block has a constant length (whole vectors, no bounds).
-            const B: usize = 8;
+            const B: usize = 4;
             for base in (0..count).step_by(B) {
                 let mut block = [[0.0; B]; GO];
                 for t in 0..B {
