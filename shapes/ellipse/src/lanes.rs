@@ -15,8 +15,7 @@ use jamkit_core::{
 
 /// The most steps of Halley's iteration [`Ellipse::exact_warm_lanes`]
 /// takes side by side (a pair that needs more goes through the scalar
-/// solve): from a memo most pairs take one step, and almost all of the
-/// rest two or three.
+/// solve); from a memo most pairs take one.
 pub const WARM_LANE_STEPS: u32 = 4;
 
 const _: () = assert!(WARM_LANE_STEPS < HALLEY_CAP);
@@ -55,10 +54,12 @@ impl Ellipse {
     /// iteration from the memo's normal with its Taylor finish, each the
     /// same operations in the same order as [`Ellipse::exact_gap_warm`];
     /// the pairs that go on (a step of 10⁻⁶ rad or more) take their
-    /// further evaluations and steps side by side, gathered into the
-    /// first lanes, up to [`WARM_LANE_STEPS`] steps in all. The pairs
-    /// these steps do not settle (no memo, a failed guard, more steps) go
-    /// through [`Ellipse::exact_gap_warm`] one at a time, from the start.
+    /// further evaluations and steps side by side, four at a time, up to
+    /// [`WARM_LANE_STEPS`] steps in all. The pairs these steps do not
+    /// settle (no memo, a failed guard, more steps) go through
+    /// [`Ellipse::exact_gap_warm`] one at a time, from the start.
+    /// `scratch` is any vector (it grows to `SCRATCH` arrays; what it
+    /// holds on entry does not matter).
     ///
     /// NOTE: each pass is straight-line code over plain arrays, so that
     /// the compiler vectorises it (square roots and divisions included);
