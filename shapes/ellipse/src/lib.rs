@@ -76,7 +76,11 @@
 //! starts at the normal where the pair's last solve ended, kept in the
 //! pair's memo relative to the line of centres: after a minimiser's step
 //! most pairs take one step and no further evaluation. The result is the
-//! same optimum to round-off, from any memo.
+//! same optimum to round-off, from any memo. The engine asks for these
+//! solves a chunk of pairs at a time ([`Ellipse::exact_warm_lanes`], the
+//! family's `FastContacts`): the screens and the first steps of many pairs
+//! side by side, by the same functions as one pair at a time, hence the
+//! same bits.
 //!
 //! Where a guard fails — `g'' ≥ 0`, Halley's denominator below `1/2`, a
 //! step beyond 1 rad or not shorter than the one before, a step over
@@ -108,12 +112,15 @@
 //! spectrally accurate for this smooth periodic integrand.
 
 use jamkit_core::{
-    Contact, Dims, Family, FamilyInfo, GapHessian, Look, MEMO_LEN, NoFastPath, Outline, Pair,
-    PairMemo, ParamSpec, Policy, RotVec, Shape, ShapeVisitor, Vector, Warm,
+    Contact, Dims, Family, FamilyInfo, GapHessian, Look, MEMO_LEN, Outline, Pair, PairMemo,
+    ParamSpec, Policy, RotVec, Shape, ShapeVisitor, Vector, Warm,
 };
 use jamkit_planar::gap2d::{ExactGap, SupportJet};
 use serde::Deserialize;
 use std::f64::consts::PI;
+
+mod lanes;
+pub use lanes::WARM_LANE_STEPS;
 
 /// The `ellipse` family's self-description.
 pub const INFO: FamilyInfo = FamilyInfo {
@@ -379,12 +386,7 @@ impl Ellipse {
             None => self.cold(&fi, &fj, pair, r, max_gap, second),
         };
         if let (Some(memo), Some(s)) = (memo, &found) {
-            // n r̄_ij: the normal relative to the line of centres, times r
-            // (any length will do, and no division).
-            let n = (s.normal[0], s.normal[1]);
-            let mut m = [0.0; MEMO_LEN];
-            m[..2].copy_from_slice(&[n.0 * x + n.1 * y, n.1 * x - n.0 * y]);
-            *memo = Some(m);
+            *memo = Some(remember((s.normal[0], s.normal[1]), (x, y)));
         }
         found
     }
@@ -411,19 +413,8 @@ impl Ellipse {
     #[inline(always)]
     fn screen(&self, pair: &Pair<2, Axis>, max_gap: f64) -> Option<(Form, Form, f64)> {
         let (fi, fj, r) = self.bounded(pair, max_gap)?;
-        let (x, y) = (pair.r_ij[0], pair.r_ij[1]);
-        // h ≥ g(ψ₀) = r − H_i − H_j at the line of centres: skip when
-        // t = r − max_gap > H_i + H_j, i.e. t r > √U_i + √U_j with
-        // U = r² H² = u(r_ij) (the quadratic form at the separation itself),
-        // tested on squares.
-        let t = r - max_gap;
-        if t > 0.0 {
-            let (ui, uj) = (fi.square((x, y)), fj.square((x, y)));
-            let tr = t * r;
-            let excess = tr * tr - ui - uj;
-            if excess > 0.0 && excess * excess > 4.0 * ui * uj {
-                return None;
-            }
+        if screened_out(&fi, &fj, (pair.r_ij[0], pair.r_ij[1]), r, max_gap) {
+            return None;
         }
         Some((fi, fj, r))
     }
@@ -639,68 +630,26 @@ fn halley(
     max_gap: f64,
     second: bool,
 ) -> Fast {
-    // g, g', g'' with both jets, and g''' at the direction v (scaled by |v|),
-    // with each body's H''' (for the finish without `second`).
-    let eval = |v: (f64, f64), l2: f64| {
-        let w = (v.0 * v.0 - v.1 * v.1, 2.0 * v.0 * v.1);
-        let ((ji, ti), (jj, tj)) = (fi.jet3(w, l2), fj.jet3(w, l2));
-        let rn = x * v.0 + y * v.1;
-        let rt = -x * v.1 + y * v.0;
-        (
-            Eval {
-                g: rn - ji.h - jj.h,
-                g1: rt - ji.d1 - jj.d1,
-                g2: -rn - ji.d2 - jj.d2,
-                ji,
-                jj,
-            },
-            -rt - ti - tj,
-            (ti, tj),
-        )
-    };
-    let square = |v: (f64, f64)| v.0 * v.0 + v.1 * v.1;
     let mut v = v0;
-    let (mut cur, mut g3, mut thirds) = eval(v, square(v));
-    let mut len_v = square(v).sqrt();
+    let l2 = square(v);
+    let (mut cur, mut g3, mut thirds) = evaluate(fi, fj, (x, y), v, l2);
+    let mut len_v = l2.sqrt();
     let mut last = f64::INFINITY;
     for iterations in 1..=HALLEY_CAP {
-        // h = max g ≥ g(ψ) for every ψ (g(v) = |v| g(ψ)).
-        if cur.g > max_gap * len_v {
+        let s = halley_step(&cur, g3, v, len_v, last, max_gap);
+        if s.apart {
             return Fast::Apart;
         }
-        // Halley: s = −(g'/g'') / (1 − g'g'''/2g''²), with the denominator
-        // above 1/2 (near the optimum it is 1).
-        let (g1, g2) = (cur.g1, cur.g2);
-        let den = 2.0 * g2 * g2 - g1 * g3;
-        if !(g2 < 0.0 && den > g2 * g2) {
+        if !s.ok {
             return Fast::Failed;
         }
-        let step = -2.0 * g1 * g2 / den;
-        let len = step.abs();
-        // Far from the optimum (a step beyond 1 rad) or not converging
-        // (a step that does not shrink): the safeguarded ascent is safe.
-        if !(len <= HALLEY_MAX_STEP && len < last) {
-            return Fast::Failed;
-        }
-        v = (v.0 - step * v.1, v.1 + step * v.0);
-        if len < HALLEY_TOL {
-            let inv = 1.0 / square(v).sqrt();
-            let n = (v.0 * inv, v.1 * inv);
-            if !second && len < TAYLOR_FINISH {
-                // H and H' moved by the turn `a = atan(step)` along their
-                // Taylor series (to a³ and a²; what is left, ≲ |H''''|a³/6
-                // ≲ 10⁻¹⁶ for |H''''| ≲ 100, is round-off), from the jets
-                // at the last iterate (scaled by `|v|` there): no
-                // evaluation.
-                let a = step * (1.0 - step * step * (1.0 / 3.0));
-                let inv_l = 1.0 / len_v;
-                let moved = |j: &SupportJet, t: f64| SupportJet {
-                    h: (j.h + a * (j.d1 + a * (0.5 * j.d2 + a * (1.0 / 6.0) * t))) * inv_l,
-                    d1: (j.d1 + a * (j.d2 + a * 0.5 * t)) * inv_l,
-                    d2: f64::NAN,
-                };
-                let (ji, jj) = (moved(&cur.ji, thirds.0), moved(&cur.jj, thirds.1));
-                let gap = x * n.0 + y * n.1 - ji.h - jj.h;
+        v = s.v;
+        let l2 = square(v);
+        let len_next = l2.sqrt();
+        if s.len < HALLEY_TOL {
+            let n = unit(v, len_next);
+            if !second && s.len < TAYLOR_FINISH {
+                let (gap, ji, jj) = taylor(&cur, thirds, s.step, len_v, n, (x, y));
                 if gap > max_gap {
                     return Fast::Apart;
                 }
@@ -713,7 +662,7 @@ fn halley(
                     converged: true,
                 });
             }
-            let (end, ..) = eval(n, 1.0);
+            let (end, ..) = evaluate(fi, fj, (x, y), n, 1.0);
             if end.g > max_gap {
                 return Fast::Apart;
             }
@@ -727,17 +676,159 @@ fn halley(
             });
         }
         let next;
-        let l2 = square(v);
-        (next, g3, thirds) = eval(v, l2);
-        let len_next = l2.sqrt();
-        // A large step must climb: else it ran past the maximum the
-        // safeguarded ascent reaches.
-        if len >= 1e-3 && next.g * len_v < cur.g * len_next {
+        (next, g3, thirds) = evaluate(fi, fj, (x, y), v, l2);
+        if overshoots(s.len, next.g, cur.g, len_v, len_next) {
             return Fast::Failed;
         }
-        (cur, len_v, last) = (next, len_next, len);
+        (cur, len_v, last) = (next, len_next, s.len);
     }
     Fast::Failed
+}
+
+/// The screen at the line of centres ([`Ellipse::exact_gap`]'s second):
+/// `h ≥ g(ψ₀) = r − H_i − H_j` there, so the pair at separation `(x, y)`
+/// (`r = |r_ij|`) is skipped when `t = r − max_gap > H_i + H_j`, i.e.
+/// `t r > √U_i + √U_j` with `U = r² H² = u(r_ij)` (the quadratic form at
+/// the separation itself), tested on squares.
+#[inline(always)]
+fn screened_out(fi: &Form, fj: &Form, (x, y): (f64, f64), r: f64, max_gap: f64) -> bool {
+    let t = r - max_gap;
+    let (ui, uj) = (fi.square((x, y)), fj.square((x, y)));
+    let tr = t * r;
+    let excess = tr * tr - ui - uj;
+    (t > 0.0) & (excess > 0.0) & (excess * excess > 4.0 * ui * uj)
+}
+
+/// `|v|²`.
+#[inline(always)]
+fn square(v: (f64, f64)) -> f64 {
+    v.0 * v.0 + v.1 * v.1
+}
+
+/// `v/|v|`, given `|v|` (`length`).
+#[inline(always)]
+fn unit(v: (f64, f64), length: f64) -> (f64, f64) {
+    let inv = 1.0 / length;
+    (v.0 * inv, v.1 * inv)
+}
+
+/// `g, g', g''` with both jets at the direction `v` (`|v|² = l2`), and
+/// `g'''` with each body's `H'''` (for the Taylor finish), all scaled by
+/// `|v|`, for the bodies `fi`, `fj` at separation `(x, y)`.
+#[inline(always)]
+fn evaluate(
+    fi: &Form,
+    fj: &Form,
+    (x, y): (f64, f64),
+    v: (f64, f64),
+    l2: f64,
+) -> (Eval, f64, (f64, f64)) {
+    let w = (v.0 * v.0 - v.1 * v.1, 2.0 * v.0 * v.1);
+    let ((ji, ti), (jj, tj)) = (fi.jet3(w, l2), fj.jet3(w, l2));
+    let rn = x * v.0 + y * v.1;
+    let rt = -x * v.1 + y * v.0;
+    (
+        Eval {
+            g: rn - ji.h - jj.h,
+            g1: rt - ji.d1 - jj.d1,
+            g2: -rn - ji.d2 - jj.d2,
+            ji,
+            jj,
+        },
+        -rt - ti - tj,
+        (ti, tj),
+    )
+}
+
+/// One step of [`halley`] from the iterate `v` (`|v| = len_v`) where `g`
+/// and its derivatives are `cur` and `g3`, after a step of length `last`.
+#[derive(Clone, Copy, Debug)]
+struct HalleyStep {
+    /// `g > max_gap` there (`h = max g ≥ g(ψ)` for every `ψ`): apart.
+    apart: bool,
+    /// The guards hold: `g'' < 0`, Halley's denominator above `1/2` (near
+    /// the optimum it is 1), and the step at most [`HALLEY_MAX_STEP`] and
+    /// shorter than the one before (else the safeguarded ascent runs).
+    ok: bool,
+    /// `s = −(g'/g'') / (1 − g'g'''/2g''²)`.
+    step: f64,
+    /// `|s|`.
+    len: f64,
+    /// `v` turned by the step, `v + s v⊥`.
+    v: (f64, f64),
+}
+
+/// [`HalleyStep`] from `cur` and `g3` at `v`.
+#[inline(always)]
+fn halley_step(
+    cur: &Eval,
+    g3: f64,
+    v: (f64, f64),
+    len_v: f64,
+    last: f64,
+    max_gap: f64,
+) -> HalleyStep {
+    // g(v) = |v| g(ψ).
+    let apart = cur.g > max_gap * len_v;
+    let (g1, g2) = (cur.g1, cur.g2);
+    let den = 2.0 * g2 * g2 - g1 * g3;
+    let step = -2.0 * g1 * g2 / den;
+    let len = step.abs();
+    let ok = (g2 < 0.0) & (den > g2 * g2) & (len <= HALLEY_MAX_STEP) & (len < last);
+    HalleyStep {
+        apart,
+        ok,
+        step,
+        len,
+        v: (v.0 - step * v.1, v.1 + step * v.0),
+    }
+}
+
+/// The finish of [`halley`] without `second` after a last step `step`
+/// below [`TAYLOR_FINISH`]: the gap and `H`, `H'` at the final normal `n`,
+/// moved from the last iterate (`cur`, each body's `H'''` in `thirds`,
+/// scaled by `|v| = len_v`) by the turn `a = atan(step)` along their
+/// Taylor series (to `a³` and `a²`; what is left, `≲ |H''''|a³/6 ≲ 10⁻¹⁶`
+/// for `|H''''| ≲ 100`, is round-off): no evaluation. `H''` is NaN (the
+/// contacts need `H` and `H'` alone).
+#[inline(always)]
+fn taylor(
+    cur: &Eval,
+    thirds: (f64, f64),
+    step: f64,
+    len_v: f64,
+    n: (f64, f64),
+    (x, y): (f64, f64),
+) -> (f64, SupportJet, SupportJet) {
+    let a = step * (1.0 - step * step * (1.0 / 3.0));
+    let inv_l = 1.0 / len_v;
+    let moved = |j: &SupportJet, t: f64| SupportJet {
+        h: (j.h + a * (j.d1 + a * (0.5 * j.d2 + a * (1.0 / 6.0) * t))) * inv_l,
+        d1: (j.d1 + a * (j.d2 + a * 0.5 * t)) * inv_l,
+        d2: f64::NAN,
+    };
+    let (ji, jj) = (moved(&cur.ji, thirds.0), moved(&cur.jj, thirds.1));
+    (x * n.0 + y * n.1 - ji.h - jj.h, ji, jj)
+}
+
+/// Whether a step of [`halley`] of length `len ≥ 10⁻³` from `g = cur`
+/// (at `|v| = len_v`) to `g = next` (at `|v| = len_next`, both scaled by
+/// `|v|`) lowered `g`: it ran past the maximum the safeguarded ascent
+/// reaches (a large step must climb).
+#[inline(always)]
+fn overshoots(len: f64, next: f64, cur: f64, len_v: f64, len_next: f64) -> bool {
+    (len >= 1e-3) & (next * len_v < cur * len_next)
+}
+
+/// The memo of a solve that ended at the normal `n` for the separation
+/// `(x, y)`: `n r̄_ij`, the normal relative to the line of centres, times
+/// `r` (any length will do, and no division).
+#[inline(always)]
+fn remember(n: (f64, f64), (x, y): (f64, f64)) -> [f64; MEMO_LEN] {
+    let mut m = [0.0; MEMO_LEN];
+    m[0] = n.0 * x + n.1 * y;
+    m[1] = n.1 * x - n.0 * y;
+    m
 }
 
 static FALLBACKS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
@@ -836,7 +927,7 @@ fn asphericity_of(alpha: f64) -> f64 {
 
 impl Shape<2> for Ellipse {
     type Orientation = Axis;
-    type Fast = NoFastPath;
+    type Fast = Self;
 
     fn family(&self) -> &'static str {
         INFO.name
