@@ -50,6 +50,21 @@ impl<const D: usize, O: Copy, const W: usize> PairLanes<D, O, W> {
         Vector::<D>::from_fn(|a, _| self.r_ij[a][l])
     }
 
+    /// Put `pair` in lane `l`, with the bodies' bounding radii `reach`
+    /// (`bounding_radius` of `size_i` and `size_j`).
+    #[inline]
+    pub fn set(&mut self, l: usize, pair: &Pair<D, O>, reach: (f64, f64)) {
+        self.size_i[l] = pair.size_i;
+        self.size_j[l] = pair.size_j;
+        (self.reach_i[l], self.reach_j[l]) = reach;
+        self.o_i[l] = pair.o_i;
+        self.o_j[l] = pair.o_j;
+        for a in 0..D {
+            self.r_ij[a][l] = pair.r_ij[a];
+        }
+        self.r2[l] = pair.r_ij.norm_squared();
+    }
+
     /// Lane `l` as one [`Pair`].
     #[inline(always)]
     pub fn pair(&self, l: usize) -> Pair<D, O> {

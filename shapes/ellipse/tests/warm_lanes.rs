@@ -79,15 +79,11 @@ const W: usize = 64;
 fn lanes(shape: &Ellipse, pairs: &[Pair<2, Axis>]) -> PairLanes<2, Axis, W> {
     let mut p = PairLanes::filled(Axis::new(0.0));
     for (l, q) in pairs.iter().enumerate() {
-        p.size_i[l] = q.size_i;
-        p.size_j[l] = q.size_j;
-        p.reach_i[l] = shape.bounding_radius(q.size_i);
-        p.reach_j[l] = shape.bounding_radius(q.size_j);
-        p.o_i[l] = q.o_i;
-        p.o_j[l] = q.o_j;
-        p.r_ij[0][l] = q.r_ij[0];
-        p.r_ij[1][l] = q.r_ij[1];
-        p.r2[l] = q.r_ij.norm_squared();
+        let reach = (
+            shape.bounding_radius(q.size_i),
+            shape.bounding_radius(q.size_j),
+        );
+        p.set(l, q, reach);
     }
     p
 }

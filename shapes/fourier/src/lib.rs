@@ -1057,16 +1057,15 @@ mod tests {
         for s in &shapes {
             let mut lanes = PairLanes::<2, Angle, W>::filled(Angle::new(0.0));
             for (l, &(size_i, t_i, size_j, t_j, (x, y))) in pairs.iter().enumerate() {
-                let d = Vector::<2>::new(x, y);
-                lanes.size_i[l] = size_i;
-                lanes.size_j[l] = size_j;
-                lanes.reach_i[l] = s.bounding_radius(size_i);
-                lanes.reach_j[l] = s.bounding_radius(size_j);
-                lanes.o_i[l] = Angle::new(t_i);
-                lanes.o_j[l] = Angle::new(t_j);
-                lanes.r_ij[0][l] = x;
-                lanes.r_ij[1][l] = y;
-                lanes.r2[l] = d.norm_squared();
+                let pair = Pair {
+                    size_i,
+                    o_i: Angle::new(t_i),
+                    size_j,
+                    o_j: Angle::new(t_j),
+                    r_ij: Vector::<2>::new(x, y),
+                };
+                let reach = (s.bounding_radius(size_i), s.bounding_radius(size_j));
+                lanes.set(l, &pair, reach);
             }
             // Stale contents must not leak into lanes without a contact.
             let mut out = ContactLanes::<2, W> {
