@@ -11,7 +11,8 @@
 //!   (`fourier` near-disks): the pairs whose contacts changed, with their
 //!   contacts and, from a file, every stationary point of their arcs by
 //!   brute force; in the `jam` mode also the two pairs whose own `ΔV`
-//!   misses the trapezoid of their own gradient most.
+//!   misses the trapezoid of their own gradient most. Only misses above
+//!   `TRACE_MIN_JUMP` (default 10⁻¹³) are explained.
 //!
 //! ```sh
 //! cargo run --release --example trace_fire -- out/x/packings/ID.failed.json [STEPS]
@@ -53,6 +54,9 @@ struct Traced<'a, const D: usize, S: Shape<D>> {
     worst: Worst,
     events: u64,
     verbose: bool,
+    /// Energy misses larger than this are explained pair by pair
+    /// (`TRACE_MIN_JUMP`, default 1e-13).
+    min_jump: f64,
 }
 
 fn list(v: &[f64]) -> String {
@@ -145,7 +149,7 @@ impl<const D: usize, S: Shape<D>> Objective for Traced<'_, D, S> {
                 // A step whose energy misses the trapezoid by more than a
                 // tenth of its change: each changed pair before and after.
                 if let Some(explain) = self.explain
-                    && err.abs() > 1e-13
+                    && err.abs() > self.min_jump
                     && err.abs() > 0.1 * (e - e0).abs()
                     && self.explained < 12
                 {
@@ -248,6 +252,10 @@ fn traced<const D: usize, S: Shape<D>>(
         explain,
         pair_err,
         explained: 0,
+        min_jump: std::env::var("TRACE_MIN_JUMP")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(1e-13),
     };
     let out = fire.minimize(&mut t);
     let mut worst = std::mem::take(&mut t.worst);
@@ -310,6 +318,23 @@ impl PackingVisitor for Trace {
             e / n as f64,
             g.iter().map(|x| x * x).sum::<f64>()
         );
+        // The body with the largest residual force, and its pairs.
+        let per = dof / n;
+        let (body, share) = (0..n)
+            .map(|b| {
+                (
+                    b,
+                    g[b * per..(b + 1) * per].iter().map(|x| x * x).sum::<f64>(),
+                )
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or((0, 0.0));
+        println!("body {body}: Σg² {share:.3e}, its pairs:");
+        let (gaps, pairs) = gaps_pairs(&mut scene);
+        for (k, p) in pairs.iter().filter(|(k, _)| k.0 == body || k.1 == body) {
+            let overlaps = gaps.get(k).map_or(String::new(), |v| list(v));
+            println!("  pair {k:?} {overlaps}: {}", explain(p));
+        }
     }
 }
 
