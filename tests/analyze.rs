@@ -4,11 +4,11 @@
 //! count must be the run's exactly; bad files are refused naming the line
 //! and what was expected.
 
+use crate::common;
 use jamkit_experiment::analyze::{ReadOptions, analyze, parse_observables, read};
 use jamkit_experiment::{Experiment, extxyz};
 use jamkit_format::PackingFile;
 use std::fmt::Write as _;
-mod common;
 
 /// A jammed sphere packing of `dim` dimensions from a run, with contacts
 /// and the spectrum measured.

@@ -3,10 +3,10 @@
 //! out, hold the tables of the packings it holds (a finished run's own,
 //! byte for byte), and give `jamkit report` the same fits as the run itself.
 
+use crate::common;
 use jamkit_experiment::Experiment;
 use jamkit_experiment::archive::archive;
 use jamkit_format::{PackingFile, without_configuration};
-mod common;
 
 #[test]
 fn archive_keeps_measures_and_gives_the_same_report() {

@@ -5,7 +5,7 @@
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 
-mod common;
+use crate::common;
 use common::{jamkit, quickstart};
 
 /// Without a terminal, each finished packing writes a line with its id,

@@ -6,7 +6,7 @@
 //! and `jamkit run` of the same file with the same overrides makes the same
 //! packings.
 
-mod common;
+use crate::common;
 use common::jamkit;
 use std::path::Path;
 

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::jamkit;
 
 /// Jam one packing of 16 bodies into `dir` and return its file.

@@ -13,7 +13,7 @@ use rand::{RngExt, SeedableRng};
 use std::f64::consts::PI;
 use std::path::Path;
 
-mod common;
+use crate::common;
 
 fn ellipse(aspect: f64) -> Ellipse {
     Ellipse::new(&EllipseParams {
@@ -331,43 +331,13 @@ fn runs_are_deterministic() {
     }
 }
 
-/// The generic pass with the family's warm lanes
-/// (`FastContacts::contacts_warm_lanes`, memos and all) gives the energy
-/// and gradient of the generic pass one pair at a time bit for bit, call
-/// after call, while the bodies move down the gradient and now and then
-/// jump (centres by up to 0.1, turns by up to 2 rad): warm pairs, pairs
-/// that turn far, pairs new to a rebuilt list. α = 1.1, 1.5 and 3, a list
-/// whose length is no multiple of the chunk.
+/// The scene's warm lanes (`FastContacts::contacts_warm_lanes`) give the
+/// generic pass's energy and gradient bit for bit along a path of moves
+/// and jumps (`common::assert_lanes_match_the_generic_pass`): α = 1.1,
+/// 1.5 and 3.
 #[test]
 fn warm_lanes_match_the_generic_pass_bit_for_bit() {
-    use jamkit_core::{Packing, Potential, SizeDistribution};
-    use jamkit_engine::{Objective, Scene};
-    let bits = |g: &[f64]| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     for aspect in [1.1, 1.5, 3.0] {
-        let shape = ellipse(aspect);
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let sizes = SizeDistribution::default().sample(97, &mut rng);
-        let packing = Packing::<2, Ellipse>::random(shape, sizes, 0.86, &mut rng).unwrap();
-        let mut lanes = Scene::new(packing, Potential::Harmonic, 0.2);
-        let mut generic = lanes.clone();
-        let (mut g, mut h) = (vec![0.0; lanes.dof()], vec![0.0; lanes.dof()]);
-        let mut jumps = rand_chacha::ChaCha8Rng::seed_from_u64(9);
-        for call in 0..60 {
-            let e = lanes.energy_gradient(&mut g);
-            let f = generic.energy_gradient_generic(&mut h);
-            let what = format!("α = {aspect}, call {call}");
-            assert!(e > 0.0, "{what}");
-            assert_eq!(e.to_bits(), f.to_bits(), "{what}");
-            assert_eq!(bits(&g), bits(&h), "{what}");
-            let mut dq: Vec<f64> = g.iter().map(|x| -0.02 * x).collect();
-            if call % 10 == 9 {
-                for (k, x) in dq.iter_mut().enumerate() {
-                    let big = if k % 3 == 2 { 2.0 } else { 0.1 };
-                    *x += big * (jumps.random::<f64>() - 0.5);
-                }
-            }
-            lanes.displace(&dq);
-            generic.displace(&dq);
-        }
+        common::assert_lanes_match_the_generic_pass(ellipse(aspect), &format!("α = {aspect}"));
     }
 }

@@ -9,7 +9,7 @@
 //! h_ij = h_ji, the brute-force scan of directions, the distance of the
 //! surfaces, the sphere limit) are the crate's unit tests.
 
-mod common;
+use crate::common;
 
 use jamkit_core::Shape;
 use jamkit_ellipsoid::{Ellipsoid, EllipsoidParams};

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::jamkit;
 
 fn run(file: &str, out: &Path, sets: &[&str]) -> PathBuf {

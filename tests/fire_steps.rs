@@ -1,7 +1,7 @@
 //! FIRE's time step against the stability limit of the packings it makes,
 //! and what a failed minimisation leaves behind.
 
-mod common;
+use crate::common;
 
 use common::{run_into, run_ok};
 use jamkit_core::Shape;

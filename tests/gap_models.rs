@@ -11,7 +11,7 @@ use jamkit_planar::gap2d::GapModel;
 use rand::{RngExt, SeedableRng};
 use std::f64::consts::PI;
 
-mod common;
+use crate::common;
 
 fn fourier(n: u32, delta: f64, gap: GapModel) -> NearDisk {
     NearDisk::fourier(&FourierParams {

@@ -10,7 +10,7 @@
 use jamkit_format::gsd::{self, File};
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 
 const F32: f64 = f32::EPSILON as f64;
 

@@ -9,7 +9,7 @@
 //! differences near ±Q e_z and generic, h_ij = h_ji, the printed formula,
 //! volume, asphericity) are the crate's unit tests.
 
-mod common;
+use crate::common;
 
 use jamkit_core::Shape;
 use jamkit_core::gap_model::GapModel;

@@ -9,7 +9,7 @@ use jamkit_lobed::{LobedParams, lobed};
 use jamkit_nmer::{Nmer, NmerParams, SphereSpec};
 use jamkit_sphere::Sphere;
 
-mod common;
+use crate::common;
 
 /// The kit's Hessian check (`jamkit_kit::check_hessian_at`: 1e-6 of the
 /// largest entry, with the reason in `crates/kit`) on `n` bodies for each

@@ -18,11 +18,11 @@
 //! failure to set that up is a test failure; elsewhere the test says it
 //! did not run and passes.
 
+use crate::common;
 use jamkit_experiment::Experiment;
 use jamkit_registry::{EXAMPLES, FAMILIES, params_from_ron, supports_dim};
 use std::path::Path;
 use std::process::Command;
-mod common;
 
 #[test]
 fn ase_and_gsd_read_our_exports_and_we_analyze_ase_files() {

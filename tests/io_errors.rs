@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::jamkit;
 
 /// `jamkit export … -o nodir/x.xyz`: the message names `nodir/x.xyz` (not

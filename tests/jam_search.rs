@@ -13,7 +13,7 @@ use jamkit_experiment::{Experiment, Plan};
 use jamkit_fourier::{FourierParams, NearDisk};
 use jamkit_sphere::Sphere;
 
-mod common;
+use crate::common;
 use common::compressed;
 
 /// Two packings of 16 disks (seed 3) with `fields` added to the file

@@ -1,9 +1,9 @@
 //! Small-N jamming end to end, in 2D and 3D, through the experiment runner.
 
+use crate::common;
+use common::run_into;
 use jamkit_experiment::Experiment;
 use jamkit_format::PackingFile;
-mod common;
-use common::run_into;
 
 fn experiment(dim: usize, particles: usize, samples: usize) -> Experiment {
     let text = format!(

@@ -2,9 +2,9 @@
 //! in the engine: the conformance kit on blunt to sharp lobes, and its
 //! example experiment end to end.
 
+use crate::common;
 use jamkit_experiment::{Experiment, overrides};
 use jamkit_lobed::{Lobed, LobedParams};
-mod common;
 use std::path::Path;
 
 fn lobed(delta: f64, kappa: f64) -> Lobed {

@@ -5,7 +5,7 @@
 
 use std::process::{Command, Stdio};
 
-mod common;
+use crate::common;
 use common::{jamkit, quickstart, results_without_timing};
 
 fn host() -> String {

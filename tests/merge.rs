@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::{jamkit, quickstart, results_without_timing};
 
 const SMALL: [&str; 6] = ["--set", "particles=32", "--set", "samples=5", "--jobs", "1"];

@@ -17,7 +17,7 @@ use jamkit_sphere::Sphere;
 use rand::{RngExt, SeedableRng};
 use std::collections::BTreeSet;
 
-mod common;
+use crate::common;
 use common::compressed;
 
 /// Pairs `(i, j)` in contact (`h < 0`).

@@ -37,7 +37,7 @@ fn stabilise<const D: usize, S: Shape<D>>(
     )
 }
 
-mod common;
+use crate::common;
 
 fn near_disk(n: u32, delta: f64) -> NearDisk {
     NearDisk::fourier(&FourierParams {

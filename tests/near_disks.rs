@@ -9,7 +9,7 @@ use jamkit_experiment::Experiment;
 use jamkit_fourier::{FourierParams, NearDisk};
 use rand::SeedableRng;
 
-mod common;
+use crate::common;
 use common::multi_mode;
 
 fn fourier(n: u32, delta: f64) -> NearDisk {
@@ -128,14 +128,11 @@ fn lane_pass_matches_the_generic_pass_bit_for_bit() {
     }
 }
 
-/// With the exact gap, the generic pass with the family's warm lanes
-/// (`FastContacts::contacts_warm_lanes`, memos and all) gives the energy
-/// and gradient of the generic pass one pair at a time bit for bit, call
-/// after call, while the bodies move down the gradient and now and then
-/// jump (centres by up to 0.1, turns by up to 2 rad): warm pairs, pairs
-/// that turn far, pairs new to a rebuilt list. n = 2 (Δ = 0.1, 0.3), n = 3
-/// and a sum of modes with phases, a list whose length is no multiple of
-/// the chunk.
+/// With the exact gap, the scene's warm lanes
+/// (`FastContacts::contacts_warm_lanes`) give the generic pass's energy
+/// and gradient bit for bit along a path of moves and jumps
+/// (`common::assert_lanes_match_the_generic_pass`): n = 2 (Δ = 0.1, 0.3),
+/// n = 3 and a sum of modes with phases.
 #[test]
 fn warm_lanes_match_the_generic_pass_bit_for_bit() {
     let exact = |n: u32, delta: f64| {
@@ -165,32 +162,8 @@ fn warm_lanes_match_the_generic_pass_bit_for_bit() {
         gap: jamkit_planar::gap2d::GapModel::Exact,
     })
     .unwrap();
-    let bits = |g: &[f64]| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     for shape in [exact(2, 0.1), exact(2, 0.3), exact(3, 0.2), sum] {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let sizes = SizeDistribution::default().sample(97, &mut rng);
-        let packing = Packing::<2, NearDisk>::random(shape.clone(), sizes, 0.86, &mut rng).unwrap();
-        let mut lanes = Scene::new(packing, Potential::Harmonic, 0.2);
-        let mut generic = lanes.clone();
-        let (mut g, mut h) = (vec![0.0; lanes.dof()], vec![0.0; lanes.dof()]);
-        let mut jumps = rand_chacha::ChaCha8Rng::seed_from_u64(9);
-        for call in 0..60 {
-            let e = lanes.energy_gradient(&mut g);
-            let f = generic.energy_gradient_generic(&mut h);
-            let what = format!("{shape:?}, call {call}");
-            assert!(e > 0.0, "{what}");
-            assert_eq!(e.to_bits(), f.to_bits(), "{what}");
-            assert_eq!(bits(&g), bits(&h), "{what}");
-            let mut dq: Vec<f64> = g.iter().map(|x| -0.02 * x).collect();
-            if call % 10 == 9 {
-                use rand::RngExt;
-                for (k, x) in dq.iter_mut().enumerate() {
-                    let big = if k % 3 == 2 { 2.0 } else { 0.1 };
-                    *x += big * (jumps.random::<f64>() - 0.5);
-                }
-            }
-            lanes.displace(&dq);
-            generic.displace(&dq);
-        }
+        let what = format!("{shape:?}");
+        common::assert_lanes_match_the_generic_pass(shape, &what);
     }
 }

@@ -4,12 +4,12 @@
 //! derivatives of the gap, rotation invariance of the energy, and small
 //! jamming runs that must come out isostatic, `z_J = 4d − 2` for dimers.
 
+use crate::common;
 use jamkit_core::{Contact, GapHessian, Packing, Potential, Shape, SizeDistribution, Vector};
 use jamkit_core::{Pair, ShapeExt};
 use jamkit_engine::{Objective, Scene, check::gradient_error};
 use jamkit_nmer::{Angle, Nmer, NmerParams, Quaternion, SphereSpec};
 use rand::SeedableRng;
-mod common;
 
 fn dimer<const D: usize>(alpha: f64) -> Nmer<D> {
     Nmer::<D>::new(&NmerParams {

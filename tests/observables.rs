@@ -2,8 +2,8 @@
 //! command line: files written, normalisations, resume with other
 //! observables, and `jamkit spectrum` on a saved packing.
 
+use crate::common;
 use jamkit_experiment::Experiment;
-mod common;
 use std::path::Path;
 
 fn experiment(observables: &str) -> Experiment {

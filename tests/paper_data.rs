@@ -9,7 +9,7 @@
 use jamkit_format::PackingFile;
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::packing_paths;
 
 /// The committed run `run` of `experiments/<experiment>/`.

@@ -7,7 +7,7 @@
 
 use jamkit_experiment::{Experiment, Plan, overrides};
 
-mod common;
+use crate::common;
 
 /// Near-disks (n = 2, Δ = 0.1, N = 32, one sample): a family whose
 /// default masses and search differ from the paper's.

@@ -3,8 +3,8 @@
 //! series are labelled by the other coordinates, unmeasured observables are
 //! skipped and said so, and a directory without packings is refused.
 
+use crate::common;
 use jamkit_experiment::Experiment;
-mod common;
 
 #[test]
 fn a_dimer_scan_plots_every_observable_against_each_scanned_quantity() {

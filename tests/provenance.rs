@@ -5,7 +5,7 @@
 use jamkit_format::PackingFile;
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::{jamkit, packing_paths, quickstart};
 
 const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -2,8 +2,8 @@
 //! non-empty SVG and PNG, every fitted exponent finite, the summary table
 //! present, and clear errors for directories without near-disk packings.
 
+use crate::common;
 use jamkit_experiment::Experiment;
-mod common;
 use std::path::Path;
 
 fn small_run(dir: &Path) {

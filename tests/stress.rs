@@ -5,6 +5,8 @@
 //! `max_density_steps`). The full-size files are `experiments/stress/*.ron`;
 //! their measured outcomes are in `docs/reports/stress.md`.
 
+use crate::common;
+use common::run_into;
 use jamkit_core::Pair;
 use jamkit_core::{Packing, Potential, Shape, Vector};
 use jamkit_engine::{Objective, Scene};
@@ -15,8 +17,6 @@ use jamkit_sphere::Sphere;
 use rand::SeedableRng;
 use std::f64::consts::PI;
 use std::path::Path;
-mod common;
-use common::run_into;
 
 /// Caps every reduced run so that nothing can hang.
 const CAPS: [&str; 2] = [

@@ -2,8 +2,8 @@
 //! empty cell (not `null`), a text parameter its plain text, and every row
 //! has the header's number of cells.
 
+use crate::common;
 use jamkit_experiment::Experiment;
-mod common;
 
 #[test]
 fn results_csv_has_empty_cells_for_absent_optionals_and_plain_text() {

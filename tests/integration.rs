@@ -1,0 +1,53 @@
+//! The end-to-end tests: one module per file of `tests/`, built as one
+//! test binary (the files share one build and one pool of test threads),
+//! and the fixtures they share (`common`). A filter runs one file's tests:
+//! `cargo test --release --test integration ellipse::`.
+mod analyze;
+mod archive;
+mod batch_log;
+mod bench_accuracy;
+mod cli;
+mod common;
+mod conformance;
+mod docs;
+mod draw;
+mod ellipse;
+mod ellipsoid;
+mod extxyz;
+mod families;
+mod fire_steps;
+mod gap_models;
+mod gradients;
+mod gsd;
+mod harmonic;
+mod hessian;
+mod inputs;
+mod interop;
+mod invariance;
+mod io_errors;
+mod jam_search;
+mod jamming;
+mod lobed;
+mod locks;
+mod merge;
+mod minimizers;
+mod moduli;
+mod near_disks;
+mod nmer;
+mod observables;
+mod packing_files;
+mod paper_data;
+mod paper_path;
+mod plot;
+mod profiled;
+mod provenance;
+mod python;
+mod reference;
+mod report;
+mod rough_polygons;
+mod shards;
+mod simd;
+mod slurm;
+mod spectrum;
+mod stress;
+mod tables;
