@@ -1018,7 +1018,8 @@ impl Harmonic {
     /// iteration started where the pair's last solve ended
     /// ([`gap3d::exact_joint_warm`] from the [`gap3d::JointStart`] that
     /// `memo` holds), else, or where that fails, the cold solve of
-    /// [`Harmonic::exact_gap`]; `memo` gets where this solve ended. A pair
+    /// [`Harmonic::exact_gap`]; `memo` gets where this solve ended, also
+    /// for a pair the warm solve finds apart (`h > max_gap`, `None`). A pair
     /// that [`Harmonic::gap_lower_bound`] shows farther apart than
     /// `max_gap` (read at the memo's normal, or at the line of centres
     /// without a start) is skipped before any solve, its memo kept. The
@@ -1063,13 +1064,15 @@ impl Harmonic {
                 &self.radial_body(size_i, &ci),
                 &self.radial_body(size_j, &cj),
                 &start,
-                max_gap,
+                f64::INFINITY,
                 hessians,
             );
             match warm {
+                // A pair found apart keeps where it was found too, so that
+                // its next solve (and screen) starts there.
                 gap3d::Joint::Found(e) => {
                     *memo = Some(gap3d::JointStart::remember(&e, r_ij, &ci, &cj));
-                    return Some(e);
+                    return (e.gap <= max_gap).then_some(e);
                 }
                 gap3d::Joint::Apart => return None,
                 // Not a start to try again: the cold solve writes its own.
