@@ -217,10 +217,22 @@
 //! `jamkit_core::PairMemo`: the normal relative to the line of centres
 //! and each support unit vector relative to its body's direction, so a
 //! pair that moved or turned as a whole starts at its optimum), skipping
-//! the cold start's two support searches at the line of centres; after a
-//! small move it converges in two or three steps. Same steps, safeguards
-//! and tolerance, so the same guarantee on convergence whatever the start;
-//! a result is accepted only with its normal in the cap `n·r̂ ≥ 1/2`, where
+//! the cold start's two support searches at the line of centres. Same
+//! steps and safeguards; it ends at a looser tolerance, since what a step
+//! leaves shrinks with the step itself: Newton's iteration leaves
+//! `K len²` after a step of length `len` (`K` below 1 for the bodies
+//! tested), and `L` is stationary, so `h` keeps only the square of that.
+//! A warm iteration ends after a step below [`WARM_TOL`] = 10⁻⁵ (≤ 10⁻¹⁰
+//! left in the normal and the support points, ≤ 10⁻²⁰ in `h`), read at the
+//! step's end as the cold one is; and after a step below [`TAYLOR_TOL`] =
+//! 10⁻⁶, without support Hessians, it ends without reading the radial
+//! functions again: the support points moved along the step to first
+//! order (≤ 10⁻¹²) and `h` the stationary value of the quadratic model,
+//! `L + ½ ∇L·δ` (`O(len³)`: ≤ 10⁻¹⁸). After a FIRE step most pairs take
+//! one step. The guarantee holds whatever the start, so the error a
+//! result carries is set by how far its own last step went, not by how
+//! far the pair moved: a pair that stops moving is solved to round-off.
+//! A result is accepted only with its normal in the cap `n·r̂ ≥ 1/2`, where
 //! it is the maximum the cold solve reaches (conditions on
 //! [`exact_joint_warm`]), else the caller solves cold. A pair is then
 //! known to be apart only from its converged gap (`h > max_gap`), not from
@@ -603,6 +615,23 @@ fn unit(x: Vector<3>) -> Option<Vector<3>> {
     (n > 0.0 && n.is_finite()).then(|| x / n)
 }
 
+/// An upper bound on the support function of a star-shaped body
+/// `x(y) = ρ(y) y` in the direction `u` (unit) from its radial function in
+/// that direction alone: `s(u) ≤ ρ(u) + π² G² / (16 ρ_min)`, with `G` a
+/// bound on the surface slope `|∇_S ρ|` and `0 < ρ_min ≤ ρ(u)`.
+///
+/// At the angle `θ` from `u`, `ρ(y) ≤ ρ(u) + G θ` (along the great
+/// circle) and, for `θ ≤ π/2`, `cos θ = 1 − 2 sin²(θ/2) ≤ 1 − 4θ²/π²`
+/// (`sin x ≥ (2√2/π) x` for `x ≤ π/4`), so
+/// `u·x(y) = ρ(y) cos θ ≤ ρ(u) + Gθ − 4ρ(u)θ²/π²`, whose largest value over
+/// `θ` is `ρ(u) + π²G²/(16 ρ(u))`; for `θ > π/2`, `u·x(y) < 0 < ρ(u)`.
+/// With it `g(u) ≥ u·r − ρ_i(u) − ρ_j(−u) − (the two margins)` bounds the gap
+/// `h ≥ g(u)` from below at any `u`, from two radial values.
+#[inline(always)]
+pub fn radial_support_bound(rho_u: f64, slope: f64, rho_min: f64) -> f64 {
+    rho_u + std::f64::consts::PI * std::f64::consts::PI * slope * slope / (16.0 * rho_min)
+}
+
 /// Where a [`radial_support`] search ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RadialSupport {
@@ -909,6 +938,8 @@ struct Linearised {
     b: Matrix<3>,
     /// `R ρ y`, the surface point.
     x: Vector<3>,
+    /// The support search's gradient `t` (body frame).
+    t: Vector<3>,
     /// `ρ u·y`, its height.
     phi: f64,
 }
@@ -937,28 +968,61 @@ fn spd_inverse(m: &Matrix<3>) -> Option<Matrix<3>> {
 }
 
 /// `None` where `A` is not positive definite (the surface is not convex
-/// there, or `y` is far from the support point).
+/// there, or `y` is far from the support point). `t` and `A` as in
+/// [`tangent`], `P H P` by rank-one updates; with `A⁺ = (A + y yᵀ)⁻¹ − y yᵀ`
+/// (`A y = 0`) and `Bᵀ = ρ P + g yᵀ`, the search's step is `A⁺ t`, and
+/// `A⁺ Bᵀ = ρ A⁺ + (A⁺ g) yᵀ`, `R B = ρ R + (R y)(g − ρ y)ᵀ`.
 #[inline(always)]
 fn linearise<F>(body: &RadialBody<'_, F>, ub: &Vector<3>, at: &At) -> Option<Linearised>
 where
     F: Radial,
 {
     let y = at.y;
-    let (t, big) = tangent(ub, at);
-    let yy = y * y.transpose();
-    let inv = spd_inverse(&(big + yy))?;
-    let proj = Matrix::<3>::identity() - yy;
+    let rho = at.rho;
+    let c = ub.dot(&y);
+    let pu = ub - y * c;
     let g = at.g - y * y.dot(&at.g);
-    let b = proj * at.rho + y * g.transpose();
+    let t = g * c + pu * rho;
+    let hy = at.h * y;
+    let yy = y * y.transpose();
+    let php = at.h - y * hy.transpose() - hy * y.transpose() + yy * y.dot(&hy);
+    let gp = g * pu.transpose();
+    let big = (Matrix::<3>::identity() - yy) * (rho * c) - php * c - (gp + gp.transpose());
+    let a_plus = spd_inverse(&(big + yy))? - yy;
     let rot = Matrix::<3>::from_columns(body.columns);
+    let ry = body.to_world(&y);
     Some(Linearised {
-        n: proj * (inv * t),
-        follow: proj * (inv * b.transpose()) * rot.transpose(),
-        b: rot * b,
-        x: body.to_world(&(y * at.rho)),
-        phi: at.rho * ub.dot(&y),
+        n: a_plus * t,
+        follow: (a_plus * rho + (a_plus * g) * y.transpose()) * rot.transpose(),
+        b: rot * rho + ry * (g - y * rho).transpose(),
+        x: ry * rho,
+        t,
+        phi: rho * c,
     })
 }
+
+/// The last step of a converged cold joint iteration ([`exact_joint`])
+/// is below this (the nested solve's tolerance): ~10⁻¹⁴ left in the
+/// normal and the support points, ~10⁻²⁸ in `h`.
+pub const JOINT_TOL: f64 = 1e-7;
+
+/// The last step of a converged warm joint iteration
+/// ([`exact_joint_warm`]) is below this: what is left is at most
+/// `K len²` in the normal and the support points (quadratic convergence,
+/// `K` of the order of the ratio of third to second derivatives of `L`;
+/// 0.54 at most on the ellipsoids of the tests, near-spherical and
+/// elongated: ≤ 10⁻¹⁰) and `O(len⁴)` in `h` (`L` is stationary: ≤ 10⁻²⁰).
+pub const WARM_TOL: f64 = 1e-5;
+
+/// A warm joint iteration without support Hessians ([`exact_joint_warm`])
+/// whose step is below this ends without reading the radial functions
+/// again: the normal `u + δu` (`K len²` from the optimum, as after any
+/// step), each support point moved along the step to first order,
+/// `x + R B δy` (`O(len²)`: ≤ 10⁻¹²), and `h` the stationary value of the
+/// quadratic model of `L`, `L + ½ ∇L·δ` (`O(len³)`: ≤ 10⁻¹⁸, below the
+/// round-off of `h`). Each support value is `±u·x` at the moved point
+/// (`O(len²)`; the gap is the model's).
+pub const TAYLOR_TOL: f64 = 1e-6;
 
 /// The iteration cap of [`exact_joint`] (it converges in 3–6 steps where it
 /// converges at all).
@@ -1014,8 +1078,8 @@ where
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
 pub enum Joint {
-    /// Converged (a Newton step below 10⁻⁷ on the normal and both support
-    /// points).
+    /// Converged (a Newton step below [`JOINT_TOL`] on the normal and both
+    /// support points; [`WARM_TOL`] or [`TAYLOR_TOL`] from a warm start).
     Found(ExactGap3),
     /// `g(r̂) > max_gap` (cold: the pair is skipped, as by the nested
     /// solve), or a converged gap above `max_gap` ([`exact_joint_warm`]).
@@ -1048,7 +1112,9 @@ where
     if u.dot(r_ij) - fi.value() - fj.value() > max_gap {
         return Joint::Apart;
     }
-    match joint_iterate(r_ij, body_i, body_j, u, fi.at, fj.at, hessians) {
+    match joint_iterate(
+        r_ij, body_i, body_j, u, fi.at, fj.at, hessians, JOINT_TOL, 0.0,
+    ) {
         Some(e) => Joint::Found(e),
         None => Joint::Failed,
     }
@@ -1150,10 +1216,11 @@ fn unit_or_x(r: &Vector<3>) -> Vector<3> {
 
 /// The joint iteration of [`exact_joint`] started at `start` instead of
 /// the line of centres: the warm start of a pair whose last solve ended
-/// near there ([`JointStart`]). The same iteration, safeguards and
-/// tolerance as the cold one, so the same guarantee on convergence (a
-/// last step below 10⁻⁷ on the normal and both support points: ~10⁻¹⁴
-/// left in each, ~10⁻²⁸ in `h`), whatever the start. The result is
+/// near there ([`JointStart`]). The same iteration and safeguards as the
+/// cold one, ended after a step below [`WARM_TOL`] (≤ 10⁻¹⁰ left in the
+/// normal and both support points, ≤ 10⁻²⁰ in `h`) or, without
+/// `hessians`, below [`TAYLOR_TOL`] from the linearisation (module
+/// documentation, "The warm start"), whatever the start. The result is
 /// accepted only where its normal (and the start's) lies in the cap
 /// `n·r̂ ≥ 1/2` about the line of centres. There it is the maximum the
 /// cold solve's ascent from `r̂` reaches when (a) the two support
@@ -1186,7 +1253,9 @@ where
     let u = start.normal;
     let (ub_i, ub_j) = (body_i.to_body(&u), body_j.to_body(&-u));
     let (at_i, at_j) = (body_i.at(start.y_i, &ub_i), body_j.at(start.y_j, &ub_j));
-    match joint_iterate(r_ij, body_i, body_j, u, at_i, at_j, hessians) {
+    match joint_iterate(
+        r_ij, body_i, body_j, u, at_i, at_j, hessians, WARM_TOL, TAYLOR_TOL,
+    ) {
         Some(e) if cap.contains(&e.normal) => {
             if e.gap > max_gap {
                 Joint::Apart
@@ -1199,9 +1268,13 @@ where
 }
 
 /// The joint iteration from the normal `u` and the supports' radial jets
-/// `at_i`, `at_j` (read at `u` and `−u`): `None` where it fails (module
-/// documentation).
+/// `at_i`, `at_j` (read at `u` and `−u`), ended after a step below `tol`
+/// (taken, both supports read at its end), or, without `hessians`, after
+/// a step below `taylor` (taken, the supports moved along it to first
+/// order and `h` from the second-order model, no further radial jet):
+/// `None` where it fails (module documentation).
 #[inline]
+#[allow(clippy::too_many_arguments)]
 fn joint_iterate<F, G>(
     r_ij: &Vector<3>,
     body_i: &RadialBody<'_, F>,
@@ -1210,6 +1283,8 @@ fn joint_iterate<F, G>(
     mut at_i: At,
     mut at_j: At,
     hessians: bool,
+    tol: f64,
+    taylor: f64,
 ) -> Option<ExactGap3>
 where
     F: Radial,
@@ -1229,7 +1304,10 @@ where
         let uu = u * u.transpose();
         let p = Matrix::<3>::identity() - uu;
         let g = u.dot(r_ij) - li.phi - lj.phi;
-        let w = p * g + p * (li.b * li.follow + lj.b * lj.follow) * p;
+        // `P S P` by rank-one updates, `S = S̃_i + S̃_j`.
+        let s = li.b * li.follow + lj.b * lj.follow;
+        let (su, us) = (s * u, s.tr_mul(&u));
+        let w = p * g + s - u * us.transpose() - su * u.transpose() + uu * u.dot(&su);
         let rhs = p * (r_ij - li.x + lj.x - li.b * li.n + lj.b * lj.n);
         let c = (w + uu).cholesky()?;
         let du = c.solve(&rhs);
@@ -1243,6 +1321,28 @@ where
         if !len.is_finite() || len > last {
             return None;
         }
+        if len < taylor && !hessians {
+            // `h = L + ½ ∇L·δ` (the quadratic model's stationary value),
+            // `∇L·δ = d·δu − t_i·δy_i − t_j·δy_j`, and the surface points
+            // moved by `R B δy`.
+            let d = r_ij - li.x + lj.x;
+            let gap = g + 0.5 * (d.dot(&du) - li.t.dot(&dyi) - lj.t.dot(&dyj));
+            let u = along_sphere(&u, &du);
+            let (x_i, x_j) = (li.x + li.b * dyi, lj.x + lj.b * dyj);
+            let jet = |h: f64, point: Vector<3>| SupportJet3 {
+                h,
+                point,
+                hess: Matrix::<3>::zeros(),
+            };
+            return Some(ExactGap3 {
+                normal: u,
+                gap,
+                jet_i: jet(u.dot(&x_i), x_i),
+                jet_j: jet(-u.dot(&x_j), x_j),
+                iterations,
+                converged: true,
+            });
+        }
         let cut = if len > 0.3 { 0.3 / len } else { 1.0 };
         u = along_sphere(&u, &(du * cut));
         yi = along_sphere(&yi, &(dyi * cut));
@@ -1250,7 +1350,7 @@ where
         let (ub_i, ub_j) = (body_i.to_body(&u), body_j.to_body(&-u));
         at_i = body_i.at(yi, &ub_i);
         at_j = body_j.at(yj, &ub_j);
-        if len < 1e-7 {
+        if len < tol {
             let jet_i = body_i.jet(&ub_i, at_i, hessians);
             let jet_j = body_j.jet(&ub_j, at_j, hessians);
             return Some(ExactGap3 {
@@ -1739,6 +1839,167 @@ mod tests {
             }
         }
         assert_eq!(checked, 30);
+    }
+
+    /// One joint step from a start `ε` off the optimum (normal and both
+    /// support unit vectors turned by `ε` about random axes,
+    /// `ε` = 10⁻² … 10⁻⁶) leaves at most `K len²` in each, `len` the
+    /// step's length (the quadratic convergence [`WARM_TOL`] rests on):
+    /// near-spheres (α ≤ 1.2) and the spheroids above, apart and
+    /// overlapping, against the nested solve on the closed-form supports
+    /// (~10⁻¹⁴ from the optimum, so only steps with `K len²` well above
+    /// that are judged). `K` is measured below 1 (the largest printed);
+    /// asserted ≤ 2.
+    #[test]
+    fn one_joint_step_leaves_at_most_k_len_squared() {
+        let qi = Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap();
+        let qj = Quaternion::normalized(-0.7, 0.1, 0.4, 0.2).unwrap();
+        let pairs = [
+            ([0.5, 0.5, 0.55], [0.6, 0.6, 0.57]),
+            ([0.52, 0.55, 0.6], [0.66, 0.6, 0.7]),
+            ([0.45, 0.45, 0.6], [0.7, 0.7, 0.52]),
+            ([0.4, 0.55, 0.8], [0.7, 0.5, 0.45]),
+        ];
+        let turn = |v: &Vector<3>, axis: Vector<3>, eps: f64| {
+            Quaternion::exp(&(axis.normalize() * eps)).apply(v)
+        };
+        let axes = [
+            Vector::<3>::new(0.3, 0.8, -0.2),
+            Vector::<3>::new(-0.6, 0.1, 0.7),
+            Vector::<3>::new(0.2, -0.4, -0.9),
+        ];
+        let (mut worst, mut judged): (f64, u32) = (0.0, 0);
+        for (semi_i, semi_j) in pairs {
+            let (ci, ri, qsi) = radial_ellipsoid(&qi, semi_i);
+            let (cj, rj, qsj) = radial_ellipsoid(&qj, semi_j);
+            let bi = RadialBody {
+                columns: &ci,
+                radial: &ri,
+            };
+            let bj = RadialBody {
+                columns: &cj,
+                radial: &rj,
+            };
+            for d in [
+                Vector::<3>::new(0.5, -0.7, 0.6).normalize(),
+                Vector::<3>::new(-0.9, 0.3, 0.45).normalize(),
+            ] {
+                let reach = qsi.jet(&d).h + qsj.jet(&-d).h;
+                for delta in [-0.03, 0.02] {
+                    let r = d * (reach + delta);
+                    let want = exact(&r, |u| qsi.jet(u), |u| qsj.jet(u), f64::INFINITY).unwrap();
+                    let yi_want = bi.to_body(&want.jet_i.point).normalize();
+                    let yj_want = bj.to_body(&want.jet_j.point).normalize();
+                    for eps in [1e-2, 1e-3, 1e-4, 1e-5, 1e-6] {
+                        let u0 = turn(&want.normal, axes[0], eps);
+                        let yi0 = turn(&yi_want, axes[1], eps);
+                        let yj0 = turn(&yj_want, axes[2], eps);
+                        let (ub_i, ub_j) = (bi.to_body(&u0), bj.to_body(&-u0));
+                        let (at_i, at_j) = (bi.at(yi0, &ub_i), bj.at(yj0, &ub_j));
+                        let got =
+                            joint_iterate(&r, &bi, &bj, u0, at_i, at_j, false, f64::INFINITY, 0.0)
+                                .expect("one step from near the optimum");
+                        assert_eq!(got.iterations, 1);
+                        let yi1 = bi.to_body(&got.jet_i.point).normalize();
+                        let yj1 = bj.to_body(&got.jet_j.point).normalize();
+                        let len = (got.normal - u0)
+                            .norm()
+                            .max((yi1 - yi0).norm())
+                            .max((yj1 - yj0).norm());
+                        let error = (got.normal - want.normal)
+                            .norm()
+                            .max((yi1 - yi_want).norm())
+                            .max((yj1 - yj_want).norm());
+                        if len * len > 1e-11 {
+                            worst = worst.max(error / (len * len));
+                            judged += 1;
+                        }
+                    }
+                }
+            }
+        }
+        println!("largest K: {worst:.3} over {judged} steps");
+        assert!(judged >= 40, "{judged} steps judged");
+        assert!(worst <= 2.0, "K = {worst}");
+    }
+
+    /// The finish from the linearisation ([`TAYLOR_TOL`]): one step from a
+    /// start `ε` off the optimum (as in the test above, `ε` = 10⁻² … 10⁻⁴),
+    /// ended without reading the radial functions again, leaves at most
+    /// `K₃ len³` in `h` (the quadratic model's stationary value) and
+    /// `K₂ len²` in the normal and the support points (moved to first
+    /// order), against the nested solve on the closed-form supports.
+    /// Measured `K₃`, `K₂` are printed; asserted ≤ 5 and ≤ 2.
+    #[test]
+    fn the_taylor_finish_is_third_order_in_the_gap() {
+        let qi = Quaternion::normalized(0.3, -0.5, 0.2, 0.9).unwrap();
+        let qj = Quaternion::normalized(-0.7, 0.1, 0.4, 0.2).unwrap();
+        let pairs = [
+            ([0.5, 0.5, 0.55], [0.6, 0.6, 0.57]),
+            ([0.52, 0.55, 0.6], [0.66, 0.6, 0.7]),
+            ([0.4, 0.55, 0.8], [0.7, 0.5, 0.45]),
+        ];
+        let turn = |v: &Vector<3>, axis: Vector<3>, eps: f64| {
+            Quaternion::exp(&(axis.normalize() * eps)).apply(v)
+        };
+        let axes = [
+            Vector::<3>::new(0.3, 0.8, -0.2),
+            Vector::<3>::new(-0.6, 0.1, 0.7),
+            Vector::<3>::new(0.2, -0.4, -0.9),
+        ];
+        let (mut k3, mut k2, mut judged): (f64, f64, u32) = (0.0, 0.0, 0);
+        for (semi_i, semi_j) in pairs {
+            let (ci, ri, qsi) = radial_ellipsoid(&qi, semi_i);
+            let (cj, rj, qsj) = radial_ellipsoid(&qj, semi_j);
+            let bi = RadialBody {
+                columns: &ci,
+                radial: &ri,
+            };
+            let bj = RadialBody {
+                columns: &cj,
+                radial: &rj,
+            };
+            for d in [
+                Vector::<3>::new(0.5, -0.7, 0.6).normalize(),
+                Vector::<3>::new(-0.9, 0.3, 0.45).normalize(),
+            ] {
+                let reach = qsi.jet(&d).h + qsj.jet(&-d).h;
+                for delta in [-0.03, 0.02] {
+                    let r = d * (reach + delta);
+                    let want = exact(&r, |u| qsi.jet(u), |u| qsj.jet(u), f64::INFINITY).unwrap();
+                    let yi_want = bi.to_body(&want.jet_i.point).normalize();
+                    let yj_want = bj.to_body(&want.jet_j.point).normalize();
+                    for eps in [1e-2, 3e-3, 1e-3, 3e-4, 1e-4] {
+                        let u0 = turn(&want.normal, axes[0], eps);
+                        let yi0 = turn(&yi_want, axes[1], eps);
+                        let yj0 = turn(&yj_want, axes[2], eps);
+                        let (ub_i, ub_j) = (bi.to_body(&u0), bj.to_body(&-u0));
+                        let (at_i, at_j) = (bi.at(yi0, &ub_i), bj.at(yj0, &ub_j));
+                        let got =
+                            joint_iterate(&r, &bi, &bj, u0, at_i, at_j, false, 0.0, f64::INFINITY)
+                                .expect("one step from near the optimum");
+                        assert_eq!(got.iterations, 1);
+                        let yi1 = bi.to_body(&got.jet_i.point).normalize();
+                        let yj1 = bj.to_body(&got.jet_j.point).normalize();
+                        let len = (got.normal - u0)
+                            .norm()
+                            .max((yi1 - yi0).norm())
+                            .max((yj1 - yj0).norm());
+                        let points = (got.normal - want.normal)
+                            .norm()
+                            .max((got.jet_i.point - want.jet_i.point).norm())
+                            .max((got.jet_j.point - want.jet_j.point).norm());
+                        k2 = k2.max(points / (len * len));
+                        k3 = k3.max((got.gap - want.gap).abs() / (len * len * len));
+                        judged += 1;
+                    }
+                }
+            }
+        }
+        println!("largest K3 {k3:.3}, K2 {k2:.3} over {judged} steps");
+        assert_eq!(judged, 60);
+        assert!(k3 <= 5.0, "K3 = {k3}");
+        assert!(k2 <= 2.0, "K2 = {k2}");
     }
 
     /// Where the joint iteration cannot work, it falls back: two flat

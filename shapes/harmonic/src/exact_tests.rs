@@ -401,11 +401,11 @@ fn joint_solver_agrees_with_the_nested_one() {
                         &r,
                         &gap3d::RadialBody {
                             columns: &ci,
-                            radial: |y: &Vector<3>| s.radial_jet(SIZES.0, y),
+                            radial: |y: &Vector<3>| s.joint_jet(SIZES.0, y),
                         },
                         &gap3d::RadialBody {
                             columns: &cj,
-                            radial: |y: &Vector<3>| s.radial_jet(SIZES.1, y),
+                            radial: |y: &Vector<3>| s.joint_jet(SIZES.1, y),
                         },
                         f64::INFINITY,
                         true,

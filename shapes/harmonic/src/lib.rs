@@ -80,10 +80,14 @@
 //! [`jamkit_gap3d::joint_fallbacks`]), and the engine's energy pass starts
 //! each listed pair's solve where its last one ended
 //! ([`Harmonic::exact_gap_warm`], [`jamkit_gap3d::exact_joint_warm`]): the
-//! same optimum to the same tolerance, in two or three steps after a small
-//! move. Both converge to the same tolerance; the results agree to
-//! ~10⁻¹⁴, not bit for bit, so a packing made with `"Joint"` is a
-//! different (equally valid) packing. A packing file records
+//! same optimum, in one or two steps after a small move, to a tolerance
+//! set by the last step (≤ 10⁻¹⁰ in the normal and the support points,
+//! ≤ 10⁻²⁰ in the gap; [`jamkit_gap3d::WARM_TOL`]), after a screen that
+//! skips pairs certainly apart ([`Harmonic::gap_lower_bound`]); where `F`
+//! is a quadratic form (every mode `l = 2`) it reads the radial jets in
+//! closed form. The results agree with the nested solve's to ~10⁻¹⁰, not
+//! bit for bit, so a packing made with `"Joint"` is a different (equally
+//! valid) packing. A packing file records
 //! `exact_solver` only where it is `"Joint"` and the gap exact, so files
 //! of `"Nested"` packings are those written before the parameter existed
 //! ([`jamkit_core::Added`]), and a file or run that records none reads
@@ -303,6 +307,13 @@ pub struct Harmonic {
     axisymmetric: bool,
     /// A certain upper bound on `|F|` on the sphere.
     f_bound: f64,
+    /// `M` with `F(y) = yᵀ M y` on the sphere, where every mode has
+    /// `l = 2` (`F` is then a quadratic form): the joint solve's radial
+    /// jets in closed form ([`Harmonic::joint_jet`]).
+    quadratic: Option<Matrix<3>>,
+    /// `Σ|c|`, slightly raised: a bound on the slope `|∇_S F|` (each mode
+    /// is scaled to slope `|c|`).
+    f_slope: f64,
     /// `⟨P_l²⟩` for each degree (same order as `by_degree`).
     mean_squares: Vec<f64>,
     /// `V / (R⁰)³`.
@@ -447,6 +458,9 @@ impl Harmonic {
         }
         let mut by_degree: Vec<(u32, Poly)> = Vec::new();
         let mut f_bound = 0.0;
+        // The scan's largest slope is each mode's to ~10⁻¹³ (relative);
+        // 10⁻⁹ more covers it.
+        let f_slope = modes.iter().map(|md| md.c.abs()).sum::<f64>() * (1.0 + 1e-9);
         for md in &modes {
             let raw = Poly::solid_harmonic(md.l, md.m);
             let (slope, bound) = raw.max_slope_and_bound(md.m);
@@ -490,12 +504,31 @@ impl Harmonic {
             .iter()
             .map(|(_, p)| p.mul(p).sphere_mean())
             .collect();
+        let quadratic = match by_degree.as_slice() {
+            [(2, p)] => {
+                let mut m = Matrix::<3>::zeros();
+                for (c, e) in p.terms() {
+                    let axes: Vec<usize> = (0..3).flat_map(|a| (0..e[a]).map(move |_| a)).collect();
+                    let (a, b) = (axes[0], axes[1]);
+                    if a == b {
+                        m[(a, a)] += c;
+                    } else {
+                        m[(a, b)] += 0.5 * c;
+                        m[(b, a)] += 0.5 * c;
+                    }
+                }
+                Some(m)
+            }
+            _ => None,
+        };
         let shape = Self {
+            quadratic,
             delta: d,
             axisymmetric: modes.iter().all(|md| md.m == 0 || md.c == 0.0),
             modes,
             by_degree,
             f_bound,
+            f_slope,
             mean_squares,
             unit_volume,
             inertia,
@@ -587,6 +620,33 @@ impl Harmonic {
     /// `F(y)` at the body-frame unit vector `y`.
     pub fn f(&self, y: &Vector<3>) -> f64 {
         self.by_degree.iter().map(|(_, p)| p.value(y)).sum()
+    }
+
+    /// A lower bound on the exact gap `h` of a pair (sizes `size_i`,
+    /// `size_j`, rotations with the columns `ci`, `cj`, separation `r_ij`)
+    /// from the radial functions at any unit vector `n` alone:
+    /// `h ≥ g(n) ≥ n·r_ij − ρ_i(n) − ρ_j(−n) − m_i − m_j`, with the margins
+    /// `m = π² G² / (16 ρ_min)` of [`gap3d::radial_support_bound`]
+    /// (`G = R⁰ Δ Σ|c|`, `ρ_min = R⁰(1 − Δ f_bound)`).
+    pub fn gap_lower_bound(
+        &self,
+        size_i: f64,
+        ci: &[Vector<3>; 3],
+        size_j: f64,
+        cj: &[Vector<3>; 3],
+        r_ij: &Vector<3>,
+        n: &Vector<3>,
+    ) -> f64 {
+        let support = |size: f64, c: &[Vector<3>; 3], v: &Vector<3>| {
+            let y = Vector::<3>::new(c[0].dot(v), c[1].dot(v), c[2].dot(v));
+            let rho = size * (1.0 + self.delta * self.f_fast(&y));
+            gap3d::radial_support_bound(
+                rho,
+                size * self.delta * self.f_slope,
+                size * (1.0 - self.delta * self.f_bound),
+            )
+        };
+        n.dot(r_ij) - support(size_i, ci, n) - support(size_j, cj, &-n)
     }
 
     /// The tangential gradient `∇_S F` at the body-frame unit vector `y`.
@@ -757,6 +817,39 @@ impl Harmonic {
         (value, grad, hb)
     }
 
+    /// [`Harmonic::radial_jet`] as the joint solve reads it: where `F` is
+    /// the quadratic form `yᵀ M y` (every mode `l = 2`), in closed form,
+    /// `F̃ = v = yᵀMy`, `∇F̃ = 2(My − v y)`,
+    /// `∇∇F̃ = 2M − 4(My yᵀ + y (My)ᵀ) − 2v 1 + 8v y yᵀ` (the degree-`l`
+    /// formula of [`Harmonic::unit_jet`] with `∇P = 2My`, `∇∇P = 2M`); the
+    /// same numbers to round-off, not the same bits, so only the `"Joint"`
+    /// solver reads it (`"Nested"` keeps its packings bit for bit).
+    #[inline(always)]
+    fn joint_jet(&self, size: f64, y: &Vector<3>) -> (f64, Vector<3>, Matrix<3>) {
+        let Some(m) = &self.quadratic else {
+            return self.radial_jet(size, y);
+        };
+        let my = m * y;
+        let v = y.dot(&my);
+        let grad = (my - y * v) * 2.0;
+        let mixed = my * y.transpose();
+        let hess =
+            m * 2.0 - (mixed + mixed.transpose()) * 4.0 - Matrix::<3>::identity() * (2.0 * v)
+                + y * y.transpose() * (8.0 * v);
+        let a = size * self.delta;
+        (size + a * v, grad * a, hess * a)
+    }
+
+    /// `F(y)` at the body-frame unit vector `y`, from the quadratic form
+    /// where there is one.
+    #[inline(always)]
+    fn f_fast(&self, y: &Vector<3>) -> f64 {
+        match &self.quadratic {
+            Some(m) => y.dot(&(m * y)),
+            None => self.f(y),
+        }
+    }
+
     /// `ρ = R⁰(1 + ΔF)`, `∇ρ̃` and `∇∇ρ̃` at the body-frame unit vector `y`
     /// (`ρ̃(x) = ρ(x/|x|)`): the radial function
     /// [`gap3d::radial_support`] reads.
@@ -768,7 +861,8 @@ impl Harmonic {
     }
 
     /// A body of size `size` whose rotation has the columns `columns`, as
-    /// the joint iteration reads it ([`gap3d::exact_joint`]).
+    /// the joint iteration reads it ([`gap3d::exact_joint`]; radial jets
+    /// by [`Harmonic::joint_jet`]).
     #[inline(always)]
     fn radial_body<'a>(
         &'a self,
@@ -777,7 +871,7 @@ impl Harmonic {
     ) -> gap3d::RadialBody<'a, impl gap3d::Radial + 'a> {
         gap3d::RadialBody {
             columns,
-            radial: move |y: &Vector<3>| self.radial_jet(size, y),
+            radial: move |y: &Vector<3>| self.joint_jet(size, y),
         }
     }
 
@@ -924,10 +1018,15 @@ impl Harmonic {
     /// iteration started where the pair's last solve ended
     /// ([`gap3d::exact_joint_warm`] from the [`gap3d::JointStart`] that
     /// `memo` holds), else, or where that fails, the cold solve of
-    /// [`Harmonic::exact_gap`]; `memo` gets where this solve ended. The
+    /// [`Harmonic::exact_gap`]; `memo` gets where this solve ended, also
+    /// for a pair the warm solve finds apart (`h > max_gap`, `None`). A pair
+    /// that [`Harmonic::gap_lower_bound`] shows farther apart than
+    /// `max_gap` (read at the memo's normal, or at the line of centres
+    /// without a start) is skipped before any solve, its memo kept. The
     /// support Hessians at the optimum only with `hessians`. The result is
-    /// the cold solve's optimum to the joint iteration's tolerance,
-    /// whatever the memo holds (module documentation of `jamkit_gap3d`,
+    /// the cold solve's optimum to the warm iteration's tolerance
+    /// ([`gap3d::WARM_TOL`], [`gap3d::TAYLOR_TOL`]), whatever the memo
+    /// holds (module documentation of `jamkit_gap3d`,
     /// [`gap3d::exact_joint_warm`]); with an empty memo it is the cold
     /// solve's bit for bit.
     #[allow(clippy::too_many_arguments)]
@@ -950,19 +1049,30 @@ impl Harmonic {
         let start = memo
             .as_ref()
             .and_then(|m| gap3d::JointStart::recall(m, r_ij, &ci, &cj));
+        // Certainly apart (`h ≥ g(n) ≥` the bound, with room for
+        // round-off) at the last normal, or at the line of centres without
+        // a start (then `g(r̂)` exceeds `max_gap` too, and the cold solve
+        // skips the pair at its first check): skipped, the memo kept.
+        let screen = start.as_ref().map_or(r_ij / r, |s| s.normal);
+        let bound = self.gap_lower_bound(size_i, &ci, size_j, &cj, r_ij, &screen);
+        if bound - max_gap > 1e-12 * (size_i + size_j) {
+            return None;
+        }
         if let Some(start) = start {
             let warm = gap3d::exact_joint_warm(
                 r_ij,
                 &self.radial_body(size_i, &ci),
                 &self.radial_body(size_j, &cj),
                 &start,
-                max_gap,
+                f64::INFINITY,
                 hessians,
             );
             match warm {
+                // A pair found apart keeps where it was found too, so that
+                // its next solve (and screen) starts there.
                 gap3d::Joint::Found(e) => {
                     *memo = Some(gap3d::JointStart::remember(&e, r_ij, &ci, &cj));
-                    return Some(e);
+                    return (e.gap <= max_gap).then_some(e);
                 }
                 gap3d::Joint::Apart => return None,
                 // Not a start to try again: the cold solve writes its own.
