@@ -108,11 +108,11 @@ pub enum FireVariant {
     Fire2,
 }
 
-/// FIRE's parameters and stopping criteria.
 /// `Δt_max` when neither the experiment nor the family sets it: stable with
 /// room to spare for disks and spheres of unit mass (`2/ω_max ≈ 0.8`).
 pub const DEFAULT_DT_MAX: f64 = 0.5;
 
+/// FIRE's parameters and stopping criteria.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FireParams {
@@ -188,6 +188,16 @@ pub struct FireParams {
     /// recorded settings leave it out when off, and where it does not act
     /// (no Newton finish), so that packings made before it existed resume.
     pub escape_plateaus: bool,
+    /// Where a minimisation has not converged after
+    /// [`crate::stable_dt::STABLE_DT_AFTER`] FIRE steps (and every as many
+    /// after), lower `Δt_max` below the stability bound `2/ω_max` of the
+    /// stiffest mode, estimated from the analytic Hessian
+    /// ([`crate::stable_dt`]); FIRE crawls where `Δt_max` is near or above
+    /// it. Acts with plain masses only, and never on a minimisation that
+    /// converges sooner. On by default; off in [`FireParams::paper`]. A
+    /// packing's recorded settings leave it out when off, so that packings
+    /// made before it existed resume.
+    pub stable_dt: bool,
 }
 
 /// FIRE steps between two samples of `V` of the unjamming forecast.
@@ -307,6 +317,7 @@ impl Default for FireParams {
             lbfgs: LbfgsChoice::Family,
             unjam_forecast: true,
             escape_plateaus: true,
+            stable_dt: true,
         }
     }
 }
@@ -334,6 +345,7 @@ impl FireParams {
             lbfgs: LbfgsChoice::Off,
             unjam_forecast: false,
             escape_plateaus: false,
+            stable_dt: false,
             ..Self::default()
         }
     }
@@ -347,6 +359,7 @@ impl FireParams {
             force_criterion: ForceCriterion::default(),
             unjam_forecast: true,
             escape_plateaus: true,
+            stable_dt: true,
             ..Self::paper()
         }
     }
@@ -526,6 +539,8 @@ pub struct MinimizeOutcome {
     pub lbfgs_evaluations: u64,
     /// Moves of the plateau escape (`escape_plateaus`).
     pub plateau_escapes: u64,
+    /// Times `stable_dt` lowered `Δt_max`.
+    pub dt_cuts: u64,
 }
 
 /// A FIRE minimiser with its work buffers (reused across minimisations).
@@ -543,6 +558,7 @@ pub struct Fire {
     blocks: BlockMasses,
     /// `M⁻¹ g` of the preconditioned FIRE.
     precon_grad: Vec<f64>,
+    stable_dt_work: crate::stable_dt::StableDtWork,
     /// With [`Fire::record`]: `(φ, outcome)` of every minimisation.
     trace: Option<Vec<(f64, MinimizeOutcome)>>,
     /// With [`Fire::watch`]: where the minimiser stands, for another thread.
@@ -703,7 +719,13 @@ impl Fire {
         let mut blocked = false;
 
         let mut dt = p.dt_init;
-        let dt_max = p.dt_max();
+        let mut dt_max = p.dt_max();
+        let mut next_dt_check = if p.stable_dt && precon.is_none() {
+            crate::stable_dt::STABLE_DT_AFTER
+        } else {
+            u64::MAX
+        };
+        let mut dt_cuts: u64 = 0;
         let (alpha_start, n_min) = (p.alpha_start(), p.n_min());
         let mut alpha = alpha_start;
         let mut positive_steps: u32 = 0;
@@ -738,6 +760,7 @@ impl Fire {
                     newton_iterations,
                     lbfgs_evaluations,
                     plateau_escapes,
+                    dt_cuts,
                 })
             };
         }
@@ -867,6 +890,21 @@ impl Fire {
                 lbfgs_interval = lbfgs_interval.max(50).saturating_mul(2);
                 next_lbfgs = steps.saturating_add(lbfgs_interval);
                 from_rest!();
+            }
+            if steps >= next_dt_check {
+                next_dt_check = steps.saturating_add(crate::stable_dt::STABLE_DT_AFTER);
+                match crate::stable_dt::omega_max_sq(obj, inv_m, &mut self.stable_dt_work)? {
+                    Some(w2) => {
+                        let capped = crate::stable_dt::capped(dt_max, w2);
+                        if capped < dt_max {
+                            dt_max = capped;
+                            dt = dt.min(dt_max);
+                            dt_cuts += 1;
+                        }
+                    }
+                    // No Hessian: no check again.
+                    None => next_dt_check = u64::MAX,
+                }
             }
             // Power P = F·v with F = −g.
             let power = -minus_power;
@@ -1144,6 +1182,15 @@ pub(crate) mod tests {
             // One body: its block is the whole (diagonal) Hessian.
             diagonal_block(&self.k, blocks)
         }
+        fn hessian_entries(&mut self, e: &mut Vec<(u32, u32, f64)>) -> Result<bool> {
+            e.extend(
+                self.k
+                    .iter()
+                    .enumerate()
+                    .map(|(a, &k)| (a as u32, a as u32, k)),
+            );
+            Ok(true)
+        }
     }
 
     /// One body whose stiffness block is `diag(k)` (test wells).
@@ -1213,6 +1260,45 @@ pub(crate) mod tests {
             steps(Masses::Blocks(PreconParams::default())),
         );
         assert!(3 * blocks < plain, "blocks {blocks} steps, plain {plain}");
+    }
+
+    /// A well with one mode of `ω² = 55` (the stability bound of FIRE's
+    /// step `2/ω = 0.27`, below the default `Δt_max = 0.5`), a soft one
+    /// (`k = 10⁻⁴`) and one of `k = 1`: without `stable_dt` FIRE keeps exciting the stiff
+    /// mode and does not converge in 4·10⁵ steps; with it, one check
+    /// lowers `Δt_max` to `1.5/ω` and FIRE converges soon after it, to the
+    /// same criterion.
+    #[test]
+    fn stable_dt_ends_the_crawl_of_a_step_above_the_stiff_bound() {
+        let run = |stable_dt: bool| {
+            let mut q = Quadratic {
+                x: vec![1.0, -2.0, 0.3],
+                k: vec![55.0, 1e-4, 1.0],
+                inv_m: vec![1.0; 3],
+            };
+            let out = Fire::new(FireParams {
+                energy_tol: 1e-300,
+                force_tol: 1e-24,
+                force_criterion: ForceCriterion::Sum,
+                newton: None,
+                max_steps: 400_000,
+                stable_dt,
+                ..FireParams::default()
+            })
+            .minimize(&mut q);
+            (out, q.x)
+        };
+        assert!(matches!(run(false).0, Err(Error::NotConverged { .. })));
+        let (out, x) = run(true);
+        let out = out.unwrap();
+        assert_eq!(out.dt_cuts, 1);
+        assert!(
+            out.steps < 2 * crate::stable_dt::STABLE_DT_AFTER,
+            "{} steps",
+            out.steps
+        );
+        let g: f64 = (55.0 * x[0]).powi(2) + (1e-4 * x[1]).powi(2) + x[2].powi(2);
+        assert!(g < 1e-24, "{g}");
     }
 
     #[test]

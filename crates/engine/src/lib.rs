@@ -18,6 +18,8 @@
 //!   point, compression to a packing fraction or a pressure, and to a
 //!   packing fraction above its own jamming point;
 //! * [`saddle`]: the saddle escape after the bisection;
+//! * [`stable_dt`]: FIRE's `Δt_max` kept below the stiffest mode's
+//!   stability bound in a minimisation that does not converge;
 //! * [`cell`]: a packing in a deformed periodic cell ([`cell::Strained`]),
 //!   and [`stabilise`]: the shear stabilisation that relaxes that cell's
 //!   shape.
@@ -43,6 +45,7 @@ mod scene_objective;
 pub mod simd;
 mod slots;
 pub mod stabilise;
+pub mod stable_dt;
 
 pub use fire::{
     Fire, FireParams, FireVariant, ForceCriterion, Masses, MinimizeOutcome, Progress,

@@ -392,13 +392,14 @@ fn protocol_settings(protocol: &Protocol) -> serde_json::Value {
 }
 
 /// The minimiser as a packing records it: as resolved for the family
-/// (`FireParams::for_family`), with four fields left out where packings
+/// (`FireParams::for_family`), with five fields left out where packings
 /// made before they existed hold them, so that those still resume under
 /// an explicit setting: `lbfgs: None` (they ran without L-BFGS),
 /// `masses: Plain`, `unjam_forecast` where it is off or does not act
 /// (it acts in `Jam` and `AboveJam` with a search other than `Bisection`:
-/// `jamkit_engine::jam`), and `escape_plateaus` where it is off or does
-/// not act (it acts with the Newton finish). Where the family's default is L-BFGS it is always
+/// `jamkit_engine::jam`), `escape_plateaus` where it is off or does
+/// not act (it acts with the Newton finish), and `stable_dt` where it is
+/// off. Where the family's default is L-BFGS it is always
 /// written, so no packing of one minimiser is ever taken for the other's.
 fn minimizer_settings(minimizer: &FireParams, protocol: &Protocol) -> serde_json::Value {
     let mut value = serde_json::to_value(minimizer).expect("minimizer serialises");
@@ -418,6 +419,9 @@ fn minimizer_settings(minimizer: &FireParams, protocol: &Protocol) -> serde_json
             || m.get("escape_plateaus") == Some(&serde_json::Value::Bool(false))
         {
             m.remove("escape_plateaus");
+        }
+        if m.get("stable_dt") == Some(&serde_json::Value::Bool(false)) {
+            m.remove("stable_dt");
         }
         if m.get("masses") == Some(&serde_json::json!("Plain")) {
             m.remove("masses");

@@ -357,6 +357,13 @@ fn unwritten_setting(key: &str) -> Option<&'static str> {
              `escape_plateaus: false` to the minimizer, or \
              `--set minimizer.escape_plateaus=false`, to resume them)",
         ),
+        // Packings made without the stiff-mode check of `Δt_max` record
+        // none (`grid::minimizer_settings`).
+        "minimizer.stable_dt" => Some(
+            "false (not written; the default before true: add \
+             `stable_dt: false` to the minimizer, or \
+             `--set minimizer.stable_dt=false`, to resume them)",
+        ),
         // Packings without L-BFGS record none (`sample::minimizer_settings`).
         "minimizer.lbfgs" => Some(
             "None (not written; the default before the family's: \
