@@ -371,6 +371,42 @@ fn packings_without_the_plateau_escape_are_refused_where_it_acts_and_resume_as_o
     );
 }
 
+/// A run directory of packings made without the check of `Δt_max` against
+/// the stiffest mode (jamkit's default before it; they record no
+/// `stable_dt`) is refused under the default, with the field named and the
+/// fix said, and resumed under an explicit `stable_dt: false`;
+/// `paper_path: true` records none, so the paper path's packings keep
+/// their settings.
+#[test]
+fn packings_without_the_stable_dt_check_are_refused_under_the_default_and_resume_as_off() {
+    let experiment = |minimizer: &str, more: &str| {
+        let text = format!(
+            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3,
+            minimizer: ({minimizer}){more})"#
+        );
+        Experiment::from_ron(&text, "inline").unwrap()
+    };
+    common::refused_then_resumed(
+        &experiment("stable_dt: false", ""),
+        &experiment("", ""),
+        &[
+            "minimizer.stable_dt",
+            "false (not written; the default before true",
+            "--set minimizer.stable_dt=false",
+        ],
+    );
+    let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
+    assert_eq!(
+        settings(&experiment("", ", paper_path: true")),
+        settings(&experiment("stable_dt: false", ", paper_path: true"))
+    );
+    assert!(
+        settings(&experiment("", ""))
+            .to_string()
+            .contains("stable_dt")
+    );
+}
+
 /// A run directory of jamming packings made without the saddle escape
 /// (jamkit's default before it; they record no `escape_saddles`) is refused
 /// under the default, with the field named and the fix said, and resumed

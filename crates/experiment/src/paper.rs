@@ -5,8 +5,9 @@
 //! ([`FireParams::paper`]), and finds the jamming point by the plain
 //! bisection (`search: Bisection`), and takes the end state of the
 //! bisection as it is. jamkit's defaults differ in the Newton finish, the
-//! family's masses and L-BFGS, the extrapolated search and the saddle
-//! escape (docs/how-to/paper-protocol.md); `paper_path: true` sets those
+//! family's masses and L-BFGS, the check of `Δt_max` against the stiffest
+//! mode, the extrapolated search and the saddle escape
+//! (docs/how-to/paper-protocol.md); `paper_path: true` sets those
 //! fields to the paper's, so that the packings are the paper path's bit
 //! for bit, the same as with each field set by hand.
 //!
@@ -19,13 +20,14 @@ use crate::schema::{Experiment, Protocol};
 use jamkit_engine::{FireParams, JamSearch};
 
 /// The minimiser fields the paper's path sets, by their `--set` path.
-const MINIMIZER_FIELDS: [&str; 6] = [
+const MINIMIZER_FIELDS: [&str; 7] = [
     "minimizer.variant",
     "minimizer.force_tol_per_body",
     "minimizer.force_criterion",
     "minimizer.newton",
     "minimizer.masses",
     "minimizer.lbfgs",
+    "minimizer.stable_dt",
 ];
 
 /// Refuse a file whose `paper_path: true` contradicts one of its own
@@ -61,6 +63,11 @@ pub(crate) fn check(e: &Experiment) -> Result<(), ExperimentError> {
         (
             m.lbfgs == default.lbfgs || m.lbfgs == paper.lbfgs,
             format!("{:?}", m.lbfgs),
+        ),
+        (
+            // Either value is one of the two: always allowed.
+            true,
+            m.stable_dt.to_string(),
         ),
     ];
     for (field, (allowed, value)) in MINIMIZER_FIELDS.iter().zip(either) {
@@ -113,6 +120,7 @@ pub(crate) fn apply(mut e: Experiment) -> Experiment {
     m.newton = paper.newton;
     m.masses = paper.masses;
     m.lbfgs = paper.lbfgs;
+    m.stable_dt = paper.stable_dt;
     if let Protocol::Jam { search, .. } | Protocol::AboveJam { search, .. } = &mut e.protocol {
         *search = JamSearch::Bisection;
     }
