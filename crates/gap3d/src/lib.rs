@@ -187,7 +187,8 @@
 //! support Hessian's formula read at the current `y` (at converged
 //! supports it is the nested solve's step exactly). One step costs a
 //! radial jet and a 3 × 3 inverse by cofactors per body (for `A⁺ t`
-//! and `A⁺ Bᵀ`, four right-hand sides) and a Cholesky factorisation of `W`, where the nested
+//! and `A⁺ Bᵀ`, four right-hand sides) and one of `W + u uᵀ` for the
+//! step (one division each, no square root), where the nested
 //! solve runs both searches to convergence (2–3 steps each, with their
 //! line searches) and factorises `A` twice more for the support Hessians.
 //!
@@ -216,7 +217,9 @@
 //! the pair's last solve ended ([`JointStart`], kept as a
 //! `jamkit_core::PairMemo`: the normal relative to the line of centres
 //! and each support unit vector relative to its body's direction, so a
-//! pair that moved or turned as a whole starts at its optimum), skipping
+//! pair that moved or turned as a whole starts at its optimum; written
+//! from where the iteration ended, without normalising, and read back
+//! with one square root before the three normalisations), skipping
 //! the cold start's two support searches at the line of centres. Same
 //! steps and safeguards; it ends at a looser tolerance, since what a step
 //! leaves shrinks with the step itself: Newton's iteration leaves
@@ -1177,9 +1180,7 @@ impl JointStart {
         let a = in_frame(columns_i, &(n * r_ij.norm() - r_ij));
         let di = self.y_i - in_frame(columns_i, n);
         let dj = self.y_j + in_frame(columns_j, n);
-        [
-            a[0], a[1], a[2], di[0], di[1], di[2], dj[0], dj[1], dj[2],
-        ]
+        [a[0], a[1], a[2], di[0], di[1], di[2], dj[0], dj[1], dj[2]]
     }
 
     /// The start [`JointStart::memo`] encoded, read at the separation
@@ -1892,6 +1893,15 @@ mod tests {
         assert_eq!(checked, 30);
     }
 
+    /// The spheroids' semi-axes of the one-step tests: near-spheres
+    /// (α ≤ 1.2) and more elongated ones (α up to 2).
+    const ONE_STEP_PAIRS: [([f64; 3], [f64; 3]); 4] = [
+        ([0.5, 0.5, 0.55], [0.6, 0.6, 0.57]),
+        ([0.52, 0.55, 0.6], [0.66, 0.6, 0.7]),
+        ([0.45, 0.45, 0.6], [0.7, 0.7, 0.52]),
+        ([0.4, 0.55, 0.8], [0.7, 0.5, 0.45]),
+    ];
+
     /// One joint step from a start off the optimum, as
     /// [`perturbed_starts`] takes it.
     struct OneStep {
@@ -1959,8 +1969,9 @@ mod tests {
                         let yj0 = turn(&yj_want, axes[2], eps);
                         let (ub_i, ub_j) = (bi.to_body(&u0), bj.to_body(&-u0));
                         let (at_i, at_j) = (bi.at(yi0, &ub_i), bj.at(yj0, &ub_j));
-                        let (got, _) = joint_iterate(&r, &bi, &bj, u0, at_i, at_j, false, tol, taylor)
-                            .expect("one step from near the optimum");
+                        let (got, _) =
+                            joint_iterate(&r, &bi, &bj, u0, at_i, at_j, false, tol, taylor)
+                                .expect("one step from near the optimum");
                         assert_eq!(got.iterations, 1);
                         let yi1 = bi.to_body(&got.jet_i.point).normalize();
                         let yj1 = bj.to_body(&got.jet_j.point).normalize();
@@ -1992,15 +2003,9 @@ mod tests {
     /// asserted ≤ 2.
     #[test]
     fn one_joint_step_leaves_at_most_k_len_squared() {
-        let pairs = [
-            ([0.5, 0.5, 0.55], [0.6, 0.6, 0.57]),
-            ([0.52, 0.55, 0.6], [0.66, 0.6, 0.7]),
-            ([0.45, 0.45, 0.6], [0.7, 0.7, 0.52]),
-            ([0.4, 0.55, 0.8], [0.7, 0.5, 0.45]),
-        ];
         let eps = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6];
         let (mut worst, mut judged): (f64, u32) = (0.0, 0);
-        perturbed_starts(&pairs, &eps, f64::INFINITY, 0.0, |step| {
+        perturbed_starts(&ONE_STEP_PAIRS, &eps, f64::INFINITY, 0.0, |step| {
             let error = (step.got.normal - step.want.normal)
                 .norm()
                 .max((step.y_got[0] - step.y_want[0]).norm())
@@ -2024,11 +2029,7 @@ mod tests {
     /// Measured `K₃`, `K₂` are printed; asserted ≤ 5 and ≤ 2.
     #[test]
     fn the_taylor_finish_is_third_order_in_the_gap() {
-        let pairs = [
-            ([0.5, 0.5, 0.55], [0.6, 0.6, 0.57]),
-            ([0.52, 0.55, 0.6], [0.66, 0.6, 0.7]),
-            ([0.4, 0.55, 0.8], [0.7, 0.5, 0.45]),
-        ];
+        let pairs = [ONE_STEP_PAIRS[0], ONE_STEP_PAIRS[1], ONE_STEP_PAIRS[3]];
         let eps = [1e-2, 3e-3, 1e-3, 3e-4, 1e-4];
         let (mut k3, mut k2, mut judged): (f64, f64, u32) = (0.0, 0.0, 0);
         perturbed_starts(&pairs, &eps, 0.0, f64::INFINITY, |step| {
