@@ -1133,9 +1133,11 @@ where
 pub struct JointStart {
     /// The normal (world frame, unit).
     pub normal: Vector<3>,
-    /// Body `i`'s support unit vector `y_i` (its frame, unit).
+    /// Body `i`'s support unit vector `y_i` (its frame; unit, or unit to
+    /// `O(len²)` where a joint iteration ended from its linearisation,
+    /// [`Joint::Found`]).
     pub y_i: Vector<3>,
-    /// Body `j`'s support unit vector `y_j` (its frame, unit).
+    /// Body `j`'s support unit vector `y_j` (likewise).
     pub y_j: Vector<3>,
 }
 
