@@ -1142,7 +1142,7 @@ pub struct JointStart {
 }
 
 impl JointStart {
-    /// What a pair keeps of the solve that ended at `e` (a [`PairMemo`]'s
+    /// What a pair keeps of the solve that ended at `e` (a [`jamkit_core::PairMemo`]'s
     /// numbers; [`JointStart::memo`] of the normal and the support unit
     /// vectors `y = Qᵀ p / |p|`, from the support points: a star-shaped
     /// body's support point is `ρ(y) y`), for bodies whose rotations have
@@ -1163,7 +1163,7 @@ impl JointStart {
         end.memo(r_ij, columns_i, columns_j)
     }
 
-    /// The nine numbers of a [`PairMemo`] for this start, at the
+    /// The nine numbers of a [`jamkit_core::PairMemo`] for this start, at the
     /// separation `r_ij` and orientations `columns_i`, `columns_j`: the
     /// normal relative to the line of centres, `Q_iᵀ(|r| n − r)` (body `i`'s
     /// frame, scaled by the separation), and each support unit vector
