@@ -410,7 +410,7 @@ fn joint_solver_agrees_with_the_nested_one() {
                         f64::INFINITY,
                         true,
                     );
-                    let gap3d::Joint::Found(alone) = alone else {
+                    let gap3d::Joint::Found(alone, _) = alone else {
                         panic!("{s:?} at {r:?}: the joint iteration fell back");
                     };
                     most = most.max(alone.iterations);

@@ -1070,8 +1070,8 @@ impl Harmonic {
             match warm {
                 // A pair found apart keeps where it was found too, so that
                 // its next solve (and screen) starts there.
-                gap3d::Joint::Found(e) => {
-                    *memo = Some(gap3d::JointStart::remember(&e, r_ij, &ci, &cj));
+                gap3d::Joint::Found(e, end) => {
+                    *memo = Some(end.memo(r_ij, &ci, &cj));
                     return (e.gap <= max_gap).then_some(e);
                 }
                 gap3d::Joint::Apart => return None,

@@ -103,11 +103,14 @@ fn warm_contacts_agree_with_cold_ones_whatever_the_memo() {
 /// searched ones to 2·10⁻¹⁰. From the memo of a small move (10⁻³,
 /// 10⁻² rad) the warm iteration itself converges
 /// ([`gap3d::exact_joint_warm`] does not fall back) in at most 3 steps.
-/// The largest of each is printed.
+/// Where it says it ended (the next start) is its result's normal and
+/// support unit vectors `Qᵀp/|p|` to 10⁻¹¹ (after a step below
+/// [`gap3d::TAYLOR_TOL`], `y + δy` against the point moved to first
+/// order: `O(len²)` ≤ 10⁻¹²). The largest of each is printed.
 #[test]
 fn warm_results_are_converged() {
     let mut rng = Rng8::seed_from_u64(13);
-    let (mut residual, mut gap, mut points): (f64, f64, f64) = (0.0, 0.0, 0.0);
+    let (mut residual, mut gap, mut points, mut ends): (f64, f64, f64, f64) = (0.0, 0.0, 0.0, 0.0);
     let mut steps = 0;
     for s in shapes() {
         for _ in 0..25 {
@@ -117,7 +120,7 @@ fn warm_results_are_converged() {
             let next = nudged(&pair, &mut rng, 1e-3, 1e-2);
             let (ci, cj) = (next.o_i.columns(), next.o_j.columns());
             let start = gap3d::JointStart::recall(&memo.unwrap(), &next.r_ij, &ci, &cj).unwrap();
-            let gap3d::Joint::Found(e) = gap3d::exact_joint_warm(
+            let gap3d::Joint::Found(e, end) = gap3d::exact_joint_warm(
                 &next.r_ij,
                 &s.radial_body(next.size_i, &ci),
                 &s.radial_body(next.size_j, &cj),
@@ -128,6 +131,10 @@ fn warm_results_are_converged() {
                 panic!("the warm iteration fell back after a small move");
             };
             steps = steps.max(e.iterations);
+            ends = ends
+                .max((end.normal - e.normal).norm())
+                .max((end.y_i - next.o_i.apply_inverse(&e.jet_i.point).normalize()).norm())
+                .max((end.y_j - next.o_j.apply_inverse(&e.jet_j.point).normalize()).norm());
             let n = e.normal;
             let (pi, pj) = (
                 s.support(next.size_i, &ci, &n),
@@ -141,11 +148,14 @@ fn warm_results_are_converged() {
                 .max((e.jet_j.point - pj.jet.point).norm());
         }
     }
-    println!("tangent gradient {residual:e}, gap {gap:e}, points {points:e}, {steps} steps");
+    println!(
+        "tangent gradient {residual:e}, gap {gap:e}, points {points:e}, ends {ends:e}, {steps} steps"
+    );
     assert!(residual <= 2e-10, "tangent gradient {residual:e}");
     assert!(gap <= 1e-15, "gap against g(n): {gap:e}");
     assert!(points <= 2e-10, "support points {points:e}");
     assert!(steps <= 3, "{steps} steps");
+    assert!(ends <= 1e-11, "where the iteration ended: {ends:e}");
 }
 
 /// [`gap3d::JointStart`] read back at the pair it was written for is the
