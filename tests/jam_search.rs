@@ -338,24 +338,14 @@ fn packings_without_the_unjamming_forecast_are_refused_where_it_acts_and_resume_
 /// and off.
 #[test]
 fn packings_without_the_plateau_escape_are_refused_where_it_acts_and_resume_as_off() {
-    let experiment = |minimizer: &str, more: &str| {
-        let text = format!(
-            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3,
-            minimizer: ({minimizer}){more})"#
-        );
-        Experiment::from_ron(&text, "inline").unwrap()
-    };
-    common::refused_then_resumed(
+    let experiment =
+        |minimizer: &str, more: &str| old_disks(&format!(", minimizer: ({minimizer}){more}"));
+    refused_then_resumed_as_off(
         &experiment("escape_plateaus: false", ""),
         &experiment("", ""),
-        &[
-            "minimizer.escape_plateaus",
-            "true",
-            "false (not written; the default before true",
-            "--set minimizer.escape_plateaus=false",
-        ],
+        "minimizer.escape_plateaus",
+        "minimizer.escape_plateaus",
     );
-    let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
     assert_eq!(
         settings(&experiment("newton: None", "")),
         settings(&experiment("newton: None, escape_plateaus: false", ""))
@@ -379,23 +369,14 @@ fn packings_without_the_plateau_escape_are_refused_where_it_acts_and_resume_as_o
 /// their settings.
 #[test]
 fn packings_without_the_stable_dt_check_are_refused_under_the_default_and_resume_as_off() {
-    let experiment = |minimizer: &str, more: &str| {
-        let text = format!(
-            r#"(name: "old", family: "sphere", dim: 2, particles: 16, samples: 2, seed: 3,
-            minimizer: ({minimizer}){more})"#
-        );
-        Experiment::from_ron(&text, "inline").unwrap()
-    };
-    common::refused_then_resumed(
+    let experiment =
+        |minimizer: &str, more: &str| old_disks(&format!(", minimizer: ({minimizer}){more}"));
+    refused_then_resumed_as_off(
         &experiment("stable_dt: false", ""),
         &experiment("", ""),
-        &[
-            "minimizer.stable_dt",
-            "false (not written; the default before true",
-            "--set minimizer.stable_dt=false",
-        ],
+        "minimizer.stable_dt",
+        "minimizer.stable_dt",
     );
-    let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
     assert_eq!(
         settings(&experiment("", ", paper_path: true")),
         settings(&experiment("stable_dt: false", ", paper_path: true"))
