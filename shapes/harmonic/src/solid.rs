@@ -14,7 +14,7 @@
 //! (`m < 0`, the `sin |m|φ` one): `r^l P_l^{|m|}(cos θ) cos mφ` (resp.
 //! `sin |m|φ`) without the Condon–Shortley phase, up to a positive factor.
 //! The factor does not matter here: the family rescales every harmonic so
-//! that its largest slope on the sphere is 1 ([`Poly::max_slope`]).
+//! that its largest slope on the sphere is 1 ([`Poly::max_slope_and_bound`]).
 //!
 //! Polynomials are lists of monomials `a x^i y^j z^k`; their value,
 //! gradient and Hessian at a point are exact sums over the list (degree
