@@ -1,7 +1,7 @@
 //! `paper_path: true`, the paper's path as one named setting: its packings
 //! are those of the paper's fields set one by one (FIRE all the way with
-//! plain masses and no L-BFGS, `Σ (∂V/∂q)²`, the plain bisection, no
-//! saddle escape), bit for
+//! plain masses and no L-BFGS, `Σ (∂V/∂q)²`, a fixed `Δt_max`, the plain
+//! bisection, no saddle escape), bit for
 //! bit and with the same recorded settings; it is not jamkit's default
 //! path; and a file that contradicts it is refused, naming the field.
 
@@ -32,6 +32,7 @@ fn paper_path_is_the_paper_fields_set_one_by_one_bit_for_bit() {
         "minimizer.force_criterion=Sum",
         "protocol.search=Bisection",
         "protocol.escape_saddles=false",
+        "minimizer.stable_dt=false",
     ]);
     let default = near_disks(&[]);
     let settings = |e: &Experiment| Plan::new(e).unwrap().jobs[0].settings.clone();
