@@ -25,9 +25,9 @@ use std::io::Write;
 use std::time::Instant;
 
 /// The header of the lines [`run`] prints, one per packing.
-pub const HEADER: &str = "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s,lbfgs_evals,saddle_escapes,plateau_escapes";
+pub const HEADER: &str = "family,dim,particles,seed,phi_j,z_j,iso_margin,fire_steps,wall_s,us_per_step,packing_hash,newton_iterations,cpu_s,lbfgs_evals,saddle_escapes,plateau_escapes,dt_cuts";
 /// The header of the step trace (`--trace`).
-pub const TRACE_HEADER: &str = "seed,phi,fire_steps,newton_iterations,reason,energy_per_particle,force_sq,lbfgs_evals,plateau_escapes";
+pub const TRACE_HEADER: &str = "seed,phi,fire_steps,newton_iterations,reason,energy_per_particle,force_sq,lbfgs_evals,plateau_escapes,dt_cuts";
 
 /// The gap model of near-disks on the command line.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
@@ -464,6 +464,7 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         out.newton_iterations += s.newton_iterations;
         out.lbfgs_evaluations += s.lbfgs_evaluations;
         out.plateau_escapes += s.plateau_escapes;
+        out.dt_cuts += s.dt_cuts;
         escapes = s.rounds.to_string();
     }
     let wall = t.elapsed().as_secs_f64();
@@ -472,21 +473,22 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         for (phi, m) in fire.take_trace() {
             writeln!(
                 f,
-                "{seed},{phi:.15},{},{},{:?},{:e},{:e},{},{}",
+                "{seed},{phi:.15},{},{},{:?},{:e},{:e},{},{},{}",
                 m.steps,
                 m.newton_iterations,
                 m.reason,
                 m.energy / n as f64,
                 m.force_sq,
                 m.lbfgs_evaluations,
-                m.plateau_escapes
+                m.plateau_escapes,
+                m.dt_cuts
             )?;
         }
         f.flush()?;
     }
     let s = summarize(&mut scene, threshold);
     Ok(format!(
-        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2},{},{escapes},{}",
+        "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2},{},{escapes},{},{}",
         out.phi,
         s.z_j,
         s.iso_margin,
@@ -496,7 +498,8 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         packing_hash(scene.packing()),
         out.newton_iterations,
         out.lbfgs_evaluations,
-        out.plateau_escapes
+        out.plateau_escapes,
+        out.dt_cuts
     ))
 }
 

@@ -179,18 +179,21 @@ pub struct ProtocolOutcome {
     pub lbfgs_evaluations: u64,
     /// Moves of the plateau escape over all minimisations.
     pub plateau_escapes: u64,
+    /// Times `stable_dt` lowered FIRE's `Δt_max`, over all minimisations.
+    pub dt_cuts: u64,
 }
 
 impl ProtocolOutcome {
     /// Adds `other`'s work (FIRE steps, minimisations, Newton iterations,
-    /// L-BFGS evaluations, plateau escapes) to this outcome's; φ and `V/N`
-    /// stay this one's.
+    /// L-BFGS evaluations, plateau escapes, `Δt_max` cuts) to this
+    /// outcome's; φ and `V/N` stay this one's.
     pub fn add_work(&mut self, other: &ProtocolOutcome) {
         self.fire_steps += other.fire_steps;
         self.minimizations += other.minimizations;
         self.newton_iterations += other.newton_iterations;
         self.lbfgs_evaluations += other.lbfgs_evaluations;
         self.plateau_escapes += other.plateau_escapes;
+        self.dt_cuts += other.dt_cuts;
     }
 }
 
@@ -202,6 +205,7 @@ struct Tally {
     newton_iterations: u64,
     lbfgs_evaluations: u64,
     plateau_escapes: u64,
+    dt_cuts: u64,
     /// The last minimisation ended on the unjamming forecast.
     forecast: bool,
 }
@@ -219,6 +223,7 @@ impl Tally {
         self.newton_iterations += out.newton_iterations;
         self.lbfgs_evaluations += out.lbfgs_evaluations;
         self.plateau_escapes += out.plateau_escapes;
+        self.dt_cuts += out.dt_cuts;
         self.forecast = out.reason == StopReason::Forecast;
         Ok(out.energy / scene.bodies() as f64)
     }
@@ -232,6 +237,7 @@ impl Tally {
             newton_iterations: self.newton_iterations,
             lbfgs_evaluations: self.lbfgs_evaluations,
             plateau_escapes: self.plateau_escapes,
+            dt_cuts: self.dt_cuts,
         }
     }
 }

@@ -141,6 +141,8 @@ pub struct SaddleOutcome {
     pub minimizations: u64,
     /// Plateau escapes of the re-run searches.
     pub plateau_escapes: u64,
+    /// `Δt_max` cuts (`stable_dt`) of the re-run searches.
+    pub dt_cuts: u64,
     /// Final packing fraction.
     pub phi: f64,
     /// Final `V/N`.
@@ -317,6 +319,7 @@ pub fn escape_saddles<const D: usize, S: Shape<D>>(
         out.lbfgs_evaluations += o.lbfgs_evaluations;
         out.minimizations += o.minimizations;
         out.plateau_escapes += o.plateau_escapes;
+        out.dt_cuts += o.dt_cuts;
         out.phi = o.phi;
         out.energy_per_particle = o.energy_per_particle;
     }

@@ -240,6 +240,7 @@ impl Sample<'_> {
                         outcome.lbfgs_evaluations += s.lbfgs_evaluations;
                         outcome.minimizations += s.minimizations;
                         outcome.plateau_escapes += s.plateau_escapes;
+                        outcome.dt_cuts += s.dt_cuts;
                         saddle_escapes = Some(s.rounds);
                     }
                     Ok(outcome)
