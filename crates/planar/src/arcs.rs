@@ -1225,6 +1225,17 @@ pub fn scan_stationary<F: PolarOutline, G: PolarOutline>(
 mod tests {
     use super::*;
 
+    /// Uniform numbers in `[0, 1)` from a linear congruential generator
+    /// seeded with `state`.
+    fn uniform(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// The scan on the tables' unsolved support points against the scan on
     /// solved ones: the same contacts (with the same saddles) to 10⁻¹² in
     /// `h` and `ψ`, on random overlapping and nearly touching pairs of
@@ -1233,13 +1244,7 @@ mod tests {
     /// same cells: on nearly all pairs.
     #[test]
     fn the_scan_on_tables_finds_the_contacts_of_the_solved_scan() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform(0x2545_f491_4f6c_dd1d);
         let (mut pairs, mut same, mut contacts) = (0, 0, 0);
         for &(n, delta) in &[(4.0, 0.3), (8.0, 0.2), (8.0, 0.3), (16.0, 0.3), (32.0, 0.3)] {
             let outline = |e: Unit| {
@@ -1298,13 +1303,7 @@ mod tests {
     /// the whole circle.
     #[test]
     fn the_normal_window_meets_exactly_the_pieces_that_reach_it() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15);
         let (mut met, mut missed) = (0, 0);
         for _ in 0..2000 {
             let angle = TAU * (next() - 0.5);
