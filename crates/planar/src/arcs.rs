@@ -1225,15 +1225,11 @@ pub fn scan_stationary<F: PolarOutline, G: PolarOutline>(
 mod tests {
     use super::*;
 
-    /// Uniform numbers in `[0, 1)` from a linear congruential generator
-    /// seeded with `state`.
-    fn uniform(mut state: u64) -> impl FnMut() -> f64 {
-        move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        }
+    /// Uniform numbers in `[0, 1)`, seeded.
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        move || rng.random::<f64>()
     }
 
     /// The scan on the tables' unsolved support points against the scan on
