@@ -765,8 +765,9 @@ impl NormalWindow {
 }
 
 /// `g`, `g'`, `g''` of an arc pair at `ψ`, the jets (sizes included) and
-/// the support points' polar angles; for a support point not solved (the
-/// scan's), `off`: a bound of how far `g'` is from the solved value.
+/// the support points' polar angles; whether they are solved, and if not
+/// (the scan's samples), `off`: a bound of how far `g'` is from the solved
+/// value.
 struct Eval {
     g: f64,
     g1: f64,
@@ -774,6 +775,7 @@ struct Eval {
     jets: (SupportJet, SupportJet),
     rho_sign: f64,
     phis: (f64, f64),
+    solved: bool,
     off: f64,
 }
 
@@ -839,6 +841,7 @@ fn piece<F: PolarOutline, G: PolarOutline>(
             jets: (ja_s, jb_s),
             rho_sign: (ja.h + ja.d2).signum() * (jb.h + jb.d2).signum(),
             phis: (pa, pb),
+            solved: solve,
             off,
         }
     };
@@ -947,7 +950,7 @@ fn scan_cells<E: Fn(f64) -> Eval>(eval: &E, (lo, hi): (f64, f64), cells: usize) 
     };
     // dψ/du.
     let rate = |u: f64| (hi - lo) * 6.0 * u * (1.0 - u);
-    let end = |psi: f64, e: &Eval| (psi, e.g1, e.g2, e.off == 0.0);
+    let end = |psi: f64, e: &Eval| (psi, e.g1, e.g2, e.solved);
     // A cell: where the cubic through `g'` and its slope in `u` at the ends
     // turns twice inside, near zero at both turns, two extrema may hide two
     // roots besides those the ends show: the cell is halved in `u` (down to
