@@ -151,7 +151,7 @@ fn extrapolated_search_ends_in_the_window_in_fewer_minimisations() {
             ..JamParams::default()
         };
         let out = jam(&mut scene, &mut fire, &params).unwrap();
-        (out.phi, out.energy_per_particle, out.minimizations)
+        (out.phi, out.energy_per_particle, out.work.minimizations)
     }
     let window = JamParams::default();
     let (mut paper, mut leaps) = (0, 0);

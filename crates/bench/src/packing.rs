@@ -460,11 +460,7 @@ fn bench_packing<const D: usize, S: Shape<D>>(
             |scene| summarize(scene, threshold).rattler,
         )?;
         out.phi = s.phi;
-        out.fire_steps += s.fire_steps;
-        out.newton_iterations += s.newton_iterations;
-        out.lbfgs_evaluations += s.lbfgs_evaluations;
-        out.plateau_escapes += s.plateau_escapes;
-        out.dt_cuts += s.dt_cuts;
+        out.work += s.work;
         escapes = s.rounds.to_string();
     }
     let wall = t.elapsed().as_secs_f64();
@@ -487,19 +483,20 @@ fn bench_packing<const D: usize, S: Shape<D>>(
         f.flush()?;
     }
     let s = summarize(&mut scene, threshold);
+    let w = out.work;
     Ok(format!(
         "{family},{D},{n},{seed},{:.6},{:.4},{},{},{wall:.2},{:.2},{:016x},{},{cpu:.2},{},{escapes},{},{}",
         out.phi,
         s.z_j,
         s.iso_margin,
-        out.fire_steps,
+        w.fire_steps,
         // Per energy-and-gradient evaluation: FIRE's steps and L-BFGS's.
-        wall * 1e6 / (out.fire_steps + out.lbfgs_evaluations).max(1) as f64,
+        wall * 1e6 / (w.fire_steps + w.lbfgs_evaluations).max(1) as f64,
         packing_hash(scene.packing()),
-        out.newton_iterations,
-        out.lbfgs_evaluations,
-        out.plateau_escapes,
-        out.dt_cuts
+        w.newton_iterations,
+        w.lbfgs_evaluations,
+        w.plateau_escapes,
+        w.dt_cuts
     ))
 }
 

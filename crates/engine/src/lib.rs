@@ -57,7 +57,7 @@ pub use newton::NewtonParams;
 pub use objective::{Objective, StopReason};
 pub use precon::PreconParams;
 pub use protocol::{
-    AboveJamOutcome, AboveJamParams, JamParams, JamSearch, PressureParams, ProtocolOutcome,
+    AboveJamOutcome, AboveJamParams, JamParams, JamSearch, PressureParams, ProtocolOutcome, Work,
     above_jam, compress_to_phi, compress_to_pressure, energy_slope, extrapolated_step, jam,
 };
 pub use scene::Scene;

@@ -24,7 +24,7 @@
 //! jams above `φ_J + δφ`; it is jammed again from there, at most `rejams`
 //! times.
 
-use crate::fire::Fire;
+use crate::fire::{Fire, MinimizeOutcome};
 use crate::objective::{Objective, StopReason};
 use crate::scene::Scene;
 use jamkit_core::{Error, Potential, Result, Shape};
@@ -162,32 +162,39 @@ impl Default for PressureParams {
     }
 }
 
-/// What a protocol ended with.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ProtocolOutcome {
-    /// Final packing fraction.
-    pub phi: f64,
-    /// Final `V/N`.
-    pub energy_per_particle: f64,
-    /// FIRE steps over all minimisations.
+/// The work of one or more minimisations, summed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Work {
+    /// FIRE steps.
     pub fire_steps: u64,
-    /// Number of minimisations (changes of `φ` plus one).
+    /// Minimisations (for a protocol: changes of `φ` plus one).
     pub minimizations: u64,
-    /// Newton iterations of the finish over all minimisations.
+    /// Newton iterations of the finish.
     pub newton_iterations: u64,
-    /// L-BFGS evaluations over all minimisations (on top of `fire_steps`).
+    /// L-BFGS evaluations (on top of `fire_steps`).
     pub lbfgs_evaluations: u64,
-    /// Moves of the plateau escape over all minimisations.
+    /// Moves of the plateau escape.
     pub plateau_escapes: u64,
-    /// Times `stable_dt` lowered FIRE's `Δt_max`, over all minimisations.
+    /// Times `stable_dt` lowered FIRE's `Δt_max`.
     pub dt_cuts: u64,
 }
 
-impl ProtocolOutcome {
-    /// Adds `other`'s work (FIRE steps, minimisations, Newton iterations,
-    /// L-BFGS evaluations, plateau escapes, `Δt_max` cuts) to this
-    /// outcome's; φ and `V/N` stay this one's.
-    pub fn add_work(&mut self, other: &ProtocolOutcome) {
+impl Work {
+    /// The work of one minimisation.
+    pub fn of(out: &MinimizeOutcome) -> Work {
+        Work {
+            fire_steps: out.steps,
+            minimizations: 1,
+            newton_iterations: out.newton_iterations,
+            lbfgs_evaluations: out.lbfgs_evaluations,
+            plateau_escapes: out.plateau_escapes,
+            dt_cuts: out.dt_cuts,
+        }
+    }
+}
+
+impl std::ops::AddAssign for Work {
+    fn add_assign(&mut self, other: Work) {
         self.fire_steps += other.fire_steps;
         self.minimizations += other.minimizations;
         self.newton_iterations += other.newton_iterations;
@@ -197,15 +204,21 @@ impl ProtocolOutcome {
     }
 }
 
+/// What a protocol ended with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProtocolOutcome {
+    /// Final packing fraction.
+    pub phi: f64,
+    /// Final `V/N`.
+    pub energy_per_particle: f64,
+    /// The work of all its minimisations.
+    pub work: Work,
+}
+
 /// Bookkeeping shared by the protocols.
 #[derive(Default)]
 struct Tally {
-    fire_steps: u64,
-    minimizations: u64,
-    newton_iterations: u64,
-    lbfgs_evaluations: u64,
-    plateau_escapes: u64,
-    dt_cuts: u64,
+    work: Work,
     /// The last minimisation ended on the unjamming forecast.
     forecast: bool,
 }
@@ -218,12 +231,7 @@ impl Tally {
     ) -> Result<f64> {
         scene.check_box()?;
         let out = fire.minimize(scene)?;
-        self.fire_steps += out.steps;
-        self.minimizations += 1;
-        self.newton_iterations += out.newton_iterations;
-        self.lbfgs_evaluations += out.lbfgs_evaluations;
-        self.plateau_escapes += out.plateau_escapes;
-        self.dt_cuts += out.dt_cuts;
+        self.work += Work::of(&out);
         self.forecast = out.reason == StopReason::Forecast;
         Ok(out.energy / scene.bodies() as f64)
     }
@@ -232,12 +240,7 @@ impl Tally {
         ProtocolOutcome {
             phi,
             energy_per_particle,
-            fire_steps: self.fire_steps,
-            minimizations: self.minimizations,
-            newton_iterations: self.newton_iterations,
-            lbfgs_evaluations: self.lbfgs_evaluations,
-            plateau_escapes: self.plateau_escapes,
-            dt_cuts: self.dt_cuts,
+            work: self.work,
         }
     }
 }
@@ -434,17 +437,16 @@ pub fn above_jam<const D: usize, S: Shape<D>>(
     } = *params;
     let energy_high = params.jam.energy_high;
     let mut left = Vec::new();
-    let mut spent: Option<ProtocolOutcome> = None;
+    // The work of the passes that unjammed while compressed.
+    let mut spent = Work::default();
     loop {
         let jammed = jam(scene, fire, &params.jam)?;
         at_jam(scene, &jammed, &left);
         let climb = compress_to_phi(scene, fire, jammed.phi + delta_phi, compress_eps)?;
         // φ and V/N of the compression, the work of every pass.
         let mut above = climb;
-        above.add_work(&jammed);
-        if let Some(spent) = &spent {
-            above.add_work(spent);
-        }
+        above.work += jammed.work;
+        above.work += spent;
         if above.energy_per_particle > energy_high {
             return Ok(AboveJamOutcome {
                 above,
@@ -462,7 +464,7 @@ pub fn above_jam<const D: usize, S: Shape<D>>(
                 phi: climb.phi,
                 // The compression's density changes: one minimisation more
                 // (the first, at φ_J).
-                steps: climb.minimizations.saturating_sub(1),
+                steps: climb.work.minimizations.saturating_sub(1),
                 reason: format!(
                     "the packing unjammed while compressed by delta_phi = {delta_phi:e} from phi_J = {:.12} (V/N = {:.3e}, not above energy_high = {energy_high:e}): a rearrangement found a state that jams above phi_J + delta_phi{}",
                     jammed.phi,
@@ -478,7 +480,7 @@ pub fn above_jam<const D: usize, S: Shape<D>>(
             });
         }
         left.push(jammed.phi);
-        spent = Some(above);
+        spent = above.work;
     }
 }
 
@@ -636,7 +638,7 @@ mod tests {
             "{} {phi_j}",
             outcome.phi
         );
-        outcome.minimizations
+        outcome.work.minimizations
     }
 
     /// A jamming point that moves up once the search has crossed it: the
@@ -655,5 +657,35 @@ mod tests {
             "a far move: regrown {regrown}, halved {creep}"
         );
         assert_eq!(density_steps(0.0, false), density_steps(0.0, true));
+    }
+
+    /// A protocol's work is the sum of its minimisations' (as the step
+    /// trace records each): a counter left out of the sum, or added twice,
+    /// shows here.
+    #[test]
+    fn a_jams_work_is_the_sum_of_its_minimisations() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let sizes = SizeDistribution::default().sample(16, &mut rng);
+        let packing = Packing::<2, Sphere>::random(Sphere, sizes, 0.1, &mut rng).unwrap();
+        let mut scene = Scene::new(packing, Potential::Harmonic, 0.2);
+        let mut fire = Fire::new(FireParams::default());
+        fire.record();
+        let out = jam(&mut scene, &mut fire, &JamParams::default()).unwrap();
+        let trace = fire.take_trace();
+        let total = |f: fn(&MinimizeOutcome) -> u64| trace.iter().map(|(_, m)| f(m)).sum::<u64>();
+        let sum = Work {
+            fire_steps: total(|m| m.steps),
+            minimizations: trace.len() as u64,
+            newton_iterations: total(|m| m.newton_iterations),
+            lbfgs_evaluations: total(|m| m.lbfgs_evaluations),
+            plateau_escapes: total(|m| m.plateau_escapes),
+            dt_cuts: total(|m| m.dt_cuts),
+        };
+        let mut added = Work::default();
+        for (_, m) in &trace {
+            added += Work::of(m);
+        }
+        assert_eq!(added, sum);
+        assert_eq!(out.work, sum);
     }
 }

@@ -62,7 +62,7 @@
 
 use crate::hessian::{Hessian, HessianOptions};
 use crate::newton::{mean_positive_diagonal, sparse_cholesky, upper_triplets};
-use crate::{Fire, JamParams, Objective, Scene, jam};
+use crate::{Fire, JamParams, Objective, Scene, Work, jam};
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 use faer::sparse::Triplet;
@@ -131,18 +131,8 @@ pub struct SaddleOutcome {
     /// Rayleigh quotient of the last mode found relative to `d̄`
     /// (`ρ/d̄ < −threshold`), or 0 when the last state checked is no saddle.
     pub curvature_rel: f64,
-    /// FIRE steps of the re-run searches.
-    pub fire_steps: u64,
-    /// Newton iterations of the re-run searches.
-    pub newton_iterations: u64,
-    /// L-BFGS evaluations of the re-run searches.
-    pub lbfgs_evaluations: u64,
-    /// Minimisations of the re-run searches.
-    pub minimizations: u64,
-    /// Plateau escapes of the re-run searches.
-    pub plateau_escapes: u64,
-    /// `Δt_max` cuts (`stable_dt`) of the re-run searches.
-    pub dt_cuts: u64,
+    /// The work of the re-run searches.
+    pub work: Work,
     /// Final packing fraction.
     pub phi: f64,
     /// Final `V/N`.
@@ -314,12 +304,7 @@ pub fn escape_saddles<const D: usize, S: Shape<D>>(
         push(scene, &unit, params.step, kick);
         let o = jam(scene, fire, &rejam)?;
         out.rounds += 1;
-        out.fire_steps += o.fire_steps;
-        out.newton_iterations += o.newton_iterations;
-        out.lbfgs_evaluations += o.lbfgs_evaluations;
-        out.minimizations += o.minimizations;
-        out.plateau_escapes += o.plateau_escapes;
-        out.dt_cuts += o.dt_cuts;
+        out.work += o.work;
         out.phi = o.phi;
         out.energy_per_particle = o.energy_per_particle;
     }

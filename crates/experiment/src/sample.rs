@@ -235,12 +235,7 @@ impl Sample<'_> {
                         )?;
                         outcome.phi = s.phi;
                         outcome.energy_per_particle = s.energy_per_particle;
-                        outcome.fire_steps += s.fire_steps;
-                        outcome.newton_iterations += s.newton_iterations;
-                        outcome.lbfgs_evaluations += s.lbfgs_evaluations;
-                        outcome.minimizations += s.minimizations;
-                        outcome.plateau_escapes += s.plateau_escapes;
-                        outcome.dt_cuts += s.dt_cuts;
+                        outcome.work += s.work;
                         saddle_escapes = Some(s.rounds);
                     }
                     Ok(outcome)
@@ -333,14 +328,14 @@ impl Sample<'_> {
         let run = Protocolled {
             phi: outcome.phi,
             energy_per_particle: outcome.energy_per_particle,
-            fire_steps: outcome.fire_steps,
+            fire_steps: outcome.work.fire_steps,
             lbfgs_evaluations: self
                 .point
                 .minimizer
                 .lbfgs
                 .params()
-                .map(|_| outcome.lbfgs_evaluations),
-            minimizations: outcome.minimizations,
+                .map(|_| outcome.work.lbfgs_evaluations),
+            minimizations: outcome.work.minimizations,
             wall_s: start.elapsed().as_secs_f64(),
             saddle_escapes,
             jam_point,
