@@ -76,8 +76,8 @@
 //! range, where `ν` is stationary (an inflection point) and the support
 //! point moves as the square root of the distance in `ψ`, so the grid is
 //! uniform in `u` with `ψ = lo + (hi − lo)(3u² − 2u³)`, in which it moves
-//! smoothly (at least 4 cells, and one per [`CELL`]; one per
-//! [`CONCAVE_CELL`] for a concave arc against a convex one). Every sign change is
+//! smoothly (at least 4 cells, and one per 0.1 rad; one per 0.025 rad for
+//! a concave arc against a convex one). Every sign change is
 //! refined by Newton's method safeguarded by bisection, stopped after a
 //! step below 10⁻⁹ rad. A cell where `g_AB'` keeps its sign while `g_AB''`
 //! turns it towards zero (a tip touching both flanks of a valley puts two
@@ -997,16 +997,16 @@ fn scan_cells<E: Fn(f64) -> Eval>(eval: &E, (lo, hi): (f64, f64), cells: usize) 
 }
 
 /// The widest cell of ψ the scan of a piece starts from, in radians, on
-/// pairs of arcs both convex or both concave. The cubic test halves cells
-/// where two stationary points may hide; the starting width sets how fine
-/// the scan is before that (`coarse_cells_find_the_contacts_of_fine_ones`).
-const CELL: f64 = 0.2;
+/// pairs of arcs both convex or both concave (and at least 4 cells a
+/// piece). The cubic test halves cells where two stationary points may
+/// hide; the starting width sets how fine the scan is before that.
+const CELL: f64 = 0.1;
 
 /// The widest cell of ψ on a concave arc against a convex one, in
 /// radians: narrower, since a tip in a valley of about its own curvature
 /// has `g''` near zero over a range of ψ and several stationary points
 /// close together.
-const CONCAVE_CELL: f64 = 0.05;
+const CONCAVE_CELL: f64 = 0.025;
 
 /// The narrowest cell [`piece`] halves, in radians of ψ.
 const MIN_CELL: f64 = 1e-6;
@@ -1353,16 +1353,18 @@ mod tests {
         assert!(met > 200 && missed > 200, "met {met}, missed {missed}");
     }
 
-    /// The default starting cells against cells of 0.005 rad (and the scan
-    /// on solved support points): the same contacts with the same
-    /// saddles, on random overlapping and nearly touching pairs of
-    /// near-disks beyond the convex limit (n = 4 … 32, Δ = 0.1 … 0.4) and
-    /// small bodies deep in a large one's valley. The
-    /// gaps agree to 10⁻¹², the normals to 10⁻⁸ rad: each root is refined
+    /// The scan against one from cells of 0.005 rad on solved support
+    /// points: the same contacts with the same saddles, on random
+    /// overlapping and nearly touching pairs of near-disks beyond the
+    /// convex limit (n = 4 … 32, Δ = 0.1 … 0.4) and small bodies deep in a
+    /// large one's valley. The gaps agree to 10⁻¹², the normals to 10⁻⁸ rad: each root is refined
     /// from its own cell until a step is below 10⁻⁹ rad, which near a fold
-    /// (`g''` small) leaves ψ uncertain by about that step.
+    /// (`g''` small) leaves ψ uncertain by about that step. Random pairs
+    /// seldom put stationary points closer than a cell (even four cells a
+    /// piece find these); the paths of `shapes/fourier/tests/nonconvex.rs`
+    /// test those.
     #[test]
-    fn coarse_cells_find_the_contacts_of_fine_ones() {
+    fn the_scan_finds_the_contacts_of_a_fine_scan() {
         let mut next = uniform(0x6a09_e667_f3bc_c908);
         let fine = Scan {
             cell: 0.005,
@@ -1389,15 +1391,16 @@ mod tests {
             let arcs = split_arcs(&outline, 4096);
             for k in 0..500 {
                 // Half the pairs as in a packing, half a body of size 1/8
-                // of the other in its valley (bottom at φ = π/2n), up to
-                // three lobe heights deep: a tip touching both flanks.
+                // of the other in one of its valleys (bottom at
+                // φ = −π/2n), up to three of its own lobe heights below
+                // the bottom: teeth touching both flanks.
                 let (si, sj, theta_i, angle, distance) = if k % 2 == 0 {
                     let sj = if next() < 0.5 { 0.5 } else { 0.7 };
                     let (theta, angle) = (TAU * next(), TAU * next());
                     let d = (0.5 + sj) * (1.0 + delta / n * (3.0 * next() - 2.0));
                     (0.5, sj, theta, angle, d)
                 } else {
-                    let angle = (PI / 2.0 + 0.3 * (2.0 * next() - 1.0)) / n;
+                    let angle = (-PI / 2.0 + 0.3 * (2.0 * next() - 1.0)) / n;
                     let d = 4.0 * (1.0 - delta / n) + 0.5 - 1.5 * delta / n * next();
                     (4.0, 0.5, 0.0, angle, d)
                 };
