@@ -1077,12 +1077,13 @@ mod tests {
     /// `1/k`); `H''` to 1e-10 (it divides by the curvature numerator).
     #[test]
     fn joint_iteration_agrees_with_the_nested_solve() {
-        let mut seed = 7u64;
+        let mut rng = {
+            use rand::SeedableRng;
+            rand_chacha::ChaCha8Rng::seed_from_u64(7)
+        };
         let mut rnd = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
+            use rand::RngExt;
+            rng.random::<f64>()
         };
         let mut joint_steps = 0;
         for _ in 0..400 {

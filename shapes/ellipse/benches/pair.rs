@@ -22,13 +22,9 @@ type Case = (f64, Axis, f64, Axis, Vector<2>);
 
 /// A deterministic uniform stream in `[0, 1)`.
 fn uniform(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    move || rng.random::<f64>()
 }
 
 /// 1024 pairs; `contact`: moved along the line of centres until they

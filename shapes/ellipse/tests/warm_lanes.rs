@@ -7,16 +7,18 @@
 use jamkit_core::{Contact, ContactLanes, FastContacts, Pair, PairLanes, PairMemo, Shape, Vector};
 use jamkit_ellipse::{Axis, Ellipse, EllipseParams};
 
-/// A small deterministic generator (splitmix64), uniform in `[0, 1)`.
-struct Uniform(u64);
+/// Seeded uniform numbers in `[0, 1)`.
+struct Uniform(rand_chacha::ChaCha8Rng);
 
 impl Uniform {
+    fn new(seed: u64) -> Self {
+        use rand::SeedableRng;
+        Self(rand_chacha::ChaCha8Rng::seed_from_u64(seed))
+    }
+
     fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        use rand::RngExt;
+        self.0.random::<f64>()
     }
 }
 
@@ -108,7 +110,7 @@ fn lanes_match_one_pair_at_a_time_bit_for_bit() {
             &shape
         ));
         for max_gap in [0.0, 0.02] {
-            let mut u = Uniform(31 + k as u64);
+            let mut u = Uniform::new(31 + k as u64);
             let mut pairs: Vec<_> = (0..150).map(|_| random_pair(&shape, &mut u)).collect();
             let mut scalar: Vec<PairMemo> = vec![None; pairs.len()];
             // The lanes' memos in reverse order.
