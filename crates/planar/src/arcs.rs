@@ -1152,13 +1152,17 @@ pub struct Scanned {
 }
 
 /// Every stationary point with `h < 0` of every pair of arcs of bodies `i`
-/// and `j` with `ψ` in `[from, to]`, by brute force: `g_AB'` on `cells`
-/// equal cells of `ψ` (each arc's support point by [`arc_support`]), every
-/// sign change bisected to the spacing of floats. Slow (`cells` times the
-/// arcs that reach each `ψ`), and independent of [`arc_contacts`]' grid,
-/// cubic test and pairing: the check of its search, for tests and
-/// diagnostics. Deep stationary points of arcs facing away from each other
-/// (`h` below `−reach` of [`arc_contacts`]) are listed too.
+/// and `j` with `ψ` in `[from, to]`, by brute force: on each range of `ψ`
+/// that both arcs of a pair reach, `g_AB'` on `ψ = lo + (hi − lo)(3u² −
+/// 2u³)` with `u` on a uniform grid, as many cells per range as its share
+/// of `cells` over `[from, to]` (at least 64; the grid crowds the range's
+/// ends, where the support points move as the square root of the distance
+/// in `ψ`), each arc's support point by [`arc_support`], every sign change
+/// bisected to the spacing of floats. Slow, and independent of
+/// [`arc_contacts`]' table starts, cells, cubic test and pairing: the
+/// check of its search, for tests and diagnostics. Deep stationary points
+/// of arcs facing away from each other (`h` below `−reach` of
+/// [`arc_contacts`]) are listed too.
 pub fn scan_stationary<F: PolarOutline, G: PolarOutline>(
     i: &ArcBody<'_, F>,
     j: &ArcBody<'_, G>,
@@ -1166,76 +1170,112 @@ pub fn scan_stationary<F: PolarOutline, G: PolarOutline>(
     (from, to): (f64, f64),
     cells: usize,
 ) -> Vec<Scanned> {
-    // β within an arc's normal range (mod 2π), if it is.
-    let within = |arc: &OutlineArc, beta: f64| {
-        let (lo, hi) = arc.normal_range();
-        let b = lo + (beta - lo).rem_euclid(TAU);
-        (b <= hi).then_some(b)
-    };
-    // (g, g', g'', sign of ρ_A ρ_B) of arcs a, b at ψ, where both reach it.
-    let eval = |a: usize, b: usize, psi: f64| {
-        let (a, b) = (&i.arcs[a], &j.arcs[b]);
-        let (_, ja) = arc_support(a, within(a, psi - i.theta)?, i.outline);
-        let (_, jb) = arc_support(b, within(b, psi + PI - j.theta)?, j.outline);
+    let mut out = Vec::new();
+    for (a, arc_a) in i.arcs.iter().enumerate() {
+        for (b, arc_b) in j.arcs.iter().enumerate() {
+            let (na, nb) = (arc_a.normal_range(), arc_b.normal_range());
+            // Arc a reaches ψ where ψ − θ_i lies in its range, arc b where
+            // ψ + π − θ_j does (both modulo 2π): each range placed in ψ,
+            // shifted by whole turns over [from, to].
+            let placed = |start: f64, len: f64| {
+                let first = ((from - len - start) / TAU).ceil() as i64;
+                let last = ((to - start) / TAU).floor() as i64;
+                (first..=last).map(move |k| (start + k as f64 * TAU, len))
+            };
+            for (sa, la) in placed(i.theta + na.0, na.1 - na.0) {
+                for (sb, lb) in placed(j.theta - PI + nb.0, nb.1 - nb.0) {
+                    let (lo, hi) = (from.max(sa).max(sb), to.min(sa + la).min(sb + lb));
+                    if hi > lo {
+                        let share = (hi - lo) / (to - from) * cells as f64;
+                        let ends = (sa, sb);
+                        stationary_by_brute_force(
+                            i,
+                            (a, arc_a),
+                            j,
+                            (b, arc_b),
+                            r_ij,
+                            ends,
+                            (lo, hi),
+                            share,
+                            &mut out,
+                        );
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// [`scan_stationary`] on one range `[lo, hi]` of `ψ` that arcs `a` and
+/// `b` both reach (`starts`: where their ranges, placed in `ψ`, begin).
+#[allow(clippy::too_many_arguments)]
+fn stationary_by_brute_force<F: PolarOutline, G: PolarOutline>(
+    i: &ArcBody<'_, F>,
+    (a, arc_a): (usize, &OutlineArc),
+    j: &ArcBody<'_, G>,
+    (b, arc_b): (usize, &OutlineArc),
+    r_ij: &Vector<2>,
+    starts: (f64, f64),
+    (lo, hi): (f64, f64),
+    share: f64,
+    out: &mut Vec<Scanned>,
+) {
+    let (na, nb) = (arc_a.normal_range(), arc_b.normal_range());
+    // (g, g', g'', sign of ρ_A ρ_B) at ψ, each normal held within its
+    // arc's range against round-off.
+    let eval = |psi: f64| {
+        let beta_a = (na.0 + (psi - starts.0)).clamp(na.0, na.1);
+        let beta_b = (nb.0 + (psi - starts.1)).clamp(nb.0, nb.1);
+        let (_, ja) = arc_support(arc_a, beta_a, i.outline);
+        let (_, jb) = arc_support(arc_b, beta_b, j.outline);
         let (s, c) = psi.sin_cos();
         let along = r_ij[0] * c + r_ij[1] * s;
-        Some((
+        (
             along - i.size * ja.h - j.size * jb.h,
             -r_ij[0] * s + r_ij[1] * c - i.size * ja.d1 - j.size * jb.d1,
             -along - i.size * ja.d2 - j.size * jb.d2,
             (ja.h + ja.d2).signum() * (jb.h + jb.d2).signum(),
-        ))
+        )
     };
-    let nj = j.arcs.len();
-    // `(ψ, g')` of each arc pair at the last cell edge it reached.
-    let mut last: Vec<Option<(f64, f64)>> = vec![None; i.arcs.len() * nj];
-    let mut out = Vec::new();
-    for k in 0..=cells {
-        let psi = from + (to - from) * k as f64 / cells as f64;
-        let reach_i: Vec<usize> = (0..i.arcs.len())
-            .filter(|&a| within(&i.arcs[a], psi - i.theta).is_some())
-            .collect();
-        let reach_j: Vec<usize> = (0..nj)
-            .filter(|&b| within(&j.arcs[b], psi + PI - j.theta).is_some())
-            .collect();
-        let mut now = vec![None; last.len()];
-        for &a in &reach_i {
-            for &b in &reach_j {
-                let Some((_, g1, _, _)) = eval(a, b, psi) else {
-                    continue;
-                };
-                now[a * nj + b] = Some((psi, g1));
-                let Some((x0, f0)) = last[a * nj + b] else {
-                    continue;
-                };
-                if (f0 > 0.0) == (g1 > 0.0) {
-                    continue;
-                }
-                let (mut lo, mut hi) = (x0, psi);
-                for _ in 0..64 {
-                    let m = 0.5 * (lo + hi);
-                    match eval(a, b, m) {
-                        Some((_, fm, _, _)) if (fm > 0.0) == (f0 > 0.0) => lo = m,
-                        _ => hi = m,
-                    }
-                }
-                let psi = 0.5 * (lo + hi);
-                if let Some((gap, _, g2, rho)) = eval(a, b, psi)
-                    && gap < 0.0
-                {
-                    out.push(Scanned {
-                        arc_i: a,
-                        arc_j: b,
-                        psi,
-                        gap,
-                        contact: -g2 * rho > 0.0,
-                    });
-                }
+    let cells = share.ceil().max(64.0) as usize;
+    let at = |k: usize| {
+        let u = k as f64 / cells as f64;
+        if k == cells {
+            hi
+        } else {
+            lo + (hi - lo) * u * u * (3.0 - 2.0 * u)
+        }
+    };
+    let mut last = (lo, eval(lo).1);
+    for k in 1..=cells {
+        let psi = at(k);
+        let g1 = eval(psi).1;
+        let (x0, f0) = std::mem::replace(&mut last, (psi, g1));
+        if (f0 > 0.0) == (g1 > 0.0) {
+            continue;
+        }
+        let (mut left, mut right) = (x0, psi);
+        for _ in 0..64 {
+            let m = 0.5 * (left + right);
+            if (eval(m).1 > 0.0) == (f0 > 0.0) {
+                left = m;
+            } else {
+                right = m;
             }
         }
-        last = now;
+        let psi = 0.5 * (left + right);
+        let (gap, _, g2, rho) = eval(psi);
+        if gap < 0.0 {
+            out.push(Scanned {
+                arc_i: a,
+                arc_j: b,
+                psi,
+                gap,
+                contact: -g2 * rho > 0.0,
+            });
+        }
     }
-    out
 }
 
 #[cfg(test)]

@@ -9,9 +9,20 @@ use jamkit_core::{
 use jamkit_fourier::{FourierParams, FourierSumParams, Mode, NearDisk};
 use jamkit_planar::profiled::Profiled;
 
-#[path = "support/random.rs"]
-mod random;
-use random::Uniform;
+/// The stream of random inputs the digest of
+/// [`near_disk_numbers_are_unchanged`] was recorded with (splitmix64,
+/// uniform in `[0, 1)`): another stream would give other numbers.
+struct Splitmix(u64);
+
+impl Splitmix {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
 
 /// The numbers of a contact.
 fn contact_numbers(c: &Contact<2>) -> Vec<f64> {
@@ -120,7 +131,7 @@ fn shapes() -> Vec<(NearDisk, Profiled<jamkit_fourier::FourierProfile>)> {
 /// Random pairs: sizes in [0.5, 0.7], angles in (−π, π], separations
 /// between overlapping and just apart in every direction.
 fn pairs(count: usize) -> Vec<(f64, f64, f64, f64, Vector<2>)> {
-    let mut u = Uniform(7);
+    let mut u = Splitmix(7);
     let pi = std::f64::consts::PI;
     (0..count)
         .map(|_| {
@@ -197,7 +208,7 @@ fn near_disk_equals_profiled_with_angles_bit_for_bit() {
 /// each and its round trip.
 #[test]
 fn orientation_types_part_under_turns() {
-    let mut u = Uniform(11);
+    let mut u = Splitmix(11);
     let (mut after, mut trip_r, mut trip_a) =
         (Tally::default(), Tally::default(), Tally::default());
     for _ in 0..2000 {

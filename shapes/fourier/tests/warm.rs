@@ -106,7 +106,7 @@ fn distance(a: &[[f64; 5]], b: &[[f64; 5]]) -> f64 {
 /// after moves of 1e-10 (turns by 1e-9 rad), one step.
 #[test]
 fn warm_and_cold_solves_agree() {
-    let mut u = Uniform(11);
+    let mut u = Uniform::new(11);
     let (mut compared, mut near) = (0, 0);
     let (mut warm_steps, mut cold_steps) = (0, 0);
     let mut worst: f64 = 0.0;
@@ -184,7 +184,7 @@ fn warm_and_cold_solves_agree() {
 /// alone leaves `~C·1e-16` rad).
 #[test]
 fn converged_means_stationary_to_round_off() {
-    let mut u = Uniform(5);
+    let mut u = Uniform::new(5);
     let mut checked = 0;
     for s in shapes() {
         let profiled = s.profiled();
@@ -250,7 +250,7 @@ fn converged_means_stationary_to_round_off() {
 /// empty), and their `contacts_warm` is `contacts`, bit for bit.
 #[test]
 fn contact_warm_answers_for_the_exact_gap_alone() {
-    let mut u = Uniform(3);
+    let mut u = Uniform::new(3);
     let (mut exact, mut approximate) = (0, 0);
     for gap in [GapModel::Exact, GapModel::FirstOrder, GapModel::SecondOrder] {
         let s = NearDisk::fourier(&FourierParams {

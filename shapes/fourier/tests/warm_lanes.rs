@@ -107,7 +107,7 @@ fn lanes_match_one_pair_at_a_time_bit_for_bit() {
             shape
         ));
         for max_gap in [0.0, 0.02] {
-            let mut u = Uniform(31 + k as u64);
+            let mut u = Uniform::new(31 + k as u64);
             let mut pairs: Vec<_> = (0..150).map(|_| random_pair(&mut u)).collect();
             let mut scalar: Vec<PairMemo> = vec![None; pairs.len()];
             // The lanes' memos in reverse order.

@@ -5,16 +5,18 @@
 
 use jamkit_core::{Pair, Rotation2, Vector};
 
-/// A small deterministic generator (splitmix64), uniform in `[0, 1)`.
-pub struct Uniform(pub u64);
+/// Seeded uniform numbers in `[0, 1)`.
+pub struct Uniform(rand_chacha::ChaCha8Rng);
 
 impl Uniform {
+    pub fn new(seed: u64) -> Self {
+        use rand::SeedableRng;
+        Self(rand_chacha::ChaCha8Rng::seed_from_u64(seed))
+    }
+
     pub fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        use rand::RngExt;
+        self.0.random::<f64>()
     }
 }
 
