@@ -1289,6 +1289,15 @@ mod tests {
         move || rng.random::<f64>()
     }
 
+    /// The unit outline `R = 1 + Δ sin(nφ)/n`: `(R, R', R'')` at `e^{iφ}`.
+    fn near_disk(n: f64, delta: f64) -> impl Fn(Unit) -> (f64, f64, f64) {
+        move |e: Unit| {
+            let phi: f64 = e.1.atan2(e.0);
+            let (s, c) = (n * phi).sin_cos();
+            (1.0 + delta * s / n, delta * c, -n * delta * s)
+        }
+    }
+
     /// The scan on the tables' unsolved support points against the scan on
     /// solved ones: the same contacts (with the same saddles) to 10⁻¹² in
     /// `h` and `ψ`, on random overlapping and nearly touching pairs of
@@ -1300,11 +1309,7 @@ mod tests {
         let mut next = uniform(0x2545_f491_4f6c_dd1d);
         let (mut pairs, mut same, mut contacts) = (0, 0, 0);
         for &(n, delta) in &[(4.0, 0.3), (8.0, 0.2), (8.0, 0.3), (16.0, 0.3), (32.0, 0.3)] {
-            let outline = |e: Unit| {
-                let phi: f64 = e.1.atan2(e.0);
-                let (s, c) = (n * phi).sin_cos();
-                (1.0 + delta * s / n, delta * c, -n * delta * s)
-            };
+            let outline = near_disk(n, delta);
             let arcs = split_arcs(&outline, 4096);
             for _ in 0..300 {
                 let (si, sj) = (0.5, if next() < 0.5 { 0.5 } else { 0.7 });
@@ -1397,9 +1402,10 @@ mod tests {
     /// points: the same contacts with the same saddles, on random
     /// overlapping and nearly touching pairs of near-disks beyond the
     /// convex limit (n = 4 … 32, Δ = 0.1 … 0.4) and small bodies deep in a
-    /// large one's valley. The gaps agree to 10⁻¹², the normals to 10⁻⁸ rad: each root is refined
-    /// from its own cell until a step is below 10⁻⁹ rad, which near a fold
-    /// (`g''` small) leaves ψ uncertain by about that step. Random pairs
+    /// large one's valley. The gaps agree to 10⁻¹², the normals to 10⁻⁸
+    /// rad: each root is refined from its own cell until a step is below
+    /// 10⁻⁹ rad, which near a fold (`g''` small) leaves ψ uncertain by
+    /// about that step. Random pairs
     /// seldom put stationary points closer than a cell (even four cells a
     /// piece find these); the paths of `shapes/fourier/tests/nonconvex.rs`
     /// test those.
@@ -1423,11 +1429,7 @@ mod tests {
             (32.0, 0.3),
         ];
         for &(n, delta) in &cases {
-            let outline = |e: Unit| {
-                let phi: f64 = e.1.atan2(e.0);
-                let (s, c) = (n * phi).sin_cos();
-                (1.0 + delta * s / n, delta * c, -n * delta * s)
-            };
+            let outline = near_disk(n, delta);
             let arcs = split_arcs(&outline, 4096);
             for k in 0..500 {
                 // Half the pairs as in a packing, half a body of size 1/8
