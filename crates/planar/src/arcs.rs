@@ -1187,14 +1187,13 @@ pub fn scan_stationary<F: PolarOutline, G: PolarOutline>(
                     let (lo, hi) = (from.max(sa).max(sb), to.min(sa + la).min(sb + lb));
                     if hi > lo {
                         let share = (hi - lo) / (to - from) * cells as f64;
-                        let ends = (sa, sb);
                         stationary_by_brute_force(
                             i,
                             (a, arc_a),
                             j,
                             (b, arc_b),
                             r_ij,
-                            ends,
+                            (sa, sb),
                             (lo, hi),
                             share,
                             &mut out,
@@ -1282,11 +1281,26 @@ fn stationary_by_brute_force<F: PolarOutline, G: PolarOutline>(
 mod tests {
     use super::*;
 
-    /// Uniform numbers in `[0, 1)`, seeded.
-    fn uniform(seed: u64) -> impl FnMut() -> f64 {
-        use rand::{RngExt, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        move || rng.random::<f64>()
+    use crate::uniform;
+
+    /// A pair of near-disks of n lobes of amplitude Δ as in a packing:
+    /// sizes 0.5 and 0.5 or 0.7 (`[i, j]`), any angles, the centres from
+    /// 2Δ/n closer to Δ/n farther than touching disks (relative) in any
+    /// direction (`r_ij`): lobes interlocked or about to.
+    fn packing_pair(
+        next: &mut impl FnMut() -> f64,
+        n: f64,
+        delta: f64,
+    ) -> ([f64; 2], [f64; 2], Vector<2>) {
+        let sizes = [0.5, if next() < 0.5 { 0.5 } else { 0.7 }];
+        let thetas = [TAU * next(), TAU * next()];
+        let angle = TAU * next();
+        let distance = (sizes[0] + sizes[1]) * (1.0 + delta / n * (3.0 * next() - 2.0));
+        (
+            sizes,
+            thetas,
+            Vector::<2>::new(distance * angle.cos(), distance * angle.sin()),
+        )
     }
 
     /// The unit outline `R = 1 + Δ sin(nφ)/n`: `(R, R', R'')` at `e^{iφ}`.
@@ -1312,17 +1326,14 @@ mod tests {
             let outline = near_disk(n, delta);
             let arcs = split_arcs(&outline, 4096);
             for _ in 0..300 {
-                let (si, sj) = (0.5, if next() < 0.5 { 0.5 } else { 0.7 });
+                let ([si, sj], [ti, tj], r) = packing_pair(&mut next, n, delta);
                 let body = |size: f64, theta: f64| ArcBody {
                     arcs: &arcs,
                     outline: &outline,
                     size,
                     theta,
                 };
-                let (bi, bj) = (body(si, TAU * next()), body(sj, TAU * next()));
-                let angle = TAU * next();
-                let distance = (si + sj) * (1.0 + delta / n * (3.0 * next() - 2.0));
-                let r = Vector::<2>::new(distance * angle.cos(), distance * angle.sin());
+                let (bi, bj) = (body(si, ti), body(sj, tj));
                 let reach = delta * 2.0 / n * (si + sj);
                 let list = |solved: bool| {
                     let mut out = Vec::new();
@@ -1405,10 +1416,9 @@ mod tests {
     /// large one's valley. The gaps agree to 10⁻¹², the normals to 10⁻⁸
     /// rad: each root is refined from its own cell until a step is below
     /// 10⁻⁹ rad, which near a fold (`g''` small) leaves ψ uncertain by
-    /// about that step. Random pairs
-    /// seldom put stationary points closer than a cell (even four cells a
-    /// piece find these); the paths of `shapes/fourier/tests/nonconvex.rs`
-    /// test those.
+    /// about that step. Random pairs seldom put stationary points closer
+    /// than a cell (even four cells a piece find these); the paths of
+    /// `shapes/fourier/tests/nonconvex.rs` test those.
     #[test]
     fn the_scan_finds_the_contacts_of_a_fine_scan() {
         let mut next = uniform(0x6a09_e667_f3bc_c908);
@@ -1436,15 +1446,13 @@ mod tests {
                 // of the other in one of its valleys (bottom at
                 // φ = −π/2n), up to three of its own lobe heights below
                 // the bottom: teeth touching both flanks.
-                let (si, sj, theta_i, angle, distance) = if k % 2 == 0 {
-                    let sj = if next() < 0.5 { 0.5 } else { 0.7 };
-                    let (theta, angle) = (TAU * next(), TAU * next());
-                    let d = (0.5 + sj) * (1.0 + delta / n * (3.0 * next() - 2.0));
-                    (0.5, sj, theta, angle, d)
+                let ([si, sj], [ti, tj], r) = if k % 2 == 0 {
+                    packing_pair(&mut next, n, delta)
                 } else {
                     let angle = (-PI / 2.0 + 0.3 * (2.0 * next() - 1.0)) / n;
                     let d = 4.0 * (1.0 - delta / n) + 0.5 - 1.5 * delta / n * next();
-                    (4.0, 0.5, 0.0, angle, d)
+                    let r = Vector::<2>::new(d * angle.cos(), d * angle.sin());
+                    ([4.0, 0.5], [0.0, TAU * next()], r)
                 };
                 let body = |size: f64, theta: f64| ArcBody {
                     arcs: &arcs,
@@ -1452,8 +1460,7 @@ mod tests {
                     size,
                     theta,
                 };
-                let (bi, bj) = (body(si, theta_i), body(sj, TAU * next()));
-                let r = Vector::<2>::new(distance * angle.cos(), distance * angle.sin());
+                let (bi, bj) = (body(si, ti), body(sj, tj));
                 let reach = delta * 2.0 / n * (si + sj);
                 let list = |scan: Scan| {
                     let mut out = Vec::new();

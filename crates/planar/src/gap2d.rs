@@ -1077,14 +1077,7 @@ mod tests {
     /// `1/k`); `H''` to 1e-10 (it divides by the curvature numerator).
     #[test]
     fn joint_iteration_agrees_with_the_nested_solve() {
-        let mut rng = {
-            use rand::SeedableRng;
-            rand_chacha::ChaCha8Rng::seed_from_u64(7)
-        };
-        let mut rnd = move || {
-            use rand::RngExt;
-            rng.random::<f64>()
-        };
+        let mut rnd = crate::uniform(7);
         let mut joint_steps = 0;
         for _ in 0..400 {
             let (ai, aj) = (1.0 + rnd(), 1.0 + rnd());

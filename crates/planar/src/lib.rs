@@ -26,3 +26,11 @@ pub mod arcs;
 pub mod first_order;
 pub mod gap2d;
 pub mod profiled;
+
+/// Seeded uniform numbers in `[0, 1)` for the tests.
+#[cfg(test)]
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    move || rng.random::<f64>()
+}
