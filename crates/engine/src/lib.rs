@@ -61,3 +61,15 @@ pub use protocol::{
     above_jam, compress_to_phi, compress_to_pressure, energy_slope, extrapolated_step, jam,
 };
 pub use scene::Scene;
+
+/// Binary disks (`SizeDistribution::default`) at random in a periodic box
+/// at packing fraction `phi`, harmonic, skin 0.2: the scene of the tests.
+#[cfg(test)]
+fn random_disks(n: usize, phi: f64, seed: u64) -> Scene<2, jamkit_sphere::Sphere> {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let sizes = jamkit_core::SizeDistribution::default().sample(n, &mut rng);
+    let packing =
+        jamkit_core::Packing::random(jamkit_sphere::Sphere, sizes, phi, &mut rng).unwrap();
+    Scene::new(packing, jamkit_core::Potential::Harmonic, 0.2)
+}

@@ -593,9 +593,6 @@ pub fn compress_to_pressure<const D: usize, S: Shape<D>>(
 mod tests {
     use super::*;
     use crate::fire::FireParams;
-    use jamkit_core::{Packing, SizeDistribution};
-    use jamkit_sphere::Sphere;
-    use rand::SeedableRng;
 
     /// Minimisations the bisection takes from φ = 0.01 to a jamming point
     /// that moves from `0.0203` to `0.0203 + jump` at the first state found
@@ -603,10 +600,7 @@ mod tests {
     /// contacts, so every minimisation ends at once), with and without
     /// regrowth.
     fn density_steps(jump: f64, regrow: bool) -> u64 {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
-        let sizes = SizeDistribution::default().sample(4, &mut rng);
-        let packing = Packing::<2, Sphere>::random(Sphere, sizes, 0.01, &mut rng).unwrap();
-        let mut scene = Scene::new(packing, Potential::Harmonic, 0.2);
+        let mut scene = crate::random_disks(4, 0.01, 1);
         let mut fire = Fire::new(FireParams::paper());
         let mut phi_j = 0.0203;
         let mut moved = false;
@@ -664,10 +658,7 @@ mod tests {
     /// shows here.
     #[test]
     fn a_jams_work_is_the_sum_of_its_minimisations() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let sizes = SizeDistribution::default().sample(16, &mut rng);
-        let packing = Packing::<2, Sphere>::random(Sphere, sizes, 0.1, &mut rng).unwrap();
-        let mut scene = Scene::new(packing, Potential::Harmonic, 0.2);
+        let mut scene = crate::random_disks(16, 0.1, 3);
         let mut fire = Fire::new(FireParams::default());
         fire.record();
         let out = jam(&mut scene, &mut fire, &JamParams::default()).unwrap();

@@ -336,9 +336,8 @@ fn push<const D: usize, S: Shape<D>>(scene: &mut Scene<D, S>, unit: &[f64], step
 mod tests {
     use super::*;
     use crate::FireParams;
-    use jamkit_core::{Packing, PeriodicBox, Potential, SizeDistribution, Vector};
+    use jamkit_core::{Packing, PeriodicBox, Potential, Vector};
     use jamkit_sphere::Sphere;
-    use rand::SeedableRng;
 
     /// 16 equal disks (radius 1/2) on a square lattice of spacing 0.99 in a
     /// periodic box: every contact overlaps by 0.01 and the forces cancel
@@ -439,10 +438,7 @@ mod tests {
     /// leaves every coordinate as the search left it, bit for bit.
     #[test]
     fn the_escape_leaves_a_jammed_minimum_untouched() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let sizes = SizeDistribution::default().sample(32, &mut rng);
-        let packing = Packing::<2, Sphere>::random(Sphere, sizes, 0.1, &mut rng).unwrap();
-        let mut scene = Scene::new(packing, Potential::Harmonic, 0.2);
+        let mut scene = crate::random_disks(32, 0.1, 3);
         let mut fire = Fire::new(FireParams::default());
         let params = JamParams::default();
         jam(&mut scene, &mut fire, &params).unwrap();
