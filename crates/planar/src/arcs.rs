@@ -1303,6 +1303,30 @@ mod tests {
         )
     }
 
+    /// The contacts (gaps up to 0.02) of two bodies of `outline`, split
+    /// into `arcs`, of `sizes` and angles `thetas` at separation `r`, by
+    /// `scan`; stationary points searched down to a depth of two lobes,
+    /// `2Δ/n` of the sizes.
+    fn scanned<F: PolarOutline>(
+        (arcs, outline): (&[OutlineArc], &F),
+        (n, delta): (f64, f64),
+        sizes: [f64; 2],
+        thetas: [f64; 2],
+        r: &Vector<2>,
+        scan: Scan,
+    ) -> Vec<ArcContact> {
+        let body = |k: usize| ArcBody {
+            arcs,
+            outline,
+            size: sizes[k],
+            theta: thetas[k],
+        };
+        let reach = delta * 2.0 / n * (sizes[0] + sizes[1]);
+        let mut out = Vec::new();
+        contacts_by(&body(0), &body(1), r, 0.02, reach, scan, |c| out.push(c));
+        out
+    }
+
     /// The unit outline `R = 1 + Δ sin(nφ)/n`: `(R, R', R'')` at `e^{iφ}`.
     fn near_disk(n: f64, delta: f64) -> impl Fn(Unit) -> (f64, f64, f64) {
         move |e: Unit| {
@@ -1326,23 +1350,13 @@ mod tests {
             let outline = near_disk(n, delta);
             let arcs = split_arcs(&outline, 4096);
             for _ in 0..300 {
-                let ([si, sj], [ti, tj], r) = packing_pair(&mut next, n, delta);
-                let body = |size: f64, theta: f64| ArcBody {
-                    arcs: &arcs,
-                    outline: &outline,
-                    size,
-                    theta,
-                };
-                let (bi, bj) = (body(si, ti), body(sj, tj));
-                let reach = delta * 2.0 / n * (si + sj);
+                let (sizes, thetas, r) = packing_pair(&mut next, n, delta);
                 let list = |solved: bool| {
-                    let mut out = Vec::new();
                     let scan = Scan {
                         solved,
                         ..Scan::DEFAULT
                     };
-                    contacts_by(&bi, &bj, &r, 0.02, reach, scan, |c| out.push(c));
-                    out
+                    scanned((&arcs, &outline), (n, delta), sizes, thetas, &r, scan)
                 };
                 let (table, solved) = (list(false), list(true));
                 assert_eq!(table.len(), solved.len(), "n {n}, Δ {delta}, r {r:?}");
@@ -1446,7 +1460,7 @@ mod tests {
                 // of the other in one of its valleys (bottom at
                 // φ = −π/2n), up to three of its own lobe heights below
                 // the bottom: teeth touching both flanks.
-                let ([si, sj], [ti, tj], r) = if k % 2 == 0 {
+                let (sizes, thetas, r) = if k % 2 == 0 {
                     packing_pair(&mut next, n, delta)
                 } else {
                     let angle = (-PI / 2.0 + 0.3 * (2.0 * next() - 1.0)) / n;
@@ -1454,19 +1468,8 @@ mod tests {
                     let r = Vector::<2>::new(d * angle.cos(), d * angle.sin());
                     ([4.0, 0.5], [0.0, TAU * next()], r)
                 };
-                let body = |size: f64, theta: f64| ArcBody {
-                    arcs: &arcs,
-                    outline: &outline,
-                    size,
-                    theta,
-                };
-                let (bi, bj) = (body(si, ti), body(sj, tj));
-                let reach = delta * 2.0 / n * (si + sj);
-                let list = |scan: Scan| {
-                    let mut out = Vec::new();
-                    contacts_by(&bi, &bj, &r, 0.02, reach, scan, |c| out.push(c));
-                    out
-                };
+                let list =
+                    |scan: Scan| scanned((&arcs, &outline), (n, delta), sizes, thetas, &r, scan);
                 let (coarse, fine) = (list(Scan::DEFAULT), list(fine));
                 assert_eq!(coarse.len(), fine.len(), "n {n}, Δ {delta}, r {r:?}");
                 for (a, b) in coarse.iter().zip(&fine) {
