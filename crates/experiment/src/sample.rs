@@ -336,6 +336,8 @@ impl Sample<'_> {
                 .params()
                 .map(|_| outcome.work.lbfgs_evaluations),
             minimizations: outcome.work.minimizations,
+            plateau_escapes: Some(outcome.work.plateau_escapes).filter(|&n| n > 0),
+            dt_cuts: Some(outcome.work.dt_cuts).filter(|&n| n > 0),
             wall_s: start.elapsed().as_secs_f64(),
             saddle_escapes,
             jam_point,
@@ -486,6 +488,9 @@ pub(crate) struct Protocolled {
     /// L-BFGS evaluations, when the minimiser ran L-BFGS.
     lbfgs_evaluations: Option<u64>,
     minimizations: u64,
+    /// The minimiser's plateau escapes and `Δt_max` cuts, when it made any.
+    plateau_escapes: Option<u64>,
+    dt_cuts: Option<u64>,
     wall_s: f64,
     saddle_escapes: Option<u32>,
     /// `AboveJam`'s jamming point.
@@ -715,6 +720,8 @@ impl Observed {
             fire_steps: run.fire_steps,
             lbfgs_evaluations: run.lbfgs_evaluations,
             minimizations: run.minimizations,
+            plateau_escapes: run.plateau_escapes,
+            dt_cuts: run.dt_cuts,
             wall_s: run.wall_s,
             flag: flags.join("; "),
             saddle_escapes: run.saddle_escapes,
@@ -761,6 +768,8 @@ pub(crate) fn remeasure(
         fire_steps: old.fire_steps,
         lbfgs_evaluations: old.lbfgs_evaluations,
         minimizations: old.minimizations,
+        plateau_escapes: old.plateau_escapes,
+        dt_cuts: old.dt_cuts,
         wall_s: old.wall_s,
         saddle_escapes: old.saddle_escapes,
         jam_point: old.jam_point.clone(),

@@ -35,6 +35,15 @@ pub struct Measures {
     pub lbfgs_evaluations: Option<u64>,
     /// Minimisations (density changes + 1).
     pub minimizations: u64,
+    /// Moves of the minimiser's plateau escape over the whole protocol,
+    /// when it made any (absent otherwise, so files without them are
+    /// unchanged).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plateau_escapes: Option<u64>,
+    /// Times the minimiser's `stable_dt` lowered FIRE's `Δt_max` over the
+    /// whole protocol, when it did (absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt_cuts: Option<u64>,
     /// Wall-clock seconds for the protocol and the observables.
     pub wall_s: f64,
     /// Empty, or why this packing deserves a second look.
@@ -86,6 +95,8 @@ impl Measures {
             fire_steps: 0,
             lbfgs_evaluations: None,
             minimizations: 0,
+            plateau_escapes: None,
+            dt_cuts: None,
             wall_s: 0.0,
             flag: String::new(),
             saddle_escapes: None,

@@ -133,10 +133,19 @@ pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
     if with_escapes {
         head.push("saddle_escapes".into());
     }
-    // Likewise only when some packing ran L-BFGS.
+    // Likewise only when some packing ran L-BFGS, escaped a plateau or
+    // had FIRE's `Δt_max` lowered.
     let with_lbfgs = files.iter().any(|f| f.measures.lbfgs_evaluations.is_some());
     if with_lbfgs {
         head.push("lbfgs_evals".into());
+    }
+    let with_plateaus = files.iter().any(|f| f.measures.plateau_escapes.is_some());
+    if with_plateaus {
+        head.push("plateau_escapes".into());
+    }
+    let with_dt_cuts = files.iter().any(|f| f.measures.dt_cuts.is_some());
+    if with_dt_cuts {
+        head.push("dt_cuts".into());
     }
     if with_spectrum {
         head.extend(SPECTRUM_COLUMNS.map(String::from));
@@ -203,6 +212,13 @@ pub fn results_csv(files: &[PackingFile], scanned: &[String]) -> String {
         }
         if with_lbfgs {
             row.push(opt(&m.lbfgs_evaluations));
+        }
+        // A packing without escapes or cuts had none: 0, not unknown.
+        if with_plateaus {
+            row.push(m.plateau_escapes.unwrap_or(0).to_string());
+        }
+        if with_dt_cuts {
+            row.push(m.dt_cuts.unwrap_or(0).to_string());
         }
         if with_spectrum {
             row.extend(spectrum_cells(m.spectrum.as_ref()));
@@ -683,6 +699,52 @@ mod tests {
         let cell = |c: &str| row[head.iter().position(|h| *h == c).unwrap()];
         assert_eq!(cell("n_rot_rattlers"), "3");
         assert_eq!(cell("z_corr"), "5.75");
+    }
+
+    /// The minimiser's plateau escapes and `Δt_max` cuts: columns only
+    /// when some packing of the table made any, 0 for the others; files
+    /// that made none (or were written before they were recorded) neither
+    /// carry the fields nor add the columns.
+    #[test]
+    fn escapes_and_dt_cuts_appear_only_when_some_packing_made_them() {
+        let file = |id: &str| -> PackingFile {
+            serde_json::from_value(serde_json::json!({
+                "id": id, "experiment": "e", "family": "fourier", "params": {},
+                "dim": 2, "particles": 4, "seed": 1, "protocol": "jam",
+                "settings": {}, "phi": 0.8, "energy_per_particle": 0.0,
+                "measures": {
+                    "phi": 0.8, "energy_per_particle": 0.0,
+                    "fire_steps": 100, "minimizations": 3, "wall_s": 0.0, "flag": ""
+                },
+                "box": [1.0, 1.0], "positions": [], "radii": [],
+                "orientations": [], "rattler": []
+            }))
+            .unwrap()
+        };
+        let (plain, mut cut) = (file("plain"), file("cut"));
+        assert_eq!(
+            (plain.measures.plateau_escapes, plain.measures.dt_cuts),
+            (None, None)
+        );
+        let head = |csv: &str| csv.lines().next().unwrap().to_string();
+        let without = results_csv(&[plain.clone(), cut.clone()], &[]);
+        assert!(!head(&without).contains("dt_cuts") && !head(&without).contains("plateau"));
+        assert!(
+            !serde_json::to_string(&plain.measures)
+                .unwrap()
+                .contains("dt_cuts")
+        );
+        cut.measures.dt_cuts = Some(2);
+        let csv = results_csv(&[plain, cut.clone()], &[]);
+        let mut lines = csv.lines();
+        let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+        assert!(!head.contains(&"plateau_escapes"), "{head:?}");
+        let at = head.iter().position(|h| *h == "dt_cuts").unwrap();
+        let cells: Vec<&str> = lines.map(|l| l.split(',').nth(at).unwrap()).collect();
+        assert_eq!(cells, ["0", "2"]);
+        let back: crate::record::Measures =
+            serde_json::from_str(&serde_json::to_string(&cut.measures).unwrap()).unwrap();
+        assert_eq!(back.dt_cuts, Some(2));
     }
 
     /// A cell with a comma, quotes or a line end comes back whole through
