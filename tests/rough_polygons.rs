@@ -39,7 +39,7 @@ fn check(n: u32, delta: f64, phi: f64, particles: usize, steps: u64) -> (usize, 
         .collect();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
     let skin = 0.4 * s.bounding_radius(0.5);
-    let packing = Packing::random(s.clone(), sizes, phi, &mut rng).unwrap();
+    let packing = Packing::random_overlapping(s.clone(), sizes, phi, &mut rng).unwrap();
     let mut scene = Scene::new(packing, Potential::Harmonic, skin);
     let mut fire = Fire::new(
         FireParams {
@@ -156,7 +156,7 @@ fn jammed(n: u32, delta: f64, file: &str) -> Scene<2, NearDisk> {
     )
     .unwrap();
     // A packing of the family whose box and bodies the file's replace.
-    let mut packing = Packing::random(
+    let mut packing = Packing::random_overlapping(
         s.clone(),
         vec![0.5; 12],
         0.5,
@@ -324,4 +324,115 @@ fn the_contacts_of_non_convex_pairs_carry_one_state_of_self_stress() {
         assert!(next > 1e-5 * high, "n = {n}: {next:e} against {high:e}");
         assert!(cos.abs() > 1.0 - 1e-6, "n = {n}: {cos}");
     }
+}
+
+/// Near-disks of n = 4, Δ = 0.3 (non-convex) with the exact gap.
+fn lobed(gap: GapModel) -> NearDisk {
+    NearDisk::fourier(&FourierParams {
+        n: 4,
+        delta: 0.3,
+        inertia: None,
+        gap,
+    })
+    .unwrap()
+}
+
+/// Why a non-convex exact start is placed free of overlaps: two bodies
+/// (R⁰ = 0.7, n = 4, Δ = 0.3) dropped 0.15 apart, nearly aligned, lobes in
+/// lobes (a pair of a random start at φ = 0.1), sit on a jump of the
+/// energy: at overlaps deeper than two lobes the arcs' contacts come and
+/// go with their energy (docs/explanation/non-convex-gap.md, "What it does
+/// not guarantee"). A step of 10⁻⁷ along −∇V lowers V by about 1 where the
+/// gradient predicts 6·10⁻⁸, and FIRE, pushed back onto the jump from
+/// both sides, leaves V where it was after 20 000 steps.
+#[test]
+fn a_lobed_pair_dropped_onto_itself_is_held_on_a_jump_of_the_energy() {
+    let s = lobed(GapModel::Exact);
+    let mut packing = Packing::random_overlapping(
+        s.clone(),
+        vec![0.7, 0.7],
+        0.05,
+        &mut rand_chacha::ChaCha8Rng::seed_from_u64(1),
+    )
+    .unwrap();
+    let c = packing.bbox.edges()[0] / 2.0;
+    packing.positions = vec![
+        jamkit_core::Vector::<2>::new(c, c),
+        jamkit_core::Vector::<2>::new(c + 0.15233512761867196, c - 0.001921833206900203),
+    ];
+    packing.orientations = vec![
+        jamkit_core::Rotation2::new(-0.42990798571621824),
+        jamkit_core::Rotation2::new(-0.4343467024509405),
+    ];
+    let mut scene = Scene::new(packing, Potential::Harmonic, 0.4 * s.bounding_radius(0.5));
+    let mut g = vec![0.0; 6];
+    let start = scene.energy_gradient(&mut g);
+    let eps = 1e-7;
+    let dq: Vec<f64> = g.iter().map(|x| -eps * x).collect();
+    scene.displace(&dq);
+    let stepped = scene.energy();
+    scene.displace(&dq.iter().map(|x| -x).collect::<Vec<_>>());
+    let predicted = eps * g.iter().map(|x| x * x).sum::<f64>();
+    let mut fire = Fire::new(
+        FireParams {
+            max_steps: 20_000,
+            ..FireParams::default()
+        }
+        .for_family(&s),
+    );
+    let outcome = fire.minimize(&mut scene);
+    let end = scene.energy();
+    eprintln!(
+        "V = {start:.4}; after a step of {eps:e} along -grad V: {stepped:.4} (predicted fall {predicted:.1e}); after FIRE {end:.4} ({})",
+        if outcome.is_ok() {
+            "converged"
+        } else {
+            "not converged"
+        }
+    );
+    assert!(start - stepped > 0.1, "no jump: {start} → {stepped}");
+    assert!(predicted < 1e-6);
+    assert!(end > 0.5 * start, "V = {end:e}: the deep pair came apart");
+}
+
+/// The random start of a non-convex exact outline has no overlapping
+/// pair (every contact's h ≥ 0, 64 bodies at φ = 0.1, five seeds), while
+/// the paper's first-order gap on the same outline keeps the plain random
+/// start (the same draws as `random_overlapping`), which overlaps.
+#[test]
+fn a_non_convex_exact_start_is_free_of_overlaps() {
+    let sizes: Vec<f64> = (0..64)
+        .map(|k| if k % 2 == 0 { 0.5 } else { 0.7 })
+        .collect();
+    let deepest = |p: &Packing<2, NearDisk>| {
+        let mut deepest = 0.0f64;
+        for i in 0..p.len() {
+            for j in i + 1..p.len() {
+                let r_ij = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
+                let pair = Pair::new(
+                    p.sizes[i],
+                    p.orientations[i],
+                    p.sizes[j],
+                    p.orientations[j],
+                    r_ij,
+                );
+                p.shape
+                    .contacts(&pair, 0.0, |c| deepest = deepest.min(c.gap));
+            }
+        }
+        deepest
+    };
+    let mut overlapping = 0;
+    for seed in 1..=5 {
+        let rng = || rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let exact =
+            Packing::random(lobed(GapModel::Exact), sizes.clone(), 0.1, &mut rng()).unwrap();
+        assert_eq!(deepest(&exact), 0.0, "seed {seed}");
+        let first = lobed(GapModel::FirstOrder);
+        let paper = Packing::random(first.clone(), sizes.clone(), 0.1, &mut rng()).unwrap();
+        let plain = Packing::random_overlapping(first, sizes.clone(), 0.1, &mut rng()).unwrap();
+        assert_eq!(paper.positions, plain.positions, "seed {seed}");
+        overlapping += usize::from(deepest(&paper) < 0.0);
+    }
+    assert!(overlapping >= 3, "{overlapping} of 5 plain starts overlap");
 }

@@ -73,11 +73,37 @@ pub struct Packing<const D: usize, S: Shape<D>> {
 
 impl<const D: usize, S: Shape<D>> Packing<D, S> {
     /// Bodies with the given sizes placed uniformly at random (orientations
-    /// uniform too) in a cubic box whose edge gives packing fraction `phi`.
+    /// uniform too) in a cubic box whose edge gives packing fraction `phi`;
+    /// free of overlaps where the shape's policy asks for it
+    /// ([`Policy::overlap_free_start`](crate::Policy::overlap_free_start)).
     pub fn random<R: Rng + ?Sized>(
         shape: S,
         sizes: Vec<f64>,
         phi: f64,
+        rng: &mut R,
+    ) -> Result<Self> {
+        let overlap_free = shape.policy().overlap_free_start;
+        Self::random_placed(shape, sizes, phi, overlap_free, rng)
+    }
+
+    /// [`Packing::random`] with overlaps allowed whatever the shape's
+    /// policy: the same draws as its start for shapes that allow them (for
+    /// tests of overlapping states, e.g. denser than a sequential placement
+    /// reaches).
+    pub fn random_overlapping<R: Rng + ?Sized>(
+        shape: S,
+        sizes: Vec<f64>,
+        phi: f64,
+        rng: &mut R,
+    ) -> Result<Self> {
+        Self::random_placed(shape, sizes, phi, false, rng)
+    }
+
+    fn random_placed<R: Rng + ?Sized>(
+        shape: S,
+        sizes: Vec<f64>,
+        phi: f64,
+        overlap_free: bool,
         rng: &mut R,
     ) -> Result<Self> {
         if !(phi > 0.0 && phi.is_finite()) {
@@ -89,7 +115,7 @@ impl<const D: usize, S: Shape<D>> Packing<D, S> {
         let total: f64 = sizes.iter().map(|&s| shape.volume(s)).sum();
         let edge = (total / phi).powf(1.0 / D as f64);
         let bbox = PeriodicBox::cubic(edge);
-        if shape.policy().overlap_free_start {
+        if overlap_free {
             return Self::random_without_overlaps(shape, sizes, bbox, phi, rng);
         }
         let positions = (0..sizes.len())

@@ -37,9 +37,10 @@ pub struct Policy {
     /// overrides it. Default: no (FIRE alone, the paper's).
     pub lbfgs_blocks: bool,
     /// Whether the random start must be free of overlaps. Non-convex bodies
-    /// (bodies made of spheres) can interpenetrate into a *locked* pair at a
-    /// random start (two dimers crossed at their centres feel no net force:
-    /// a local minimum of the energy with a finite overlap), so they are
+    /// (bodies made of spheres, lobed outlines with the exact gap) can
+    /// interpenetrate into a *locked* pair at a random start (two dimers
+    /// crossed at their centres feel no net force: a local minimum of the
+    /// energy with a finite overlap), so they are
     /// placed one by one, each redrawn until it overlaps none placed before
     /// ([`Packing::random`](crate::Packing::random)). Default false: convex
     /// bodies relax any start, and keep their random stream.
