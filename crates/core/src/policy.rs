@@ -40,7 +40,8 @@ pub struct Policy {
     /// (bodies made of spheres, lobed outlines with the exact gap) can
     /// interpenetrate into a *locked* pair at a random start (two dimers
     /// crossed at their centres feel no net force: a local minimum of the
-    /// energy with a finite overlap), so they are
+    /// energy with a finite overlap; two lobed bodies lobes in lobes sit on
+    /// a jump of the energy), so they are
     /// placed one by one, each redrawn until it overlaps none placed before
     /// ([`Packing::random`](crate::Packing::random)). Default false: convex
     /// bodies relax any start, and keep their random stream.

@@ -1166,9 +1166,10 @@ impl<P: NearDiskProfile, O: PlanarOrientation> Shape<2> for Profiled<P, O> {
     /// (`d + 1`); near-disks jam hypostatic; a warning where the outline is
     /// not convex and the gap is an approximate one (one contact per pair).
     /// A non-convex outline with the exact gap starts free of overlaps: two
-    /// bodies dropped almost onto each other, lobes in lobes, can be held
-    /// there by their contacts and saddles against their cores (two bodies
-    /// of n = 4, Δ = 0.3, R⁰ = 0.7, with centres 0.15 apart and nearly
+    /// bodies dropped almost onto each other, lobes in lobes, overlap deeper
+    /// than two lobes, where the arcs' contacts come and go with their
+    /// energy, and can sit on such a jump, where FIRE stays (two bodies of
+    /// n = 4, Δ = 0.3, R⁰ = 0.7, with centres 0.15 apart and nearly
     /// aligned, stopped a minimisation at φ = 0.1 with `V/N = 0.064`).
     fn policy(&self) -> Policy {
         let mut warnings = Vec::new();
