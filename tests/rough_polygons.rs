@@ -26,13 +26,7 @@ use polygon::{Polygon, support_points};
 /// deepest contact, to 2e-5. Returns the pairs compared in contact, those
 /// with several contacts, and those left to the core.
 fn check(n: u32, delta: f64, phi: f64, particles: usize, steps: u64) -> (usize, usize, usize) {
-    let s = NearDisk::fourier(&FourierParams {
-        n,
-        delta,
-        inertia: None,
-        gap: GapModel::Exact,
-    })
-    .unwrap();
+    let s = near_disk(n, delta, GapModel::Exact);
     assert!(!s.is_convex());
     let sizes: Vec<f64> = (0..particles)
         .map(|k| if k % 2 == 0 { 0.5 } else { 0.7 })
@@ -142,13 +136,7 @@ fn relaxed_non_convex_packings_agree_with_fine_polygons() {
 /// --example trace_fire -- jam N_MODE DELTA PARTICLES SEED MAX_STEPS
 /// SECONDS` (the file's header says which).
 fn jammed(n: u32, delta: f64, file: &str) -> Scene<2, NearDisk> {
-    let s = NearDisk::fourier(&FourierParams {
-        n,
-        delta,
-        inertia: None,
-        gap: GapModel::Exact,
-    })
-    .unwrap();
+    let s = near_disk(n, delta, GapModel::Exact);
     let text = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("tests/inputs/rough")
@@ -326,15 +314,20 @@ fn the_contacts_of_non_convex_pairs_carry_one_state_of_self_stress() {
     }
 }
 
-/// Near-disks of n = 4, Δ = 0.3 (non-convex) with the exact gap.
-fn lobed(gap: GapModel) -> NearDisk {
+/// Near-disks `(n, Δ)` of the paper's inertia with the gap model `gap`.
+fn near_disk(n: u32, delta: f64, gap: GapModel) -> NearDisk {
     NearDisk::fourier(&FourierParams {
-        n: 4,
-        delta: 0.3,
+        n,
+        delta,
         inertia: None,
         gap,
     })
     .unwrap()
+}
+
+/// Near-disks of n = 4, Δ = 0.3 (non-convex).
+fn lobed(gap: GapModel) -> NearDisk {
+    near_disk(4, 0.3, gap)
 }
 
 /// Why a non-convex exact start is placed free of overlaps: two bodies
@@ -404,22 +397,12 @@ fn a_non_convex_exact_start_is_free_of_overlaps() {
     let sizes: Vec<f64> = (0..64)
         .map(|k| if k % 2 == 0 { 0.5 } else { 0.7 })
         .collect();
-    let deepest = |p: &Packing<2, NearDisk>| {
+    // The deepest contact of a start, over the scene's listed pairs.
+    let deepest = |p: Packing<2, NearDisk>| {
+        let skin = 0.4 * p.shape.bounding_radius(0.5);
         let mut deepest = 0.0f64;
-        for i in 0..p.len() {
-            for j in i + 1..p.len() {
-                let r_ij = p.bbox.minimum_image(p.positions[j] - p.positions[i]);
-                let pair = Pair::new(
-                    p.sizes[i],
-                    p.orientations[i],
-                    p.sizes[j],
-                    p.orientations[j],
-                    r_ij,
-                );
-                p.shape
-                    .contacts(&pair, 0.0, |c| deepest = deepest.min(c.gap));
-            }
-        }
+        Scene::new(p, Potential::Harmonic, skin)
+            .for_each_contact(0.0, |_, _, _, c| deepest = deepest.min(c.gap));
         deepest
     };
     let mut overlapping = 0;
@@ -427,12 +410,12 @@ fn a_non_convex_exact_start_is_free_of_overlaps() {
         let rng = || rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let exact =
             Packing::random(lobed(GapModel::Exact), sizes.clone(), 0.1, &mut rng()).unwrap();
-        assert_eq!(deepest(&exact), 0.0, "seed {seed}");
+        assert_eq!(deepest(exact), 0.0, "seed {seed}");
         let first = lobed(GapModel::FirstOrder);
         let paper = Packing::random(first.clone(), sizes.clone(), 0.1, &mut rng()).unwrap();
         let plain = Packing::random_overlapping(first, sizes.clone(), 0.1, &mut rng()).unwrap();
         assert_eq!(paper.positions, plain.positions, "seed {seed}");
-        overlapping += usize::from(deepest(&paper) < 0.0);
+        overlapping += usize::from(deepest(paper) < 0.0);
     }
     assert!(overlapping >= 3, "{overlapping} of 5 plain starts overlap");
 }
